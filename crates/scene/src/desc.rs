@@ -1,0 +1,146 @@
+//! Format-neutral scene description: a tree of plugin nodes with typed
+//! properties, each carrying its file position. The Mitsuba XML reader
+//! produces it; `build.rs` turns it into a render scene.
+
+use crate::error::FileLoc;
+use glam::{DMat4, DVec3};
+use std::cell::Cell;
+use std::rc::Rc;
+
+/// A typed property value, after `$name` substitution.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    Float(f64),
+    Integer(i64),
+    Boolean(bool),
+    String(String),
+    /// `<rgb value="r, g, b"/>` (a single value is broadcast to all three).
+    Rgb([f64; 3]),
+    /// `<spectrum value="v"/>` with a single constant value.
+    SpectrumConstant(f64),
+    /// `<spectrum value="400:0.1, 500:0.8"/>`: (wavelength nm, value) pairs.
+    SpectrumSampled(Vec<(f64, f64)>),
+    Point(DVec3),
+    Vector(DVec3),
+    /// `<transform>` composed in the order written (later operations apply after earlier ones).
+    Transform(DMat4),
+}
+
+impl Value {
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Value::Float(_) => "float",
+            Value::Integer(_) => "integer",
+            Value::Boolean(_) => "boolean",
+            Value::String(_) => "string",
+            Value::Rgb(_) => "rgb",
+            Value::SpectrumConstant(_) | Value::SpectrumSampled(_) => "spectrum",
+            Value::Point(_) => "point",
+            Value::Vector(_) => "vector",
+            Value::Transform(_) => "transform",
+        }
+    }
+}
+
+/// A named property of a node.
+#[derive(Debug, Clone)]
+pub struct Property {
+    pub name: String,
+    pub value: Value,
+    pub loc: FileLoc,
+    /// Set when the builder reads the property; unread ones are errors.
+    pub used: Cell<bool>,
+}
+
+/// The object kinds of the format (Mitsuba's tag names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Scene,
+    Shape,
+    Bsdf,
+    Emitter,
+    Sensor,
+    Film,
+    Sampler,
+    Rfilter,
+    Integrator,
+    Texture,
+    Medium,
+    Phase,
+    Volume,
+}
+
+impl Kind {
+    /// Maps an XML tag to a kind, `None` for tags that are not objects.
+    pub fn from_tag(tag: &str) -> Option<Kind> {
+        Some(match tag {
+            "scene" => Kind::Scene,
+            "shape" => Kind::Shape,
+            "bsdf" => Kind::Bsdf,
+            "emitter" => Kind::Emitter,
+            "sensor" => Kind::Sensor,
+            "film" => Kind::Film,
+            "sampler" => Kind::Sampler,
+            "rfilter" => Kind::Rfilter,
+            "integrator" => Kind::Integrator,
+            "texture" => Kind::Texture,
+            "medium" => Kind::Medium,
+            "phase" => Kind::Phase,
+            "volume" => Kind::Volume,
+            _ => return None,
+        })
+    }
+    pub fn tag(self) -> &'static str {
+        match self {
+            Kind::Scene => "scene",
+            Kind::Shape => "shape",
+            Kind::Bsdf => "bsdf",
+            Kind::Emitter => "emitter",
+            Kind::Sensor => "sensor",
+            Kind::Film => "film",
+            Kind::Sampler => "sampler",
+            Kind::Rfilter => "rfilter",
+            Kind::Integrator => "integrator",
+            Kind::Texture => "texture",
+            Kind::Medium => "medium",
+            Kind::Phase => "phase",
+            Kind::Volume => "volume",
+        }
+    }
+}
+
+/// One plugin instance: `<shape type="sphere" id="s">...</shape>`.
+///
+/// Nodes reached through `<ref id=.../>` are shared (`Rc`), so a BSDF
+/// referenced by two shapes is one node, and the builder can build it once.
+#[derive(Debug)]
+pub struct Node {
+    pub kind: Kind,
+    /// The `type` attribute (empty for the scene root).
+    pub plugin: String,
+    pub id: Option<String>,
+    /// The `name` attribute of a nested object (e.g. `<texture name="reflectance">`).
+    pub name: Option<String>,
+    pub props: Vec<Property>,
+    /// Nested objects in document order, references already resolved.
+    pub children: Vec<Child>,
+    pub loc: FileLoc,
+}
+
+/// A nested object with the name it was given in its parent (if any).
+#[derive(Debug, Clone)]
+pub struct Child {
+    /// `name` attribute of the nested tag, or of the `<ref name=.. id=..>`.
+    pub name: Option<String>,
+    pub node: Rc<Node>,
+    /// Where the nesting (or the `<ref>`) appears in the parent.
+    pub loc: FileLoc,
+}
+
+/// A parsed scene file: the root `<scene>` node.
+#[derive(Debug)]
+pub struct SceneDesc {
+    pub root: Rc<Node>,
+    /// The scene's `version` attribute.
+    pub version: String,
+}
