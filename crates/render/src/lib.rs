@@ -1,7 +1,17 @@
 //! Penumbra's rendering core. No file formats live here: the `penumbra-scene`
-//! crate builds a [`scene::Scene`] and this crate renders it.
+//! crate builds a [`render::RenderJob`] and this crate renders it.
 //!
 //! Layers, bottom up: `math` → `sampling` → `geometry` → `accel` →
 //! `bsdf` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
 
+pub mod accel;
+pub mod bsdf;
+pub mod camera;
+pub mod film;
 pub mod geometry;
+pub mod integrator;
+pub mod light;
+pub mod math;
+pub mod render;
+pub mod sampling;
+pub mod scene;

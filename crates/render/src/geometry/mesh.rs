@@ -57,3 +57,71 @@ impl TriangleMesh {
         Ok(())
     }
 }
+
+impl TriangleMesh {
+    /// Mitsuba's `rectangle`: [-1, 1]² in the z = 0 plane, normal +z.
+    pub fn rectangle() -> TriangleMesh {
+        TriangleMesh {
+            positions: vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)],
+            indices: vec![[0, 1, 2], [2, 3, 0]],
+        }
+    }
+
+    /// Mitsuba's `cube`: [-1, 1]³ with outward-facing flat faces.
+    pub fn cube() -> TriangleMesh {
+        let mut m = TriangleMesh::default();
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let mut n = Vec3::ZERO;
+                n[axis] = sign;
+                // Two tangents spanning the face, ordered so that (u × v) = n.
+                let mut u = Vec3::ZERO;
+                u[(axis + 1) % 3] = 1.0;
+                let mut v = Vec3::ZERO;
+                v[(axis + 2) % 3] = sign;
+                let base = m.positions.len() as u32;
+                for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                    m.positions.push(n + u * a + v * b);
+                    m.normals.push(n);
+                    m.uvs.push(Vec2::new((a + 1.0) / 2.0, (b + 1.0) / 2.0));
+                }
+                m.indices.push([base, base + 1, base + 2]);
+                m.indices.push([base + 2, base + 3, base]);
+            }
+        }
+        m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_point_outwards() {
+        let m = TriangleMesh::cube();
+        assert_eq!(m.indices.len(), 12);
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            let centre = (a + b + c) / 3.0;
+            assert!(n.dot(centre) > 0.0, "face normal must point away from the centre");
+        }
+    }
+
+    #[test]
+    fn rectangle_faces_plus_z() {
+        let m = TriangleMesh::rectangle();
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            assert!((b - a).cross(c - a).z > 0.0);
+        }
+    }
+}

@@ -1,4 +1,14 @@
-//! Geometric primitives: rays, boxes, triangles, spheres and meshes.
+//! Geometric primitives: rays, boxes, triangles, spheres, disks and meshes.
 
+pub mod bounds;
+pub mod interaction;
 pub mod mesh;
+pub mod ray;
+pub mod shape;
+pub mod triangle;
+
+pub use bounds::Aabb;
+pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
+pub use ray::{offset_origin, Ray};
+pub use shape::{Mesh, Shape, ShapeSample};

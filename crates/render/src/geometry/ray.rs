@@ -1,0 +1,38 @@
+//! Rays and the offsets that keep spawned rays from re-hitting their surface.
+
+use crate::math::RAY_EPSILON;
+use glam::Vec3;
+
+/// A ray `o + t d` for t in (0, t_max). `d` need not be normalised for
+/// intersection, but integrators keep it unit length so `t` is a distance.
+#[derive(Debug, Clone, Copy)]
+pub struct Ray {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub t_max: f32,
+}
+
+impl Ray {
+    #[inline]
+    pub fn new(o: Vec3, d: Vec3, t_max: f32) -> Ray {
+        Ray { o, d, t_max }
+    }
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.o + self.d * t
+    }
+}
+
+/// Offsets a surface point along the geometric normal `n`, to the side that
+/// `d` leaves towards, by a margin relative to the point's magnitude
+/// (Mitsuba's `spawn_ray`: RayEpsilon · (1 + max |p_i|)).
+#[inline]
+pub fn offset_origin(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
+    let mag = (1.0 + p.abs().max_element()) * RAY_EPSILON;
+    let off = n * mag;
+    if d.dot(n) < 0.0 {
+        p - off
+    } else {
+        p + off
+    }
+}

@@ -1,0 +1,41 @@
+//! Vector math (glam re-exports), constants, colour and small helpers.
+
+pub mod frame;
+
+pub use frame::Frame;
+pub use glam::{DMat4, Mat3, Mat4, Vec2, Vec3};
+
+/// Linear-sRGB radiance or reflectance. A named alias so that a spectral
+/// representation can replace it later without touching the integrators.
+pub type Spectrum = Vec3;
+
+pub const PI: f32 = std::f32::consts::PI;
+pub const INV_PI: f32 = std::f32::consts::FRAC_1_PI;
+pub const INV_2PI: f32 = 0.5 * std::f32::consts::FRAC_1_PI;
+pub const INV_4PI: f32 = 0.25 * std::f32::consts::FRAC_1_PI;
+
+/// Relative offset for spawning rays off a surface (Mitsuba's `math::RayEpsilon`).
+pub const RAY_EPSILON: f32 = f32::EPSILON * 0.5 * 1500.0;
+/// Shadow rays stop this fraction short of the light (Mitsuba's `math::ShadowEpsilon`).
+pub const SHADOW_EPSILON: f32 = RAY_EPSILON * 10.0;
+
+#[inline]
+pub fn sqr(x: f32) -> f32 {
+    x * x
+}
+
+#[inline]
+pub fn safe_sqrt(x: f32) -> f32 {
+    x.max(0.0).sqrt()
+}
+
+/// Rec. 709 luminance of a linear-sRGB colour.
+#[inline]
+pub fn luminance(c: Spectrum) -> f32 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}
+
+/// Converts an f64 scene-description matrix to the f32 one used for rendering.
+pub fn mat4_from_f64(m: &DMat4) -> Mat4 {
+    m.as_mat4()
+}

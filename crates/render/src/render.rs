@@ -1,0 +1,111 @@
+//! The render loop: 16×16 tiles rendered in parallel with rayon. Each pixel
+//! belongs to one tile and accumulates its samples in index order, so the
+//! film is bitwise identical for any thread count or scheduling.
+
+use crate::camera::PerspectiveCamera;
+use crate::film::{Film, Filter};
+use crate::integrator::{Integrator, RayStats};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use glam::Vec2;
+use rayon::prelude::*;
+use std::ops::Range;
+
+const TILE: u32 = 16;
+
+/// Everything needed to render an image of a scene.
+#[derive(Debug, Clone)]
+pub struct RenderJob {
+    pub scene: Scene,
+    pub camera: PerspectiveCamera,
+    pub integrator: Integrator,
+    pub sampler: Sampler,
+    pub filter: Filter,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// What a render pass did.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RenderStats {
+    pub samples: u64,
+    pub rays: RayStats,
+    /// Samples dropped because their radiance or weight was NaN or infinite.
+    pub non_finite: u64,
+}
+
+impl RenderStats {
+    fn add(&mut self, o: &RenderStats) {
+        self.samples += o.samples;
+        self.rays.add(&o.rays);
+        self.non_finite += o.non_finite;
+    }
+}
+
+struct TileResult {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    film: Film,
+    stats: RenderStats,
+}
+
+impl RenderJob {
+    /// Adds samples `samples` (sample indices) of every pixel to `film`.
+    /// `progress` is called after each tile with the samples it added.
+    pub fn render_into(&self, film: &mut Film, samples: Range<u32>, progress: &(dyn Fn(u64) + Sync)) -> RenderStats {
+        assert_eq!((film.width, film.height), (self.width, self.height));
+        let tiles_x = self.width.div_ceil(TILE);
+        let tiles_y = self.height.div_ceil(TILE);
+        let results: Vec<TileResult> = (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map(|t| {
+                let r = self.render_tile(t % tiles_x * TILE, t / tiles_x * TILE, samples.clone());
+                progress(r.stats.samples);
+                r
+            })
+            .collect();
+        let mut stats = RenderStats::default();
+        for r in results {
+            for y in 0..r.film.height {
+                for x in 0..r.w {
+                    let src = (y * r.w + x) as usize;
+                    let dst = ((r.y0 + y) * self.width + r.x0 + x) as usize;
+                    for c in 0..3 {
+                        film.sum[dst][c] += r.film.sum[src][c];
+                    }
+                    film.weight[dst] += r.film.weight[src];
+                }
+            }
+            stats.add(&r.stats);
+        }
+        stats
+    }
+
+    fn render_tile(&self, x0: u32, y0: u32, samples: Range<u32>) -> TileResult {
+        let w = TILE.min(self.width - x0);
+        let h = TILE.min(self.height - y0);
+        let mut film = Film::new(w, h);
+        let mut stats = RenderStats::default();
+        let inv = Vec2::new(1.0 / self.width as f32, 1.0 / self.height as f32);
+        for y in 0..h {
+            for x in 0..w {
+                let (px, py) = (x0 + x, y0 + y);
+                for s in samples.clone() {
+                    let mut rng = self.sampler.stream((px, py), s);
+                    let (offset, weight) = self.filter.sample_2d(rng.next_2d());
+                    let pos = (Vec2::new(px as f32 + 0.5, py as f32 + 0.5) + offset) * inv;
+                    let ray = self.camera.generate_ray(pos);
+                    let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays);
+                    stats.samples += 1;
+                    if l.is_finite() && weight.is_finite() {
+                        film.add(x, y, l, weight);
+                    } else {
+                        stats.non_finite += 1;
+                    }
+                }
+            }
+        }
+        TileResult { x0, y0, w, film, stats }
+    }
+}

@@ -1,0 +1,14 @@
+//! Sampling: counter-based random numbers, samplers, warps from the unit
+//! square to other domains, discrete distributions and MIS heuristics.
+//!
+//! Naming rule: `sample_x(u) -> point` and `x_pdf(point) -> density`, with
+//! the density's measure stated in the doc comment.
+
+pub mod distrib1d;
+pub mod mis;
+pub mod rng;
+pub mod sampler;
+pub mod warp;
+
+pub use distrib1d::Distribution1D;
+pub use sampler::{SampleStream, Sampler, SamplerKind};

@@ -1,0 +1,134 @@
+//! The scene as integrators see it: ray queries, the BSDF at a hit, and
+//! light sampling (selection included). Nothing else is exposed to them.
+
+use crate::accel::Accel;
+use crate::bsdf::Bsdf;
+use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
+use crate::light::{Light, LightSample};
+use crate::math::{Spectrum, SHADOW_EPSILON};
+use glam::{Vec2, Vec3};
+
+/// Per-shape attributes beside its geometry.
+#[derive(Debug, Clone, Copy)]
+pub struct ShapeInfo {
+    /// Index into [`Scene::bsdfs`].
+    pub bsdf: u32,
+    /// Index into [`Scene::lights`] when the shape is an area emitter.
+    pub light: Option<u32>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub shapes: Vec<Shape>,
+    pub shape_info: Vec<ShapeInfo>,
+    pub bsdfs: Vec<Bsdf>,
+    pub lights: Vec<Light>,
+    /// Indices of lights at infinity (hit by escaping rays).
+    pub env_lights: Vec<u32>,
+    pub accel: Accel,
+}
+
+impl Scene {
+    /// Assembles a scene and builds its acceleration structure.
+    pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, bsdfs: Vec<Bsdf>, lights: Vec<Light>) -> Scene {
+        assert_eq!(shapes.len(), shape_info.len());
+        let accel = Accel::build(&shapes);
+        let env_lights =
+            lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
+        Scene { shapes, shape_info, bsdfs, lights, env_lights, accel }
+    }
+
+    /// Closest surface hit.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
+        let hit = self.accel.intersect(ray, &self.shapes)?;
+        let prim = self.accel.prims[hit.prim as usize];
+        let shape = prim.shape();
+        Some(self.shapes[shape as usize].interaction(shape, prim.index() as usize, ray, hit.t, hit.uv))
+    }
+
+    /// Whether the segment from `si` along `wi` is blocked before `dist`.
+    #[inline]
+    pub fn occluded(&self, si: &SurfaceInteraction, wi: Vec3, dist: f32) -> bool {
+        let o = offset_origin(si.p, si.n, wi);
+        let t_max = if dist.is_finite() { (si.p + wi * dist - o).length() * (1.0 - SHADOW_EPSILON) } else { f32::INFINITY };
+        self.accel.occluded(&Ray::new(o, wi, t_max), &self.shapes)
+    }
+
+    /// A ray leaving `si` in direction `wi`.
+    #[inline]
+    pub fn spawn_ray(&self, si: &SurfaceInteraction, wi: Vec3) -> Ray {
+        Ray::new(offset_origin(si.p, si.n, wi), wi, f32::INFINITY)
+    }
+
+    #[inline]
+    pub fn bsdf(&self, si: &SurfaceInteraction) -> &Bsdf {
+        &self.bsdfs[self.shape_info[si.shape as usize].bsdf as usize]
+    }
+
+    /// Probability of selecting one light (uniform selection, as Mitsuba).
+    #[inline]
+    fn selection_pmf(&self) -> f32 {
+        1.0 / self.lights.len() as f32
+    }
+
+    /// Picks a light uniformly with `u2.x` (then rescaled to [0, 1) for reuse,
+    /// as Mitsuba's `sample_emitter`) and samples a direction towards it. The
+    /// returned pdf includes the selection probability. No visibility test.
+    #[inline]
+    pub fn sample_light(&self, p_ref: Vec3, mut u2: Vec2) -> Option<LightSample> {
+        if self.lights.is_empty() {
+            return None;
+        }
+        let n = self.lights.len();
+        let scaled = u2.x * n as f32;
+        let i = (scaled as usize).min(n - 1);
+        u2.x = (scaled - i as f32).min(1.0 - f32::EPSILON / 2.0);
+        let mut s = self.lights[i].sample_li(p_ref, u2, &self.shapes)?;
+        s.pdf *= self.selection_pmf();
+        Some(s)
+    }
+
+    /// Radiance emitted by the surface at `si` towards `si.wo` (zero if the
+    /// shape is not an emitter or is seen from behind).
+    #[inline]
+    pub fn emitted(&self, si: &SurfaceInteraction) -> Spectrum {
+        match self.shape_info[si.shape as usize].light {
+            Some(l) => match &self.lights[l as usize] {
+                Light::Area(a) => a.emitted(si.sh_frame.n, si.wo),
+                _ => Spectrum::ZERO,
+            },
+            None => Spectrum::ZERO,
+        }
+    }
+
+    /// Solid-angle density (selection included) with which `sample_light`
+    /// from `p_ref` would have produced the emitter point `si`.
+    #[inline]
+    pub fn light_pdf(&self, p_ref: Vec3, si: &SurfaceInteraction) -> f32 {
+        match self.shape_info[si.shape as usize].light {
+            Some(_) => self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n) * self.selection_pmf(),
+            None => 0.0,
+        }
+    }
+
+    /// Radiance from lights at infinity along direction `d`, and the
+    /// solid-angle density (selection included) of sampling that direction.
+    #[inline]
+    pub fn environment(&self, _d: Vec3) -> (Spectrum, f32) {
+        let mut le = Spectrum::ZERO;
+        let mut pdf = 0.0;
+        for &i in &self.env_lights {
+            if let Light::Constant(c) = &self.lights[i as usize] {
+                le += c.radiance;
+                pdf += c.pdf() * self.selection_pmf();
+            }
+        }
+        (le, pdf)
+    }
+
+    /// Bounds of all geometry.
+    pub fn bounds(&self) -> crate::geometry::Aabb {
+        self.accel.bounds
+    }
+}
