@@ -1,11 +1,23 @@
 //! Scene loading for Penumbra: Mitsuba 3 XML → format-neutral description
-//! (`desc`) → render scene (`build`), plus mesh readers and image output.
+//! (`desc`) → render job (`build`), plus mesh readers and image output.
 
+pub mod build;
 pub mod desc;
 pub mod error;
+pub mod image_io;
 pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 pub mod props;
 
+pub use build::Overrides;
 pub use error::{FileLoc, LoadError, Result};
+
+use penumbra_render::render::RenderJob;
+use std::path::Path;
+
+/// Loads a Mitsuba 3 XML scene with `-D name=value` definitions.
+pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<RenderJob> {
+    let desc = mitsuba::parse_file(path, defines)?;
+    build::build(&desc, ov)
+}

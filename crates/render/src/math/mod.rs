@@ -39,3 +39,12 @@ pub fn luminance(c: Spectrum) -> f32 {
 pub fn mat4_from_f64(m: &DMat4) -> Mat4 {
     m.as_mat4()
 }
+
+/// Mitsuba's `look_at`: a camera-to-world matrix whose local +z points from
+/// `origin` to `target` and local +y towards `up` (local +x is the image's left).
+pub fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    let dir = (target - origin).normalize();
+    let left = up.normalize().cross(dir).normalize();
+    let new_up = dir.cross(left);
+    Mat4::from_cols(left.extend(0.0), new_up.extend(0.0), dir.extend(0.0), origin.extend(1.0))
+}

@@ -1,0 +1,69 @@
+//! Command-line interface definition.
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Debug, Parser)]
+#[command(name = "penumbra", version, about = "Penumbra: a physically based path tracer for Mitsuba 3 scenes")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a Mitsuba 3 XML scene to an image (.exr, .png, .pfm or .hdr).
+    Render(RenderArgs),
+    /// Time the bundled scenes: samples/s and rays/s (and Mitsuba 3, if installed).
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene file (Mitsuba 3 XML).
+    pub scene: PathBuf,
+    /// Output image; the extension selects the format.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Samples per pixel (overrides the scene's sample_count).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of the random sequences (overrides the sampler's seed).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Define a scene parameter, as Mitsuba's -D: fills $name.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub define: Vec<(String, String)>,
+    /// Never show the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Samples per pixel for each scene (default: the scene's own).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Scenes to time (default: the bundled scenes/cornell-box.xml).
+    pub scenes: Vec<PathBuf>,
+    /// Python interpreter with the `mitsuba` package, to time Mitsuba 3 on the
+    /// same scenes (default: $PENUMBRA_MITSUBA_PYTHON, else .venv-mitsuba/bin/python if present).
+    #[arg(long)]
+    pub mitsuba: Option<PathBuf>,
+    /// Mitsuba variant for the comparison.
+    #[arg(long, default_value = "llvm_ad_rgb")]
+    pub mitsuba_variant: String,
+}
+
+fn parse_define(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+        _ => Err(format!("'{s}' is not of the form NAME=VALUE")),
+    }
+}

@@ -1,0 +1,128 @@
+//! End-to-end tests of the `penumbra` binary: output formats, determinism
+//! across thread counts, and clear errors for bad input.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("penumbra-cli-{}-{name}", std::process::id()));
+    fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    bin().arg("render").arg(scene).arg("-o").arg(out).args(extra).output().unwrap()
+}
+
+#[test]
+fn renders_the_bundled_box_identically_with_one_and_two_threads() {
+    let d = tmpdir("threads");
+    let scene = root().join("scenes/cornell-box.xml");
+    let (a, b) = (d.join("a.pfm"), d.join("b.pfm"));
+    let small = ["--spp", "4", "-D", "res=48"];
+    let o1 = render(&scene, &a, &[&small[..], &["--threads", "1"]].concat());
+    assert!(o1.status.success(), "{}", String::from_utf8_lossy(&o1.stderr));
+    let o2 = render(&scene, &b, &[&small[..], &["--threads", "2"]].concat());
+    assert!(o2.status.success(), "{}", String::from_utf8_lossy(&o2.stderr));
+    let (ba, bb) = (fs::read(&a).unwrap(), fs::read(&b).unwrap());
+    assert!(ba.len() > 48 * 48 * 12);
+    assert_eq!(ba, bb, "1 and 2 threads must give bitwise identical images");
+    // A different seed gives a different image.
+    let c = d.join("c.pfm");
+    assert!(render(&scene, &c, &[&small[..], &["--seed", "8"]].concat()).status.success());
+    assert_ne!(fs::read(&c).unwrap(), ba);
+    let stderr = String::from_utf8_lossy(&o1.stderr);
+    assert!(stderr.contains("samples/s") && stderr.contains("rays/s"), "summary line: {stderr}");
+    fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn writes_every_output_format() {
+    let d = tmpdir("formats");
+    let scene = root().join("scenes/cornell-box.xml");
+    for ext in ["exr", "png", "pfm", "hdr"] {
+        let out = d.join(format!("img.{ext}"));
+        let o = render(&scene, &out, &["--spp", "1", "-D", "res=16"]);
+        assert!(o.status.success(), "{ext}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(fs::metadata(&out).unwrap().len() > 0);
+    }
+    fs::remove_dir_all(&d).ok();
+}
+
+/// Writes `xml` as a scene, renders it, and expects a failure whose message
+/// names the file and `line`, and no output image.
+fn expect_error(name: &str, xml: &str, line: u32, needle: &str) {
+    let d = tmpdir(name);
+    let scene = d.join("scene.xml");
+    fs::write(&scene, xml).unwrap();
+    let out = d.join("out.png");
+    let o = render(&scene, &out, &[]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{name}: should fail");
+    assert!(stderr.contains(&format!("scene.xml:{line}")), "{name}: no file:line {line} in: {stderr}");
+    assert!(stderr.to_lowercase().contains(&needle.to_lowercase()), "{name}: '{needle}' not in: {stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: panic: {stderr}");
+    assert!(!out.exists(), "{name}: output left behind");
+    let leftovers: Vec<_> = fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers.len(), 1, "{name}: stray files {leftovers:?}");
+    fs::remove_dir_all(&d).ok();
+}
+
+const SENSOR: &str = r#"<sensor type="perspective"><float name="fov" value="40"/>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>"#;
+
+#[test]
+fn malformed_xml_is_reported_with_its_line() {
+    expect_error("malformed", "<scene version=\"3.0.0\">\n<shape type=\"sphere\">\n</scene>\n", 3, "");
+}
+
+#[test]
+fn missing_mesh_file_is_reported() {
+    let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"obj\">\n  <string name=\"filename\" value=\"nope.obj\"/>\n</shape>\n</scene>\n");
+    expect_error("missing-mesh", &xml, 6, "nope.obj");
+}
+
+#[test]
+fn unknown_plugin_lists_the_supported_ones() {
+    let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"teapot\"/>\n</scene>\n");
+    expect_error("unknown-plugin", &xml, 5, "rectangle");
+}
+
+#[test]
+fn bad_number_is_reported() {
+    let xml = format!(
+        "<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <float name=\"radius\" value=\"1.0x\"/>\n</shape>\n</scene>\n"
+    );
+    expect_error("bad-number", &xml, 6, "radius");
+}
+
+#[test]
+fn undefined_reference_is_reported() {
+    let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <ref id=\"gold\"/>\n</shape>\n</scene>\n");
+    expect_error("undefined-ref", &xml, 6, "gold");
+}
+
+#[test]
+fn unknown_parameter_is_an_error() {
+    let xml = format!(
+        "<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <float name=\"radius_typo\" value=\"1\"/>\n</shape>\n</scene>\n"
+    );
+    expect_error("unknown-param", &xml, 6, "radius_typo");
+}
+
+#[test]
+fn missing_scene_file_is_a_clear_error() {
+    let o = render(Path::new("/nonexistent/scene.xml"), Path::new("/tmp/never.png"), &[]);
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("/nonexistent/scene.xml"), "{stderr}");
+}

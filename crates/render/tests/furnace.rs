@@ -1,0 +1,92 @@
+//! Analytic furnace scenes: the path tracer must reach the closed-form
+//! radiance. Tolerances come from the estimator's measured per-pixel spread
+//! (4 standard errors of the image mean), not from tuning.
+
+use penumbra_render::bsdf::{Bsdf, Diffuse};
+use penumbra_render::camera::{FovAxis, PerspectiveCamera};
+use penumbra_render::film::{Film, Filter, FilterKind};
+use penumbra_render::geometry::Shape;
+use penumbra_render::integrator::{Integrator, PathIntegrator};
+use penumbra_render::light::{AreaLight, ConstantLight, Light};
+use penumbra_render::math::{look_at, Vec3};
+use penumbra_render::render::RenderJob;
+use penumbra_render::sampling::{Sampler, SamplerKind};
+use penumbra_render::scene::{Scene, ShapeInfo};
+
+fn job(scene: Scene, camera_at: Vec3, look: Vec3, fov: f32, spp: u32) -> RenderJob {
+    RenderJob {
+        scene,
+        camera: PerspectiveCamera::new(look_at(camera_at, look, Vec3::Y), fov, FovAxis::X, 16, 16, 1e-3, 1e4),
+        integrator: Integrator::Path(PathIntegrator::default()),
+        sampler: Sampler::new(SamplerKind::Independent, 7, spp),
+        filter: Filter::new(FilterKind::Box),
+        width: 16,
+        height: 16,
+    }
+}
+
+/// Renders each pixel independently and returns (image mean, standard error of the mean).
+fn mean_and_error(job: &RenderJob, spp: u32) -> (Vec<[f32; 3]>, f64, f64) {
+    // Two halves rendered separately give a per-pixel variance estimate.
+    let mut a = Film::new(job.width, job.height);
+    let mut b = Film::new(job.width, job.height);
+    job.render_into(&mut a, 0..spp / 2, &|_| {});
+    job.render_into(&mut b, spp / 2..spp, &|_| {});
+    let (ia, ib) = (a.develop(), b.develop());
+    let mut full = a.clone();
+    full.merge(&b);
+    let img = full.develop();
+    let n = img.len() as f64;
+    let mean = img.iter().map(|p| p[1] as f64).sum::<f64>() / n;
+    // Var(mean of halves' difference)/4 estimates the variance of the pixel mean.
+    let var_pix = ia.iter().zip(&ib).map(|(x, y)| ((x[1] - y[1]) as f64).powi(2)).sum::<f64>() / n / 4.0;
+    (img, mean, (var_pix / n).sqrt())
+}
+
+fn white_sphere_in_constant_env(reflectance: f32) -> Scene {
+    Scene::new(
+        vec![Shape::sphere(Vec3::ZERO, 1.0, false)],
+        vec![ShapeInfo { bsdf: 0, light: None }],
+        vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(reflectance) })],
+        vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
+    )
+}
+
+#[test]
+fn white_furnace_renders_one_everywhere() {
+    let spp = 256;
+    let j = job(white_sphere_in_constant_env(1.0), Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, spp);
+    let (img, mean, se) = mean_and_error(&j, spp);
+    assert!((mean - 1.0).abs() < 0.005, "mean {mean}");
+    assert!((mean - 1.0).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}");
+    // A converged white furnace is flat: every pixel is 1 within its own noise.
+    assert!(img.iter().all(|p| (p[1] - 1.0).abs() < 0.1), "a pixel is far from 1");
+}
+
+#[test]
+fn grey_sphere_reflects_its_albedo() {
+    // A convex diffuse object in a uniform environment reflects rho * Le.
+    let spp = 256;
+    let j = job(white_sphere_in_constant_env(0.8), Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 20.0, spp);
+    let (_, mean, se) = mean_and_error(&j, spp);
+    assert!((mean - 0.8).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}");
+}
+
+#[test]
+fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
+    // Closed diffuse sphere, emitting Le inwards, albedo rho: L = Le / (1 - rho)
+    // (the Neumann series of the rendering equation in closed form).
+    let (le, rho) = (0.5f32, 0.6f32);
+    let scene = Scene::new(
+        vec![Shape::sphere(Vec3::ZERO, 1.0, true)],
+        vec![ShapeInfo { bsdf: 0, light: Some(0) }],
+        vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(rho) })],
+        vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le) })],
+    );
+    let spp = 256;
+    let j = job(scene, Vec3::new(0.0, 0.0, 0.3), Vec3::new(0.0, 0.0, -1.0), 60.0, spp);
+    let (_, mean, se) = mean_and_error(&j, spp);
+    let expected = (le / (1.0 - rho)) as f64;
+    assert!((mean - expected).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}, expected {expected}");
+    assert!((mean - expected).abs() < 0.01 * expected);
+}

@@ -1,0 +1,452 @@
+//! Scene description → render job. The only module that knows both the
+//! format-neutral description and the render types: one function per
+//! object kind. Every property a plugin reads is marked; whatever is left
+//! unread is reported as unsupported (see `props.rs`).
+
+use crate::desc::{Kind, Node, SceneDesc};
+use crate::error::{LoadError, Result};
+use crate::{obj, ply};
+use glam::{DMat4, DVec3, Vec3};
+use penumbra_render::bsdf::{presets, Bsdf, Conductor, Dielectric, Diffuse};
+use penumbra_render::camera::{FovAxis, PerspectiveCamera};
+use penumbra_render::film::{Filter, FilterKind};
+use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
+use penumbra_render::integrator::{Integrator, PathIntegrator};
+use penumbra_render::light::{AreaLight, ConstantLight, Light};
+use penumbra_render::math::Spectrum;
+use penumbra_render::render::RenderJob;
+use penumbra_render::sampling::{Sampler, SamplerKind};
+use penumbra_render::scene::{Scene, ShapeInfo};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// Settings from the command line that override the scene file.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub spp: Option<u32>,
+    pub seed: Option<u64>,
+}
+
+const SHAPES: &[&str] = &["rectangle", "cube", "sphere", "disk", "obj", "ply"];
+const BSDFS: &[&str] = &["diffuse", "dielectric", "conductor", "twosided"];
+const EMITTERS: &[&str] = &["area (inside a shape)", "constant"];
+
+fn unsupported(node: &Node, supported: &[&str]) -> LoadError {
+    node.error(format!(
+        "{} plugin '{}' is not supported by Penumbra; supported {} plugins: {}",
+        node.kind.tag(),
+        node.plugin,
+        node.kind.tag(),
+        supported.join(", ")
+    ))
+}
+
+fn rgb(v: [f64; 3]) -> Spectrum {
+    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
+}
+
+/// Builds the render job for a parsed scene.
+pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
+    let root = &desc.root;
+    let mut b = Builder::default();
+    let mut sensor = None;
+    let mut integrator = None;
+    for child in &root.children {
+        let node = &child.node;
+        match node.kind {
+            Kind::Shape => b.shape(node)?,
+            Kind::Emitter => {
+                let light = b.environment_emitter(node)?;
+                b.lights.push(light);
+            }
+            Kind::Sensor => {
+                if sensor.is_some() {
+                    return Err(LoadError::at(&child.loc, "the scene has more than one sensor; Penumbra renders one"));
+                }
+                sensor = Some(node.clone());
+            }
+            Kind::Integrator => {
+                if integrator.is_some() {
+                    return Err(LoadError::at(&child.loc, "the scene has more than one integrator"));
+                }
+                integrator = Some(build_integrator(node)?);
+            }
+            // Declared for later reference; built (and checked) when used.
+            Kind::Bsdf => {
+                b.bsdf(node)?;
+            }
+            _ => {
+                return Err(LoadError::at(
+                    &child.loc,
+                    format!(
+                        "a top-level {} is not supported; the scene may contain shape, emitter, bsdf, sensor and integrator objects",
+                        node.kind.tag()
+                    ),
+                ))
+            }
+        }
+    }
+    root.check_all_used(&[
+        Kind::Shape,
+        Kind::Emitter,
+        Kind::Sensor,
+        Kind::Integrator,
+        Kind::Bsdf,
+    ])?;
+    let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
+    let (camera, filter, width, height, sampler) = build_sensor(&sensor, ov)?;
+    let scene = Scene::new(b.shapes, b.infos, b.bsdfs, b.lights);
+    Ok(RenderJob {
+        scene,
+        camera,
+        integrator: integrator.unwrap_or(Integrator::Path(PathIntegrator::default())),
+        sampler,
+        filter,
+        width,
+        height,
+    })
+}
+
+#[derive(Default)]
+struct Builder {
+    shapes: Vec<Shape>,
+    infos: Vec<ShapeInfo>,
+    bsdfs: Vec<Bsdf>,
+    lights: Vec<Light>,
+    /// BSDF nodes already built, by node identity (shared through `<ref>`).
+    bsdf_index: HashMap<*const Node, u32>,
+    default_bsdf: Option<u32>,
+}
+
+impl Builder {
+    fn bsdf(&mut self, node: &Rc<Node>) -> Result<u32> {
+        let key = Rc::as_ptr(node);
+        if let Some(&i) = self.bsdf_index.get(&key) {
+            return Ok(i);
+        }
+        let bsdf = build_bsdf(node)?;
+        let i = self.bsdfs.len() as u32;
+        self.bsdfs.push(bsdf);
+        self.bsdf_index.insert(key, i);
+        Ok(i)
+    }
+
+    fn shape(&mut self, node: &Rc<Node>) -> Result<()> {
+        let to_world = node.transform("to_world")?;
+        let flip = node.bool("flip_normals", false)?;
+        let shape = match node.plugin.as_str() {
+            "rectangle" | "cube" => {
+                let mut m = if node.plugin == "rectangle" { TriangleMesh::rectangle() } else { TriangleMesh::cube() };
+                m.transform(&to_world.as_mat4());
+                if flip {
+                    m.flip();
+                }
+                Shape::Mesh(Mesh::new(m, false))
+            }
+            "obj" | "ply" => {
+                let (file, loc) =
+                    node.get_string("filename")?.ok_or_else(|| node.error(format!("{} needs a 'filename'", node.describe())))?;
+                let path = resolve(&loc.file, &file);
+                if !path.exists() {
+                    return Err(LoadError::at(&loc, format!("mesh file '{}' not found", path.display())));
+                }
+                let mut m = if node.plugin == "obj" { obj::load_obj(&path)? } else { ply::load_ply(&path)? };
+                node.accept(&["flip_tex_coords"]);
+                let face_normals = node.bool("face_normals", false)?;
+                m.transform(&to_world.as_mat4());
+                if flip {
+                    m.flip();
+                }
+                m.validate().map_err(|e| LoadError::at(&loc, format!("mesh '{}': {e}", path.display())))?;
+                Shape::Mesh(Mesh::new(m, face_normals))
+            }
+            "sphere" => {
+                let c = node.get_point("center")?.unwrap_or(DVec3::ZERO);
+                let r = node.float("radius", 1.0)?;
+                // The sphere's own parameters compose with to_world, as in Mitsuba.
+                let m = to_world * DMat4::from_translation(c) * DMat4::from_scale(DVec3::splat(r));
+                let center = m.transform_point3(DVec3::ZERO);
+                let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a).length());
+                if (axes[0] - axes[1]).abs() > 1e-6 * axes[0] || (axes[0] - axes[2]).abs() > 1e-6 * axes[0] {
+                    return Err(node.error("sphere: to_world must not scale non-uniformly (use a mesh for ellipsoids)"));
+                }
+                Shape::sphere(center.as_vec3(), axes[0] as f32, flip)
+            }
+            "disk" => Shape::disk(to_world.as_mat4(), flip),
+            _ => return Err(unsupported(node, SHAPES)),
+        };
+        if shape.prim_count() == 0 {
+            return Err(node.error(format!("{} has no triangles", node.describe())));
+        }
+
+        let bsdf = match node.single_child(Kind::Bsdf)? {
+            Some(bn) => self.bsdf(&bn)?,
+            None => *self.default_bsdf.get_or_insert_with(|| {
+                // Mitsuba's default: diffuse with reflectance 0.5.
+                self.bsdfs.push(Bsdf::Diffuse(Diffuse { reflectance: Spectrum::splat(0.5) }));
+                (self.bsdfs.len() - 1) as u32
+            }),
+        };
+        let shape_id = self.shapes.len() as u32;
+        let light = match node.single_child(Kind::Emitter)? {
+            Some(en) => {
+                if en.plugin != "area" {
+                    return Err(en.error(format!(
+                        "emitter '{}' cannot be attached to a shape; only 'area' can",
+                        en.plugin
+                    )));
+                }
+                let radiance = en
+                    .get_rgb("radiance")?
+                    .ok_or_else(|| en.error("area emitter needs a 'radiance' value"))?;
+                en.check_all_used(&[])?;
+                if shape.area() <= 0.0 {
+                    return Err(node.error("an area emitter's shape has zero area"));
+                }
+                self.lights.push(Light::Area(AreaLight { shape: shape_id, radiance: rgb(radiance) }));
+                Some((self.lights.len() - 1) as u32)
+            }
+            None => None,
+        };
+        node.check_all_used(&[Kind::Bsdf, Kind::Emitter])?;
+        self.shapes.push(shape);
+        self.infos.push(ShapeInfo { bsdf, light });
+        Ok(())
+    }
+
+    fn environment_emitter(&mut self, node: &Node) -> Result<Light> {
+        let light = match node.plugin.as_str() {
+            "constant" => {
+                let radiance = node.get_rgb("radiance")?.unwrap_or([1.0; 3]);
+                Light::Constant(ConstantLight { radiance: rgb(radiance) })
+            }
+            "area" => return Err(node.error("an 'area' emitter must be nested inside a shape")),
+            _ => return Err(unsupported(node, EMITTERS)),
+        };
+        node.check_all_used(&[])?;
+        Ok(light)
+    }
+}
+
+/// Resolves a file name relative to the directory of the scene file that names it.
+fn resolve(scene_file: &Path, name: &str) -> PathBuf {
+    let p = Path::new(name);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        scene_file.parent().unwrap_or(Path::new(".")).join(p)
+    }
+}
+
+fn ior(node: &Node, name: &str, default: f64) -> Result<f64> {
+    if let Some((s, loc)) = node.get_string(name).ok().flatten() {
+        return presets::named_ior(&s).map(|v| v as f64).ok_or_else(|| {
+            LoadError::at(&loc, format!("unknown IOR name '{s}'; known names: {}", presets::IOR_NAMES.join(", ")))
+        });
+    }
+    node.float(name, default)
+}
+
+fn build_bsdf(node: &Node) -> Result<Bsdf> {
+    let reject_textures = |node: &Node| -> Result<()> {
+        if let Some(t) = node.children_of(Kind::Texture).next() {
+            return Err(LoadError::at(&t.loc, "textures are not supported yet; give a constant <rgb> value"));
+        }
+        Ok(())
+    };
+    reject_textures(node)?;
+    let bsdf = match node.plugin.as_str() {
+        "diffuse" => Bsdf::Diffuse(Diffuse { reflectance: rgb(node.get_rgb("reflectance")?.unwrap_or([0.5; 3])) }),
+        "dielectric" => {
+            let int = ior(node, "int_ior", 1.5046)?;
+            let ext = ior(node, "ext_ior", 1.000277)?;
+            if !(int > 0.0 && ext > 0.0) {
+                return Err(node.error("dielectric: int_ior and ext_ior must be positive"));
+            }
+            Bsdf::Dielectric(Dielectric {
+                eta: (int / ext) as f32,
+                specular_reflectance: rgb(node.get_rgb("specular_reflectance")?.unwrap_or([1.0; 3])),
+                specular_transmittance: rgb(node.get_rgb("specular_transmittance")?.unwrap_or([1.0; 3])),
+            })
+        }
+        "conductor" => {
+            let eta = node.get_rgb("eta")?;
+            let k = node.get_rgb("k")?;
+            let material = node.get_string("material")?;
+            let (eta, k) = match (material, eta.is_some() || k.is_some()) {
+                (Some((_, loc)), true) => {
+                    return Err(LoadError::at(&loc, "conductor: give either 'material' or 'eta'/'k', not both"))
+                }
+                (Some((name, loc)), false) => match presets::named_conductor(&name) {
+                    Some((e, k)) => (Vec3::from(e), Vec3::from(k)),
+                    None => {
+                        return Err(LoadError::at(
+                            &loc,
+                            format!(
+                                "unknown conductor material '{name}'; known: {}",
+                                presets::CONDUCTOR_NAMES.join(", ")
+                            ),
+                        ))
+                    }
+                },
+                (None, true) => (rgb(eta.unwrap_or([0.0; 3])), rgb(k.unwrap_or([1.0; 3]))),
+                // Mitsuba's default material "none": a perfect mirror.
+                (None, false) => (Vec3::ZERO, Vec3::ONE),
+            };
+            Bsdf::Conductor(Conductor {
+                eta,
+                k,
+                specular_reflectance: rgb(node.get_rgb("specular_reflectance")?.unwrap_or([1.0; 3])),
+            })
+        }
+        "twosided" => {
+            let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
+            let (front, back) = match inner.as_slice() {
+                [one] => (build_bsdf(&one.node)?, build_bsdf(&one.node)?),
+                [a, b] => (build_bsdf(&a.node)?, build_bsdf(&b.node)?),
+                _ => return Err(node.error("twosided needs one or two nested BSDFs")),
+            };
+            if matches!(front, Bsdf::TwoSided(..)) || matches!(back, Bsdf::TwoSided(..)) {
+                return Err(node.error("twosided cannot wrap another twosided BSDF"));
+            }
+            Bsdf::TwoSided(Box::new(front), Box::new(back))
+        }
+        _ => return Err(unsupported(node, BSDFS)),
+    };
+    node.check_all_used(&[Kind::Bsdf])?;
+    Ok(bsdf)
+}
+
+fn build_integrator(node: &Node) -> Result<Integrator> {
+    match node.plugin.as_str() {
+        "path" => {
+            let max_depth = node.int("max_depth", -1)?;
+            let rr_depth = node.int("rr_depth", 5)?;
+            if max_depth < -1 {
+                return Err(LoadError::at(node.loc_of("max_depth"), "max_depth must be -1 (unbounded) or >= 0"));
+            }
+            if rr_depth <= 0 {
+                return Err(LoadError::at(node.loc_of("rr_depth"), "rr_depth must be positive"));
+            }
+            let hide_emitters = node.bool("hide_emitters", false)?;
+            node.check_all_used(&[])?;
+            Ok(Integrator::Path(PathIntegrator {
+                max_depth: if max_depth < 0 { u32::MAX } else { max_depth as u32 },
+                rr_depth: rr_depth.min(u32::MAX as i64) as u32,
+                hide_emitters,
+            }))
+        }
+        _ => Err(unsupported(node, &["path"])),
+    }
+}
+
+type SensorParts = (PerspectiveCamera, Filter, u32, u32, Sampler);
+
+fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
+    if node.plugin != "perspective" {
+        return Err(unsupported(node, &["perspective"]));
+    }
+    let to_world = node.transform("to_world")?;
+    let fov = node.get_float("fov")?.ok_or_else(|| node.error("perspective sensor needs a 'fov' (degrees)"))?;
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(LoadError::at(node.loc_of("fov"), "fov must lie in (0, 180) degrees"));
+    }
+    let axis = match node.string("fov_axis", "x")?.as_str() {
+        "x" => FovAxis::X,
+        "y" => FovAxis::Y,
+        "diagonal" => FovAxis::Diagonal,
+        "smaller" => FovAxis::Smaller,
+        "larger" => FovAxis::Larger,
+        other => {
+            return Err(LoadError::at(
+                node.loc_of("fov_axis"),
+                format!("fov_axis '{other}' is not one of x, y, diagonal, smaller, larger"),
+            ))
+        }
+    };
+    let near = node.float("near_clip", 0.01)?;
+    let far = node.float("far_clip", 10000.0)?;
+    if !(near > 0.0 && far > near) {
+        return Err(node.error("near_clip must be positive and smaller than far_clip"));
+    }
+    for p in ["principal_point_offset_x", "principal_point_offset_y"] {
+        if node.float(p, 0.0)? != 0.0 {
+            return Err(LoadError::at(node.loc_of(p), format!("{p} is not supported yet")));
+        }
+    }
+    node.accept(&["shutter_open", "shutter_close"]);
+
+    // Film.
+    let film = node.single_child(Kind::Film)?.ok_or_else(|| node.error("the sensor needs a <film type=\"hdrfilm\">"))?;
+    if film.plugin != "hdrfilm" {
+        return Err(unsupported(&film, &["hdrfilm"]));
+    }
+    let width = film.int("width", 768)?;
+    let height = film.int("height", 576)?;
+    if !(1..=1 << 16).contains(&width) || !(1..=1 << 16).contains(&height) {
+        return Err(film.error("film width and height must be between 1 and 65536"));
+    }
+    for p in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"] {
+        if film.has(p) {
+            return Err(LoadError::at(film.loc_of(p), format!("hdrfilm '{p}' is not supported yet")));
+        }
+    }
+    // Output-format settings that cannot change the rendered values.
+    film.accept(&["pixel_format", "component_format", "file_format", "sample_border", "compensate"]);
+    let filter = match film.single_child(Kind::Rfilter)? {
+        None => Filter::new(FilterKind::Gaussian { stddev: 0.5 }),
+        Some(f) => {
+            let kind = match f.plugin.as_str() {
+                "box" => FilterKind::Box,
+                "tent" => FilterKind::Tent { radius: f.float("radius", 1.0)? as f32 },
+                "gaussian" => FilterKind::Gaussian { stddev: f.float("stddev", 0.5)? as f32 },
+                _ => return Err(unsupported(&f, &["box", "tent", "gaussian"])),
+            };
+            f.check_all_used(&[])?;
+            Filter::new(kind)
+        }
+    };
+    film.check_all_used(&[Kind::Rfilter])?;
+
+    // Sampler.
+    let (kind, mut spp, mut seed) = match node.single_child(Kind::Sampler)? {
+        None => (SamplerKind::Independent, 4, 0),
+        Some(s) => {
+            let kind = match s.plugin.as_str() {
+                "independent" => SamplerKind::Independent,
+                "stratified" => {
+                    if !s.bool("jitter", true)? {
+                        return Err(LoadError::at(s.loc_of("jitter"), "stratified: jitter=false is not supported"));
+                    }
+                    SamplerKind::Stratified
+                }
+                _ => return Err(unsupported(&s, &["independent", "stratified"])),
+            };
+            let spp = s.int("sample_count", 4)?;
+            let seed = s.int("seed", 0)?;
+            if spp < 1 || spp > u32::MAX as i64 {
+                return Err(LoadError::at(s.loc_of("sample_count"), "sample_count must be a positive integer"));
+            }
+            s.check_all_used(&[])?;
+            (kind, spp as u32, seed as u64)
+        }
+    };
+    if let Some(o) = ov.spp {
+        spp = o;
+    }
+    if let Some(o) = ov.seed {
+        seed = o;
+    }
+    node.check_all_used(&[Kind::Film, Kind::Sampler])?;
+    let camera = PerspectiveCamera::new(
+        to_world.as_mat4(),
+        fov as f32,
+        axis,
+        width as u32,
+        height as u32,
+        near as f32,
+        far as f32,
+    );
+    Ok((camera, filter, width as u32, height as u32, Sampler::new(kind, seed, spp)))
+}

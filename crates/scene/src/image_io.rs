@@ -1,0 +1,162 @@
+//! Image output by file extension: `.exr` (linear float RGB), `.png`
+//! (sRGB-encoded 8-bit, clamped), `.pfm` (linear float, bottom row first),
+//! `.hdr` (Radiance RGBE). Files are written to a temporary name and renamed,
+//! so a reader never sees a half-written image and a failure leaves nothing.
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// A linear RGB image, row-major, top row first.
+#[derive(Debug, Clone)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+/// The output formats, chosen by extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Exr,
+    Png,
+    Pfm,
+    Hdr,
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Result<Format, String> {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        match ext.as_str() {
+            "exr" => Ok(Format::Exr),
+            "png" => Ok(Format::Png),
+            "pfm" => Ok(Format::Pfm),
+            "hdr" => Ok(Format::Hdr),
+            _ => Err(format!(
+                "cannot tell the image format of '{}': use the extension .exr, .png, .pfm or .hdr",
+                path.display()
+            )),
+        }
+    }
+}
+
+/// sRGB transfer function (IEC 61966-2-1).
+pub fn linear_to_srgb(v: f32) -> f32 {
+    if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(format!(".tmp{}", std::process::id()));
+    path.with_file_name(name)
+}
+
+/// Writes `img` to `path` in the format its extension names.
+pub fn write_image(path: &Path, img: &RgbImage) -> Result<(), String> {
+    let format = Format::from_path(path)?;
+    let tmp = temp_path(path);
+    let result = write_format(&tmp, format, img);
+    match result {
+        Ok(()) => fs::rename(&tmp, path).map_err(|e| format!("cannot write '{}': {e}", path.display())),
+        Err(e) => {
+            let _ = fs::remove_file(&tmp);
+            Err(format!("cannot write '{}': {e}", path.display()))
+        }
+    }
+}
+
+fn write_format(path: &Path, format: Format, img: &RgbImage) -> Result<(), String> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    match format {
+        Format::Exr => {
+            use exr::prelude::*;
+            let px = &img.pixels;
+            write_rgb_file(path, w, h, |x, y| {
+                let p = px[y * w + x];
+                (p[0], p[1], p[2])
+            })
+            .map_err(|e| e.to_string())
+        }
+        Format::Png => {
+            let mut buf = Vec::with_capacity(w * h * 3);
+            for p in &img.pixels {
+                for c in p {
+                    let v = if c.is_finite() { linear_to_srgb(c.clamp(0.0, 1.0)) } else { 0.0 };
+                    buf.push((v * 255.0 + 0.5) as u8);
+                }
+            }
+            image::save_buffer_with_format(path, &buf, img.width, img.height, image::ColorType::Rgb8, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        }
+        Format::Pfm => {
+            let f = fs::File::create(path).map_err(|e| e.to_string())?;
+            let mut out = BufWriter::new(f);
+            // Negative scale: little-endian floats; rows run bottom to top.
+            write!(out, "PF\n{w} {h}\n-1.0\n").map_err(|e| e.to_string())?;
+            for y in (0..h).rev() {
+                for p in &img.pixels[y * w..(y + 1) * w] {
+                    for c in p {
+                        out.write_all(&c.to_le_bytes()).map_err(|e| e.to_string())?;
+                    }
+                }
+            }
+            out.flush().map_err(|e| e.to_string())
+        }
+        Format::Hdr => {
+            let f = fs::File::create(path).map_err(|e| e.to_string())?;
+            let pixels: Vec<image::Rgb<f32>> =
+                img.pixels.iter().map(|p| image::Rgb(p.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 }))).collect();
+            image::codecs::hdr::HdrEncoder::new(BufWriter::new(f)).encode(&pixels, w, h).map_err(|e| e.to_string())
+        }
+    }
+}
+
+/// Reads a linear RGB EXR (references, tests).
+pub fn read_exr(path: &Path) -> Result<RgbImage, String> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), res.height(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, _, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
+    )
+    .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+    let (w, h, pixels) = img.layer_data.channel_data.pixels;
+    Ok(RgbImage { width: w as u32, height: h as u32, pixels })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_round_trip_or_exist() {
+        let dir = std::env::temp_dir().join(format!("penumbra-io-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let img = RgbImage { width: 3, height: 2, pixels: (0..6).map(|i| [i as f32 * 0.25, 0.5, 2.0]).collect() };
+        let exr_path = dir.join("a.exr");
+        write_image(&exr_path, &img).unwrap();
+        let back = read_exr(&exr_path).unwrap();
+        assert_eq!(back.pixels, img.pixels);
+        for ext in ["png", "pfm", "hdr"] {
+            let p = dir.join(format!("a.{ext}"));
+            write_image(&p, &img).unwrap();
+            assert!(fs::metadata(&p).unwrap().len() > 0);
+        }
+        let pfm = fs::read(dir.join("a.pfm")).unwrap();
+        assert_eq!(pfm.len(), "PF\n3 2\n-1.0\n".len() + 6 * 12);
+        assert!(write_image(&dir.join("a.jpg"), &img).is_err());
+        assert!(fs::read_dir(&dir).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().contains(".tmp")));
+        fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn srgb_curve_endpoints() {
+        assert_eq!(linear_to_srgb(0.0), 0.0);
+        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+        assert!((linear_to_srgb(0.18) - 0.4613).abs() < 1e-3);
+    }
+}
