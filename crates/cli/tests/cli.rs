@@ -88,13 +88,13 @@ fn malformed_xml_is_reported_with_its_line() {
 #[test]
 fn missing_mesh_file_is_reported() {
     let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"obj\">\n  <string name=\"filename\" value=\"nope.obj\"/>\n</shape>\n</scene>\n");
-    expect_error("missing-mesh", &xml, 6, "nope.obj");
+    expect_error("missing-mesh", &xml, 5, "nope.obj");
 }
 
 #[test]
 fn unknown_plugin_lists_the_supported_ones() {
     let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"teapot\"/>\n</scene>\n");
-    expect_error("unknown-plugin", &xml, 5, "rectangle");
+    expect_error("unknown-plugin", &xml, 4, "rectangle");
 }
 
 #[test]
@@ -102,13 +102,13 @@ fn bad_number_is_reported() {
     let xml = format!(
         "<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <float name=\"radius\" value=\"1.0x\"/>\n</shape>\n</scene>\n"
     );
-    expect_error("bad-number", &xml, 6, "radius");
+    expect_error("bad-number", &xml, 5, "radius");
 }
 
 #[test]
 fn undefined_reference_is_reported() {
     let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <ref id=\"gold\"/>\n</shape>\n</scene>\n");
-    expect_error("undefined-ref", &xml, 6, "gold");
+    expect_error("undefined-ref", &xml, 5, "gold");
 }
 
 #[test]
@@ -116,7 +116,7 @@ fn unknown_parameter_is_an_error() {
     let xml = format!(
         "<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <float name=\"radius_typo\" value=\"1\"/>\n</shape>\n</scene>\n"
     );
-    expect_error("unknown-param", &xml, 6, "radius_typo");
+    expect_error("unknown-param", &xml, 5, "radius_typo");
 }
 
 #[test]

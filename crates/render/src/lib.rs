@@ -15,3 +15,5 @@ pub mod math;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+#[cfg(test)]
+pub mod testing;

@@ -1,0 +1,183 @@
+//! Chi-square goodness-of-fit test of a direction sampler against its pdf
+//! (the method of Mitsuba's `chi2.py` and pbrt's tests): histogram many
+//! samples over a (cos θ, φ) grid of the sphere, integrate the claimed pdf
+//! over each cell for the expected counts, pool sparse cells, and reject
+//! when the p-value falls below a significance level.
+
+use crate::math::PI;
+use crate::sampling::rng::{hash_words, to_unit_f32};
+use glam::{Vec2, Vec3};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+const THETA_BINS: usize = 24;
+const PHI_BINS: usize = 48;
+
+fn cell(w: Vec3) -> usize {
+    let z = w.z.clamp(-1.0, 1.0);
+    let iz = (((z + 1.0) * 0.5) * THETA_BINS as f32) as usize;
+    let phi = w.y.atan2(w.x);
+    let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+    let ip = ((phi / (2.0 * PI)) * PHI_BINS as f32) as usize;
+    iz.min(THETA_BINS - 1) * PHI_BINS + ip.min(PHI_BINS - 1)
+}
+
+/// Runs the test. `sample` maps (u1, u2) to a direction and its claimed
+/// weight (None = no sample); a sampler that may fail must have a pdf that
+/// integrates to the success probability. Returns the p-value.
+pub fn chi2_test(
+    n: usize,
+    seed: u64,
+    mut sample: impl FnMut(f32, Vec2) -> Option<Vec3>,
+    pdf: impl Fn(Vec3) -> f64,
+) -> f64 {
+    let cells = THETA_BINS * PHI_BINS;
+    let mut observed = vec![0f64; cells];
+    for i in 0..n as u64 {
+        let h = hash_words(&[seed, i]);
+        let u = Vec2::new(to_unit_f32(h), to_unit_f32(h << 24));
+        let u1 = to_unit_f32(hash_words(&[seed, i, 1]));
+        if let Some(w) = sample(u1, u) {
+            assert!(w.is_finite() && (w.length() - 1.0).abs() < 1e-3, "sample {w} is not a unit direction");
+            observed[cell(w)] += 1.0;
+        }
+    }
+    // Expected counts: midpoint rule on a sub-grid of each cell in (z, φ),
+    // where dz dφ is the solid-angle measure. Cells the pdf's support cuts
+    // through (some sub-samples zero, some not), or empty ones that received
+    // samples, are integrated again on a much finer grid.
+    let mut expected = vec![0f64; cells];
+    let dz = 2.0 / THETA_BINS as f64;
+    let dp = 2.0 * std::f64::consts::PI / PHI_BINS as f64;
+    let integrate = |iz: usize, ip: usize, sub: usize| -> (f64, bool) {
+        let (mut acc, mut zeros) = (0.0, 0);
+        for a in 0..sub {
+            for b in 0..sub {
+                let z = -1.0 + (iz as f64 + (a as f64 + 0.5) / sub as f64) * dz;
+                let phi = (ip as f64 + (b as f64 + 0.5) / sub as f64) * dp;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let v = pdf(Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32));
+                zeros += (v == 0.0) as usize;
+                acc += v;
+            }
+        }
+        (acc / (sub * sub) as f64 * dz * dp * n as f64, zeros > 0 && zeros < sub * sub)
+    };
+    for iz in 0..THETA_BINS {
+        for ip in 0..PHI_BINS {
+            let c = iz * PHI_BINS + ip;
+            let (e, mixed) = integrate(iz, ip, 8);
+            expected[c] = if mixed || (e == 0.0 && observed[c] > 0.0) { integrate(iz, ip, 96).0 } else { e };
+        }
+    }
+    // Pool cells with small expectation (they make the statistic unreliable).
+    let mut order: Vec<usize> = (0..cells).collect();
+    order.sort_by(|&a, &b| expected[a].partial_cmp(&expected[b]).unwrap());
+    let (mut chi2, mut dof) = (0.0, 0usize);
+    let (mut pool_o, mut pool_e) = (0.0, 0.0);
+    for &c in &order {
+        if expected[c] == 0.0 {
+            assert!(observed[c] == 0.0, "samples landed where the pdf is zero (cell {c})");
+            continue;
+        }
+        if expected[c] < 5.0 {
+            pool_o += observed[c];
+            pool_e += expected[c];
+            if pool_e >= 5.0 {
+                chi2 += (pool_o - pool_e).powi(2) / pool_e;
+                dof += 1;
+                pool_o = 0.0;
+                pool_e = 0.0;
+            }
+            continue;
+        }
+        chi2 += (observed[c] - expected[c]).powi(2) / expected[c];
+        dof += 1;
+    }
+    if pool_e > 0.0 {
+        chi2 += (pool_o - pool_e).powi(2) / pool_e;
+        dof += 1;
+    }
+    let dist = ChiSquared::new((dof.max(2) - 1) as f64).unwrap();
+    1.0 - dist.cdf(chi2)
+}
+
+/// Significance level per test (1 %, Šidák-corrected for the number of
+/// tests a module runs).
+pub fn alpha(tests: usize) -> f64 {
+    1.0 - (1.0 - 0.01f64).powf(1.0 / tests as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::{Bsdf, Diffuse};
+    use crate::geometry::Shape;
+    use crate::sampling::warp;
+
+    const N: usize = 400_000;
+
+    #[test]
+    fn warps_match_their_densities() {
+        let a = alpha(4);
+        let p = chi2_test(N, 1, |_, u| Some(warp::sample_cosine_hemisphere(u)), |w| warp::cosine_hemisphere_pdf(w) as f64);
+        assert!(p > a, "cosine hemisphere p = {p}");
+        let p = chi2_test(N, 2, |_, u| Some(warp::sample_uniform_sphere(u)), |_| warp::uniform_sphere_pdf() as f64);
+        assert!(p > a, "uniform sphere p = {p}");
+        let cm = 0.7;
+        let p = chi2_test(
+            N,
+            3,
+            |_, u| Some(warp::sample_uniform_cone(u, cm)),
+            |w| if w.z >= cm { warp::uniform_cone_pdf(cm) as f64 } else { 0.0 },
+        );
+        assert!(p > a, "cone p = {p}");
+        // A deliberately wrong pdf must be rejected: the test can fail.
+        let p = chi2_test(N, 4, |_, u| Some(warp::sample_cosine_hemisphere(u)), |w| if w.z > 0.0 { 0.5 / PI as f64 } else { 0.0 });
+        assert!(p < a, "uniform pdf accepted for cosine samples (p = {p})");
+    }
+
+    #[test]
+    fn diffuse_bsdf_sampling_matches_its_pdf() {
+        let b = Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(0.7) });
+        let b2 = Bsdf::TwoSided(Box::new(b.clone()), Box::new(b.clone()));
+        let a = alpha(4);
+        for (k, wo) in [Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(0.99, 0.0, 0.05).normalize()].into_iter().enumerate() {
+            for (j, bsdf) in [&b, &b2].into_iter().enumerate() {
+                let wo = if j == 1 { -wo } else { wo };
+                let p = chi2_test(N, 10 + k as u64 * 2 + j as u64, |u1, u| bsdf.sample(wo, u1, u).map(|s| s.wi), |wi| bsdf.pdf(wo, wi) as f64);
+                assert!(p > a, "diffuse (twosided={j}) wo={wo}: p = {p}");
+                // The sample weight equals f cos / pdf.
+                let s = bsdf.sample(wo, 0.3, Vec2::new(0.2, 0.6)).unwrap();
+                let expect = bsdf.eval(wo, s.wi) * s.wi.z.abs() / s.pdf;
+                assert!((s.weight - expect).abs().max_element() < 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn sphere_light_sampling_matches_its_pdf() {
+        let a = alpha(2);
+        for (k, (c, r)) in [(Vec3::new(0.3, -0.2, 2.0), 0.8f32), (Vec3::new(0.0, 0.0, 0.3), 1.0)].into_iter().enumerate() {
+            // Second case: the reference point is inside the sphere (area sampling).
+            let s = Shape::sphere(c, r, false);
+            let p = chi2_test(
+                N,
+                20 + k as u64,
+                |_, u| s.sample_direction(Vec3::ZERO, u).map(|x| x.p.normalize()),
+                |w| {
+                    // Density of the first hit of the ray from the origin along w.
+                    let ray = crate::geometry::Ray::new(Vec3::ZERO, w, f32::INFINITY);
+                    match s.intersect_analytic(&ray) {
+                        Some((t, _)) => {
+                            let p = ray.at(t);
+                            let n = (p - c).normalize();
+                            s.pdf_direction(Vec3::ZERO, p, n) as f64
+                        }
+                        None => 0.0,
+                    }
+                },
+            );
+            assert!(p > a, "sphere {k}: p = {p}");
+        }
+    }
+}

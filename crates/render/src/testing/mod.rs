@@ -1,0 +1,3 @@
+//! Statistical test harnesses shared by the unit tests.
+
+pub mod chi2;
