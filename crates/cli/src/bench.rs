@@ -45,17 +45,18 @@ fn time_mitsuba(python: &Path, variant: &str, scene: &Path, spp: u32, threads: u
 }
 
 pub fn run(a: &BenchArgs) -> Result<()> {
-    let scenes: Vec<PathBuf> = if a.scenes.is_empty() {
-        DEFAULT_SCENES.iter().map(PathBuf::from).collect()
-    } else {
-        a.scenes.clone()
-    };
+    let scenes: Vec<PathBuf> =
+        if a.scenes.is_empty() { DEFAULT_SCENES.iter().map(PathBuf::from).collect() } else { a.scenes.clone() };
     let pool = crate::thread_pool(a.threads)?;
     let threads = pool.current_num_threads();
     let mitsuba = mitsuba_python(a);
-    println!("{:<28} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8}", "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup");
+    println!(
+        "{:<28} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8}",
+        "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup"
+    );
     for scene in &scenes {
-        let job = penumbra_scene::load_scene(scene, &[], &Overrides { spp: a.spp, seed: None }).map_err(|e| anyhow!(e))?;
+        let job =
+            penumbra_scene::load_scene(scene, &[], &Overrides { spp: a.spp, seed: None }).map_err(|e| anyhow!(e))?;
         // One untimed warm-up pass at 1 spp (page faults, thread start-up).
         let mut warm = job.clone();
         warm.sampler.spp = 1;

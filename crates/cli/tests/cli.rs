@@ -107,7 +107,9 @@ fn bad_number_is_reported() {
 
 #[test]
 fn undefined_reference_is_reported() {
-    let xml = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <ref id=\"gold\"/>\n</shape>\n</scene>\n");
+    let xml = format!(
+        "<scene version=\"3.0.0\">\n{SENSOR}\n<shape type=\"sphere\">\n  <ref id=\"gold\"/>\n</shape>\n</scene>\n"
+    );
     expect_error("undefined-ref", &xml, 5, "gold");
 }
 

@@ -33,7 +33,15 @@ pub struct PerspectiveCamera {
 }
 
 impl PerspectiveCamera {
-    pub fn new(world_from_camera: Mat4, fov_deg: f32, axis: FovAxis, width: u32, height: u32, near: f32, far: f32) -> Self {
+    pub fn new(
+        world_from_camera: Mat4,
+        fov_deg: f32,
+        axis: FovAxis,
+        width: u32,
+        height: u32,
+        near: f32,
+        far: f32,
+    ) -> Self {
         let aspect = width as f32 / height as f32;
         let t = (0.5 * fov_deg.to_radians()).tan();
         // Express the given fov as tan_half along x.
@@ -67,7 +75,8 @@ impl PerspectiveCamera {
     /// Ray through film position `s` in [0,1]² (x right, y down).
     #[inline]
     pub fn generate_ray(&self, s: Vec2) -> Ray {
-        let local = Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0).normalize();
+        let local =
+            Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0).normalize();
         let o = self.world_from_camera.transform_point3(Vec3::ZERO);
         let d = self.world_from_camera.transform_vector3(local).normalize();
         // The clip planes are perpendicular to the view axis.

@@ -46,8 +46,7 @@ impl Filter {
         // Tabulate |f| at the bin midpoints; the sampling density need only
         // be positive where f is, the weight f/p corrects the rest exactly.
         let w = 2.0 * radius / TABLE as f32;
-        let vals: Vec<f32> =
-            (0..TABLE).map(|i| f.eval(-radius + (i as f32 + 0.5) * w).abs().max(1e-6)).collect();
+        let vals: Vec<f32> = (0..TABLE).map(|i| f.eval(-radius + (i as f32 + 0.5) * w).abs().max(1e-6)).collect();
         let total: f32 = vals.iter().sum::<f32>() * w;
         let mut acc = 0.0;
         f.cdf.push(0.0);

@@ -33,8 +33,7 @@ impl Scene {
     pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, bsdfs: Vec<Bsdf>, lights: Vec<Light>) -> Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
-        let env_lights =
-            lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
+        let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
         Scene { shapes, shape_info, bsdfs, lights, env_lights, accel }
     }
 
@@ -51,7 +50,8 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, si: &SurfaceInteraction, wi: Vec3, dist: f32) -> bool {
         let o = offset_origin(si.p, si.n, wi);
-        let t_max = if dist.is_finite() { (si.p + wi * dist - o).length() * (1.0 - SHADOW_EPSILON) } else { f32::INFINITY };
+        let t_max =
+            if dist.is_finite() { (si.p + wi * dist - o).length() * (1.0 - SHADOW_EPSILON) } else { f32::INFINITY };
         self.accel.occluded(&Ray::new(o, wi, t_max), &self.shapes)
     }
 

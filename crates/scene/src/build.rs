@@ -87,13 +87,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             }
         }
     }
-    root.check_all_used(&[
-        Kind::Shape,
-        Kind::Emitter,
-        Kind::Sensor,
-        Kind::Integrator,
-        Kind::Bsdf,
-    ])?;
+    root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, width, height, sampler) = build_sensor(&sensor, ov)?;
     let scene = Scene::new(b.shapes, b.infos, b.bsdfs, b.lights);
@@ -117,6 +111,7 @@ struct Builder {
     /// BSDF nodes already built, by node identity (shared through `<ref>`).
     bsdf_index: HashMap<*const Node, u32>,
     default_bsdf: Option<u32>,
+    default_emitter_bsdf: Option<u32>,
 }
 
 impl Builder {
@@ -145,14 +140,20 @@ impl Builder {
                 Shape::Mesh(Mesh::new(m, false))
             }
             "obj" | "ply" => {
-                let (file, loc) =
-                    node.get_string("filename")?.ok_or_else(|| node.error(format!("{} needs a 'filename'", node.describe())))?;
+                let (file, loc) = node
+                    .get_string("filename")?
+                    .ok_or_else(|| node.error(format!("{} needs a 'filename'", node.describe())))?;
                 let path = resolve(&loc.file, &file);
                 if !path.exists() {
                     return Err(LoadError::at(&loc, format!("mesh file '{}' not found", path.display())));
                 }
-                let mut m = if node.plugin == "obj" { obj::load_obj(&path)? } else { ply::load_ply(&path)? };
-                node.accept(&["flip_tex_coords"]);
+                // Mitsuba flips v for OBJ by default, not for PLY.
+                let flip_uv = node.bool("flip_tex_coords", node.plugin == "obj")?;
+                let mut m = if node.plugin == "obj" {
+                    obj::load_obj_with(&path, flip_uv)?
+                } else {
+                    ply::load_ply_with(&path, flip_uv)?
+                };
                 let face_normals = node.bool("face_normals", false)?;
                 m.transform(&to_world.as_mat4());
                 if flip {
@@ -180,26 +181,31 @@ impl Builder {
             return Err(node.error(format!("{} has no triangles", node.describe())));
         }
 
+        let emitter = node.single_child(Kind::Emitter)?;
         let bsdf = match node.single_child(Kind::Bsdf)? {
             Some(bn) => self.bsdf(&bn)?,
+            // Mitsuba's default: diffuse with reflectance 0.5, but black for
+            // emitters (checked against Mitsuba 3.9: an emitter without a BSDF
+            // reflects nothing).
+            None if emitter.is_some() => *self.default_emitter_bsdf.get_or_insert_with(|| {
+                self.bsdfs.push(Bsdf::Diffuse(Diffuse { reflectance: Spectrum::ZERO }));
+                (self.bsdfs.len() - 1) as u32
+            }),
             None => *self.default_bsdf.get_or_insert_with(|| {
-                // Mitsuba's default: diffuse with reflectance 0.5.
                 self.bsdfs.push(Bsdf::Diffuse(Diffuse { reflectance: Spectrum::splat(0.5) }));
                 (self.bsdfs.len() - 1) as u32
             }),
         };
         let shape_id = self.shapes.len() as u32;
-        let light = match node.single_child(Kind::Emitter)? {
+        let light = match emitter {
             Some(en) => {
                 if en.plugin != "area" {
-                    return Err(en.error(format!(
-                        "emitter '{}' cannot be attached to a shape; only 'area' can",
-                        en.plugin
-                    )));
+                    return Err(
+                        en.error(format!("emitter '{}' cannot be attached to a shape; only 'area' can", en.plugin))
+                    );
                 }
-                let radiance = en
-                    .get_rgb("radiance")?
-                    .ok_or_else(|| en.error("area emitter needs a 'radiance' value"))?;
+                let radiance =
+                    en.get_rgb("radiance")?.ok_or_else(|| en.error("area emitter needs a 'radiance' value"))?;
                 en.check_all_used(&[])?;
                 if shape.area() <= 0.0 {
                     return Err(node.error("an area emitter's shape has zero area"));
@@ -378,7 +384,8 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     node.accept(&["shutter_open", "shutter_close"]);
 
     // Film.
-    let film = node.single_child(Kind::Film)?.ok_or_else(|| node.error("the sensor needs a <film type=\"hdrfilm\">"))?;
+    let film =
+        node.single_child(Kind::Film)?.ok_or_else(|| node.error("the sensor needs a <film type=\"hdrfilm\">"))?;
     if film.plugin != "hdrfilm" {
         return Err(unsupported(&film, &["hdrfilm"]));
     }

@@ -89,8 +89,15 @@ fn write_format(path: &Path, format: Format, img: &RgbImage) -> Result<(), Strin
                     buf.push((v * 255.0 + 0.5) as u8);
                 }
             }
-            image::save_buffer_with_format(path, &buf, img.width, img.height, image::ColorType::Rgb8, image::ImageFormat::Png)
-                .map_err(|e| e.to_string())
+            image::save_buffer_with_format(
+                path,
+                &buf,
+                img.width,
+                img.height,
+                image::ColorType::Rgb8,
+                image::ImageFormat::Png,
+            )
+            .map_err(|e| e.to_string())
         }
         Format::Pfm => {
             let f = fs::File::create(path).map_err(|e| e.to_string())?;
@@ -108,8 +115,11 @@ fn write_format(path: &Path, format: Format, img: &RgbImage) -> Result<(), Strin
         }
         Format::Hdr => {
             let f = fs::File::create(path).map_err(|e| e.to_string())?;
-            let pixels: Vec<image::Rgb<f32>> =
-                img.pixels.iter().map(|p| image::Rgb(p.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 }))).collect();
+            let pixels: Vec<image::Rgb<f32>> = img
+                .pixels
+                .iter()
+                .map(|p| image::Rgb(p.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
+                .collect();
             image::codecs::hdr::HdrEncoder::new(BufWriter::new(f)).encode(&pixels, w, h).map_err(|e| e.to_string())
         }
     }

@@ -23,12 +23,7 @@ impl Node {
     fn type_error(&self, p: &Property, want: &str) -> LoadError {
         LoadError::at(
             &p.loc,
-            format!(
-                "parameter '{}' of {} must be {want}, found a {}",
-                p.name,
-                self.describe(),
-                p.value.type_name()
-            ),
+            format!("parameter '{}' of {} must be {want}, found a {}", p.name, self.describe(), p.value.type_name()),
         )
     }
 
@@ -186,11 +181,7 @@ impl Node {
         if let Some(c) = self.children.iter().find(|c| !allowed_children.contains(&c.node.kind)) {
             return Err(LoadError::at(
                 &c.loc,
-                format!(
-                    "a nested {} is not supported inside {}",
-                    c.node.kind.tag(),
-                    self.describe()
-                ),
+                format!("a nested {} is not supported inside {}", c.node.kind.tag(), self.describe()),
             ));
         }
         Ok(())

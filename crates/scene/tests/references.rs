@@ -70,7 +70,11 @@ fn compare(name: &str, spp: u32) {
         }
     }
     let ratio = err / expl;
-    eprintln!("{name}: relMSE {:.3e}, explained by variance {:.3e}, ratio {ratio:.3}", err / (3.0 * n), expl / (3.0 * n));
+    eprintln!(
+        "{name}: relMSE {:.3e}, explained by variance {:.3e}, ratio {ratio:.3}",
+        err / (3.0 * n),
+        expl / (3.0 * n)
+    );
     // For unbiased estimators the ratio's expectation is 1; its spread over
     // ~10k pixel channels is a few percent, the batch variance estimate adds
     // more; 1.3 leaves room for that but not for a systematic difference.

@@ -11,9 +11,15 @@ use glam::{Vec2, Vec3};
 /// so traversal touches one cache line per test.
 #[derive(Debug, Clone, Copy)]
 pub enum Prim {
-    Triangle { v: [Vec3; 3], shape: u32, index: u32 },
+    Triangle {
+        v: [Vec3; 3],
+        shape: u32,
+        index: u32,
+    },
     /// A sphere or disk, intersected through its shape.
-    Analytic { shape: u32 },
+    Analytic {
+        shape: u32,
+    },
 }
 
 impl Prim {
@@ -98,7 +104,11 @@ impl Accel {
                 }
                 _ => {
                     let b = shape.prim_bounds(0);
-                    items.push(BuildPrim { bounds: b, centroid: b.center(), prim: Prim::Analytic { shape: si as u32 } });
+                    items.push(BuildPrim {
+                        bounds: b,
+                        centroid: b.center(),
+                        prim: Prim::Analytic { shape: si as u32 },
+                    });
                 }
             }
         }

@@ -18,6 +18,12 @@
 //!   angle: a perfect, colourless 100 % mirror. (When `eta`/`k` are given
 //!   explicitly, a missing `eta` defaults to 0 and a missing `k` to 1; giving
 //!   `material` together with `eta`/`k` is an error in Mitsuba.)
+//!
+//! Caveat: Mitsuba clamps negative sRGB components to 0 when converting the
+//! spectra, and for `AlSb`, `AlSb_palik` that leaves a channel with
+//! eta = k = 0, where Mitsuba's conductor Fresnel term evaluates 0/0 = NaN
+//! (the BSDF weight Mitsuba returns is NaN in that channel). Avoid those
+//! materials in reference scenes.
 
 /// Names accepted by [`named_ior`] (lower case, as in Mitsuba's table).
 pub const IOR_NAMES: &[&str] = &[

@@ -33,11 +33,7 @@ impl Mesh {
     #[inline]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
         let t = self.mesh.indices[i];
-        [
-            self.mesh.positions[t[0] as usize],
-            self.mesh.positions[t[1] as usize],
-            self.mesh.positions[t[2] as usize],
-        ]
+        [self.mesh.positions[t[0] as usize], self.mesh.positions[t[1] as usize], self.mesh.positions[t[2] as usize]]
     }
 }
 
@@ -51,9 +47,18 @@ fn tri_area(m: &TriangleMesh, i: usize) -> f32 {
 pub enum Shape {
     Mesh(Mesh),
     /// Mitsuba `sphere`: normals point outwards unless flipped.
-    Sphere { center: Vec3, radius: f32, flip: bool },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        flip: bool,
+    },
     /// Mitsuba `disk`: the unit disk in the local z = 0 plane, normal +z.
-    Disk { world_from_object: Mat4, object_from_world: Mat4, n: Vec3, area: f32 },
+    Disk {
+        world_from_object: Mat4,
+        object_from_world: Mat4,
+        n: Vec3,
+        area: f32,
+    },
 }
 
 impl Shape {

@@ -119,7 +119,8 @@ mod tests {
     #[test]
     fn warps_match_their_densities() {
         let a = alpha(4);
-        let p = chi2_test(N, 1, |_, u| Some(warp::sample_cosine_hemisphere(u)), |w| warp::cosine_hemisphere_pdf(w) as f64);
+        let p =
+            chi2_test(N, 1, |_, u| Some(warp::sample_cosine_hemisphere(u)), |w| warp::cosine_hemisphere_pdf(w) as f64);
         assert!(p > a, "cosine hemisphere p = {p}");
         let p = chi2_test(N, 2, |_, u| Some(warp::sample_uniform_sphere(u)), |_| warp::uniform_sphere_pdf() as f64);
         assert!(p > a, "uniform sphere p = {p}");
@@ -132,7 +133,12 @@ mod tests {
         );
         assert!(p > a, "cone p = {p}");
         // A deliberately wrong pdf must be rejected: the test can fail.
-        let p = chi2_test(N, 4, |_, u| Some(warp::sample_cosine_hemisphere(u)), |w| if w.z > 0.0 { 0.5 / PI as f64 } else { 0.0 });
+        let p = chi2_test(
+            N,
+            4,
+            |_, u| Some(warp::sample_cosine_hemisphere(u)),
+            |w| if w.z > 0.0 { 0.5 / PI as f64 } else { 0.0 },
+        );
         assert!(p < a, "uniform pdf accepted for cosine samples (p = {p})");
     }
 
@@ -141,10 +147,17 @@ mod tests {
         let b = Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(0.7) });
         let b2 = Bsdf::TwoSided(Box::new(b.clone()), Box::new(b.clone()));
         let a = alpha(4);
-        for (k, wo) in [Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(0.99, 0.0, 0.05).normalize()].into_iter().enumerate() {
+        for (k, wo) in
+            [Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(0.99, 0.0, 0.05).normalize()].into_iter().enumerate()
+        {
             for (j, bsdf) in [&b, &b2].into_iter().enumerate() {
                 let wo = if j == 1 { -wo } else { wo };
-                let p = chi2_test(N, 10 + k as u64 * 2 + j as u64, |u1, u| bsdf.sample(wo, u1, u).map(|s| s.wi), |wi| bsdf.pdf(wo, wi) as f64);
+                let p = chi2_test(
+                    N,
+                    10 + k as u64 * 2 + j as u64,
+                    |u1, u| bsdf.sample(wo, u1, u).map(|s| s.wi),
+                    |wi| bsdf.pdf(wo, wi) as f64,
+                );
                 assert!(p > a, "diffuse (twosided={j}) wo={wo}: p = {p}");
                 // The sample weight equals f cos / pdf.
                 let s = bsdf.sample(wo, 0.3, Vec2::new(0.2, 0.6)).unwrap();
@@ -157,7 +170,9 @@ mod tests {
     #[test]
     fn sphere_light_sampling_matches_its_pdf() {
         let a = alpha(2);
-        for (k, (c, r)) in [(Vec3::new(0.3, -0.2, 2.0), 0.8f32), (Vec3::new(0.0, 0.0, 0.3), 1.0)].into_iter().enumerate() {
+        for (k, (c, r)) in
+            [(Vec3::new(0.3, -0.2, 2.0), 0.8f32), (Vec3::new(0.0, 0.0, 0.3), 1.0)].into_iter().enumerate()
+        {
             // Second case: the reference point is inside the sphere (area sampling).
             let s = Shape::sphere(c, r, false);
             let p = chi2_test(
