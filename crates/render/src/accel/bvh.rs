@@ -3,9 +3,11 @@
 //! depth-first into 32-byte nodes with the left child stored next to its
 //! parent, and front-to-back ordered traversal.
 
-use crate::geometry::triangle::{intersect_triangle, RayShear};
+#[cfg(test)]
+use crate::geometry::triangle::intersect_triangle;
+use crate::geometry::triangle::{intersect_triangle_k, RayShear};
 use crate::geometry::{Aabb, Ray, Shape};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A, Vec4};
 
 /// A primitive as stored in BVH order. Triangles keep their vertices inline
 /// so traversal touches one cache line per test.
@@ -50,6 +52,21 @@ struct Node {
     max: [f32; 3],
     count: u16,
     axis: u16,
+}
+
+impl Node {
+    /// The box corners as SIMD vectors (one 16-byte load each; the fourth
+    /// lane holds `offset` / `count` bits and is ignored).
+    #[inline(always)]
+    fn corners(&self) -> (Vec3A, Vec3A) {
+        // SAFETY: Node is repr(C) and 32-byte aligned: min + offset and
+        // max + count + axis are each 16 contiguous, aligned bytes.
+        let (lo, hi) = unsafe {
+            let p = self as *const Node as *const Vec4;
+            (*p, *p.add(1))
+        };
+        (Vec3A::from_vec4(lo), Vec3A::from_vec4(hi))
+    }
 }
 
 /// The closest hit found by [`Accel::intersect`].
@@ -147,25 +164,41 @@ impl Accel {
 
     /// Walks the tree; `on_hit` returns true to stop (any-hit queries).
     #[inline(always)]
-    fn traverse(&self, ray: &mut Ray, shapes: &[Shape], mut on_hit: impl FnMut(&mut Ray, u32, f32, Vec2) -> bool) {
+    fn traverse(&self, ray: &mut Ray, shapes: &[Shape], on_hit: impl FnMut(&mut Ray, u32, f32, Vec2) -> bool) {
         if self.nodes.is_empty() {
             return;
         }
-        let inv_d = ray.d.recip();
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
         let shear = RayShear::new(ray.d);
+        match shear.kz {
+            0 => self.traverse_k::<0>(ray, &shear, shapes, on_hit),
+            1 => self.traverse_k::<1>(ray, &shear, shapes, on_hit),
+            _ => self.traverse_k::<2>(ray, &shear, shapes, on_hit),
+        }
+    }
+
+    #[inline(always)]
+    fn traverse_k<const KZ: usize>(
+        &self,
+        ray: &mut Ray,
+        shear: &RayShear,
+        shapes: &[Shape],
+        mut on_hit: impl FnMut(&mut Ray, u32, f32, Vec2) -> bool,
+    ) {
+        let inv_d = Vec3A::from(ray.d.recip());
+        let o = Vec3A::from(ray.o);
+        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
         let mut stack = [0u32; STACK];
         let mut sp = 0usize;
         let mut idx = 0usize;
         loop {
             let node = &self.nodes[idx];
-            if slab_test(node, ray.o, inv_d, ray.t_max) {
+            if slab_test(node, o, inv_d, ray.t_max) {
                 if node.count > 0 {
                     let first = node.offset as usize;
                     for (k, prim) in self.prims[first..first + node.count as usize].iter().enumerate() {
                         let found = match prim {
                             Prim::Triangle { v, .. } => {
-                                intersect_triangle(ray, &shear, v).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
+                                intersect_triangle_k::<KZ>(ray, shear, v).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
                             }
                             Prim::Analytic { shape } => shapes[*shape as usize].intersect_analytic(ray),
                         };
@@ -235,9 +268,10 @@ impl Accel {
 }
 
 #[inline(always)]
-fn slab_test(node: &Node, o: Vec3, inv_d: Vec3, t_max: f32) -> bool {
-    let t0 = (Vec3::from(node.min) - o) * inv_d;
-    let t1 = (Vec3::from(node.max) - o) * inv_d;
+fn slab_test(node: &Node, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
+    let (lo, hi) = node.corners();
+    let t0 = (lo - o) * inv_d;
+    let t1 = (hi - o) * inv_d;
     let tmin = t0.min(t1).max_element().max(0.0);
     let tmax = t0.max(t1).min_element().min(t_max);
     // Slightly widen the exit distance so rays grazing a box's face still

@@ -370,9 +370,7 @@ mod tests {
     #[test]
     fn gold_is_yellow() {
         let (eta, k) = named_conductor("Au").unwrap();
-        let r: Vec<f64> = (0..3)
-            .map(|i| fresnel_conductor(1.0, eta[i] as f64, k[i] as f64))
-            .collect();
+        let r: Vec<f64> = (0..3).map(|i| fresnel_conductor(1.0, eta[i] as f64, k[i] as f64)).collect();
         assert!(r[0] > r[1] && r[1] > r[2], "{r:?}");
     }
 }

@@ -16,6 +16,8 @@ pub struct SurfaceInteraction {
     pub n: Vec3,
     /// Shading frame; `sh_frame.n` is the interpolated shading normal.
     pub sh_frame: Frame,
+    /// Mesh texture coordinates (barycentrics without a uv attribute); the
+    /// disk's local (x, y); zero on spheres.
     pub uv: Vec2,
     /// Index of the hit shape in the scene.
     pub shape: u32,

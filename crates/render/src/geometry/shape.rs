@@ -157,7 +157,9 @@ impl Shape {
                 let mut n = (ray.at(t) - *center).normalize();
                 // Re-project onto the surface to limit floating-point drift.
                 let p = *center + n * *radius;
-                let uv = Vec2::new(n.y.atan2(n.x) / (2.0 * PI) + 0.5, n.z.clamp(-1.0, 1.0).acos() / PI);
+                // Texture coordinates are not needed until textures exist;
+                // computing them here (atan2, acos) would cost every hit.
+                let uv = Vec2::ZERO;
                 if *flip {
                     n = -n;
                 }
@@ -165,9 +167,7 @@ impl Shape {
             }
             Shape::Disk { world_from_object, n, .. } => {
                 let p = world_from_object.transform_point3(Vec3::new(uv.x, uv.y, 0.0));
-                let r = uv.length();
-                let tex = Vec2::new(r, uv.y.atan2(uv.x) / (2.0 * PI) + 0.5);
-                SurfaceInteraction { p, t, n: *n, sh_frame: Frame::from_normal(*n), uv: tex, shape: shape_id, wo }
+                SurfaceInteraction { p, t, n: *n, sh_frame: Frame::from_normal(*n), uv, shape: shape_id, wo }
             }
         }
     }

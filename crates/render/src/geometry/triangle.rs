@@ -8,9 +8,7 @@ use glam::Vec3;
 /// Per-ray data for the shear transform, computed once per traversal.
 #[derive(Debug, Clone, Copy)]
 pub struct RayShear {
-    kx: usize,
-    ky: usize,
-    kz: usize,
+    pub kz: usize,
     sx: f32,
     sy: f32,
     sz: f32,
@@ -34,7 +32,7 @@ impl RayShear {
         let kx = if kz == 2 { 0 } else { kz + 1 };
         let ky = if kx == 2 { 0 } else { kx + 1 };
         let dz = d[kz];
-        RayShear { kx, ky, kz, sx: -d[kx] / dz, sy: -d[ky] / dz, sz: 1.0 / dz }
+        RayShear { kz, sx: -d[kx] / dz, sy: -d[ky] / dz, sz: 1.0 / dz }
     }
 }
 
@@ -42,17 +40,32 @@ impl RayShear {
 /// weights are those of vertices 1 and 2.
 #[inline]
 pub fn intersect_triangle(ray: &Ray, sh: &RayShear, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
+    match sh.kz {
+        0 => intersect_triangle_k::<0>(ray, sh, v),
+        1 => intersect_triangle_k::<1>(ray, sh, v),
+        _ => intersect_triangle_k::<2>(ray, sh, v),
+    }
+}
+
+/// [`intersect_triangle`] for a ray whose dominant axis `KZ` is known at
+/// compile time, so the axis permutation costs nothing (traversal picks the
+/// instance once per ray).
+#[inline(always)]
+pub fn intersect_triangle_k<const KZ: usize>(ray: &Ray, sh: &RayShear, v: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
+    debug_assert_eq!(KZ, sh.kz);
+    let kx = if KZ == 2 { 0 } else { KZ + 1 };
+    let ky = if kx == 2 { 0 } else { kx + 1 };
     // Translate to the ray origin, permute so z is the dominant direction, shear.
-    let p0t = v[0] - ray.o;
-    let p1t = v[1] - ray.o;
-    let p2t = v[2] - ray.o;
-    let (p0z, p1z, p2z) = (p0t[sh.kz], p1t[sh.kz], p2t[sh.kz]);
-    let p0x = p0t[sh.kx] + sh.sx * p0z;
-    let p0y = p0t[sh.ky] + sh.sy * p0z;
-    let p1x = p1t[sh.kx] + sh.sx * p1z;
-    let p1y = p1t[sh.ky] + sh.sy * p1z;
-    let p2x = p2t[sh.kx] + sh.sx * p2z;
-    let p2y = p2t[sh.ky] + sh.sy * p2z;
+    let p0t = (v[0] - ray.o).to_array();
+    let p1t = (v[1] - ray.o).to_array();
+    let p2t = (v[2] - ray.o).to_array();
+    let (p0z, p1z, p2z) = (p0t[KZ], p1t[KZ], p2t[KZ]);
+    let p0x = p0t[kx] + sh.sx * p0z;
+    let p0y = p0t[ky] + sh.sy * p0z;
+    let p1x = p1t[kx] + sh.sx * p1z;
+    let p1y = p1t[ky] + sh.sy * p1z;
+    let p2x = p2t[kx] + sh.sx * p2z;
+    let p2y = p2t[ky] + sh.sy * p2z;
 
     // Edge functions; fall back to f64 when a value is exactly zero.
     let mut e0 = p1x * p2y - p1y * p2x;
