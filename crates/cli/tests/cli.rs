@@ -128,3 +128,48 @@ fn missing_scene_file_is_a_clear_error() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("/nonexistent/scene.xml"), "{stderr}");
 }
+
+fn read_pfm(path: &Path) -> (usize, usize, Vec<f32>) {
+    let bytes = fs::read(path).unwrap();
+    let text = String::from_utf8_lossy(&bytes[..32]).to_string();
+    let mut it = text.split_ascii_whitespace();
+    assert_eq!(it.next(), Some("PF"));
+    let w: usize = it.next().unwrap().parse().unwrap();
+    let h: usize = it.next().unwrap().parse().unwrap();
+    let data = &bytes[bytes.len() - w * h * 12..];
+    let v = data.chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    (w, h, v)
+}
+
+#[test]
+fn a_crop_window_renders_exactly_its_part_of_the_full_image() {
+    let d = tmpdir("crop");
+    let base = fs::read_to_string(root().join("scenes/cornell-box.xml")).unwrap();
+    let cropped = base.replace(
+        "<film type=\"hdrfilm\">",
+        "<film type=\"hdrfilm\">\n<integer name=\"crop_offset_x\" value=\"5\"/><integer name=\"crop_offset_y\" value=\"9\"/>\
+         <integer name=\"crop_width\" value=\"7\"/><integer name=\"crop_height\" value=\"4\"/>",
+    );
+    assert_ne!(base, cropped, "the bundled scene has an hdrfilm");
+    // The bundled scene refers to no other files, so it can move.
+    let scene = d.join("crop.xml");
+    fs::write(&scene, cropped).unwrap();
+    let (full, crop) = (d.join("full.pfm"), d.join("crop.pfm"));
+    let args = ["--spp", "2", "-D", "res=24"];
+    let o1 = render(&root().join("scenes/cornell-box.xml"), &full, &args);
+    let o2 = render(&scene, &crop, &args);
+    assert!(o1.status.success() && o2.status.success(), "{}", String::from_utf8_lossy(&o2.stderr));
+    let (fw, fh, fv) = read_pfm(&full);
+    let (cw, ch, cv) = read_pfm(&crop);
+    assert_eq!((fw, fh, cw, ch), (24, 24, 7, 4));
+    // PFM rows run bottom to top.
+    for y in 0..4 {
+        for x in 0..7 {
+            let (fy, cy) = (fh - 1 - (9 + y), ch - 1 - y);
+            for c in 0..3 {
+                assert_eq!(cv[(cy * cw + x) * 3 + c], fv[(fy * fw + 5 + x) * 3 + c], "pixel ({x}, {y})");
+            }
+        }
+    }
+    fs::remove_dir_all(&d).ok();
+}

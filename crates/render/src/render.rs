@@ -21,8 +21,13 @@ pub struct RenderJob {
     pub integrator: Integrator,
     pub sampler: Sampler,
     pub filter: Filter,
+    /// Size of the rendered image (the crop window when there is one).
     pub width: u32,
     pub height: u32,
+    /// The crop window's offset and the full film size the camera spans
+    /// (Mitsuba's `crop_offset_*` and `width`/`height`).
+    pub crop_offset: (u32, u32),
+    pub full_size: (u32, u32),
 }
 
 /// What a render pass did.
@@ -87,14 +92,17 @@ impl RenderJob {
         let h = TILE.min(self.height - y0);
         let mut film = Film::new(w, h);
         let mut stats = RenderStats::default();
-        let inv = Vec2::new(1.0 / self.width as f32, 1.0 / self.height as f32);
+        let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
+        let origin = Vec2::new(self.crop_offset.0 as f32 + 0.5, self.crop_offset.1 as f32 + 0.5);
         for y in 0..h {
             for x in 0..w {
                 let (px, py) = (x0 + x, y0 + y);
                 for s in samples.clone() {
-                    let mut rng = self.sampler.stream((px, py), s);
+                    // Keyed by the pixel's position in the full film, so a
+                    // crop window renders exactly its part of the full image.
+                    let mut rng = self.sampler.stream((px + self.crop_offset.0, py + self.crop_offset.1), s);
                     let (offset, weight) = self.filter.sample_2d(rng.next_2d());
-                    let pos = (Vec2::new(px as f32 + 0.5, py as f32 + 0.5) + offset) * inv;
+                    let pos = (origin + Vec2::new(px as f32, py as f32) + offset) * inv;
                     let ray = self.camera.generate_ray(pos);
                     let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays);
                     stats.samples += 1;

@@ -89,7 +89,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     }
     root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
-    let (camera, filter, width, height, sampler) = build_sensor(&sensor, ov)?;
+    let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
     let scene = Scene::new(b.shapes, b.infos, b.bsdfs, b.lights);
     Ok(RenderJob {
         scene,
@@ -97,8 +97,10 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
         integrator: integrator.unwrap_or(Integrator::Path(PathIntegrator::default())),
         sampler,
         filter,
-        width,
-        height,
+        width: film.crop_size.0,
+        height: film.crop_size.1,
+        crop_offset: film.crop_offset,
+        full_size: film.size,
     })
 }
 
@@ -347,18 +349,51 @@ fn build_integrator(node: &Node) -> Result<Integrator> {
     }
 }
 
-type SensorParts = (PerspectiveCamera, Filter, u32, u32, Sampler);
+/// Film geometry: full size and the crop window rendered.
+struct FilmRect {
+    size: (u32, u32),
+    crop_offset: (u32, u32),
+    crop_size: (u32, u32),
+}
+
+type SensorParts = (PerspectiveCamera, Filter, FilmRect, Sampler);
+
+/// Field of view in degrees along `fov_axis`: `fov`, or Mitsuba's
+/// `focal_length` ("50mm" by default), a 35 mm-equivalent focal length that
+/// fixes the diagonal field of view (the 36x24 mm frame's diagonal is 43.27 mm).
+fn field_of_view(node: &Node) -> Result<(f64, Option<FovAxis>)> {
+    let fov = node.get_float("fov")?;
+    let focal = node.get_string("focal_length")?;
+    match (fov, focal) {
+        (Some(_), Some((_, loc))) => Err(LoadError::at(&loc, "give either 'fov' or 'focal_length', not both")),
+        (Some(f), None) => {
+            if !(f > 0.0 && f < 180.0) {
+                return Err(LoadError::at(node.loc_of("fov"), "fov must lie in (0, 180) degrees"));
+            }
+            Ok((f, None))
+        }
+        (None, focal) => {
+            let (text, loc) = focal.unwrap_or_else(|| ("50mm".to_string(), node.loc.clone()));
+            let mm: f64 = text
+                .trim()
+                .strip_suffix("mm")
+                .and_then(|v| v.trim().parse().ok())
+                .filter(|v: &f64| *v > 0.0)
+                .ok_or_else(|| LoadError::at(&loc, format!("focal_length '{text}' is not of the form '50mm'")))?;
+            let diagonal = (36.0f64 * 36.0 + 24.0 * 24.0).sqrt();
+            Ok((2.0 * (diagonal / (2.0 * mm)).atan().to_degrees(), Some(FovAxis::Diagonal)))
+        }
+    }
+}
 
 fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if node.plugin != "perspective" {
         return Err(unsupported(node, &["perspective"]));
     }
     let to_world = node.transform("to_world")?;
-    let fov = node.get_float("fov")?.ok_or_else(|| node.error("perspective sensor needs a 'fov' (degrees)"))?;
-    if !(fov > 0.0 && fov < 180.0) {
-        return Err(LoadError::at(node.loc_of("fov"), "fov must lie in (0, 180) degrees"));
-    }
+    let (fov, forced_axis) = field_of_view(node)?;
     let axis = match node.string("fov_axis", "x")?.as_str() {
+        _ if forced_axis.is_some() => forced_axis.unwrap_or(FovAxis::X),
         "x" => FovAxis::X,
         "y" => FovAxis::Y,
         "diagonal" => FovAxis::Diagonal,
@@ -394,11 +429,17 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if !(1..=1 << 16).contains(&width) || !(1..=1 << 16).contains(&height) {
         return Err(film.error("film width and height must be between 1 and 65536"));
     }
-    for p in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"] {
-        if film.has(p) {
-            return Err(LoadError::at(film.loc_of(p), format!("hdrfilm '{p}' is not supported yet")));
-        }
+    let (w, h) = (width as u32, height as u32);
+    let cx = film.int("crop_offset_x", 0)?;
+    let cy = film.int("crop_offset_y", 0)?;
+    let cw = film.int("crop_width", width)?;
+    let ch = film.int("crop_height", height)?;
+    if cx < 0 || cy < 0 || cw < 1 || ch < 1 || cx + cw > width || cy + ch > height {
+        return Err(film.error(format!(
+            "the crop window ({cx}, {cy}) + ({cw} x {ch}) does not lie inside the {width} x {height} film"
+        )));
     }
+    let rect = FilmRect { size: (w, h), crop_offset: (cx as u32, cy as u32), crop_size: (cw as u32, ch as u32) };
     // Output-format settings that cannot change the rendered values.
     film.accept(&["pixel_format", "component_format", "file_format", "sample_border", "compensate"]);
     let filter = match film.single_child(Kind::Rfilter)? {
@@ -455,5 +496,5 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
         near as f32,
         far as f32,
     );
-    Ok((camera, filter, width as u32, height as u32, Sampler::new(kind, seed, spp)))
+    Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))
 }
