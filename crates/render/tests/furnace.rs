@@ -92,3 +92,23 @@ fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
     assert!((mean - expected).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}, expected {expected}");
     assert!((mean - expected).abs() < 0.01 * expected);
 }
+
+#[test]
+fn non_finite_samples_are_dropped_and_counted() {
+    // A NaN reflectance poisons every path that hits the sphere; those
+    // samples must be counted and kept off the film.
+    let scene = Scene::new(
+        vec![Shape::sphere(Vec3::ZERO, 1.0, false)],
+        vec![ShapeInfo { bsdf: 0, light: None }],
+        vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(f32::NAN) })],
+        vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
+    );
+    let j = job(scene, Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, 4);
+    let mut film = Film::new(j.width, j.height);
+    let stats = j.render_into(&mut film, 0..4, &|_| {});
+    assert!(stats.non_finite > 0 && stats.non_finite < stats.samples, "{stats:?}");
+    let img = film.develop();
+    assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    // Pixels that only see the environment are exactly its radiance.
+    assert_eq!(img[0], [1.0, 1.0, 1.0]);
+}
