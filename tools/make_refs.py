@@ -57,6 +57,11 @@ SPP = {
     "glass_caustic": 65536,
     "direct_light": 16384,
     "hidden_emitters": 16384,
+    "point_light": 8192,
+    "spot_light": 65536,
+    "envmap_sun": 65536,
+    "many_lights": 65536,
+    "direct_integrator": 16384,
 }
 DEFAULT_SPP = 8192
 # Largest single mi.render call (spp); keeps LLVM wavefronts at a few M lanes.

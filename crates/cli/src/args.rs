@@ -37,6 +37,11 @@ pub struct RenderArgs {
     /// Define a scene parameter, as Mitsuba's -D: fills $name.
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     pub define: Vec<(String, String)>,
+    /// Replace the scene's integrator: NAME[:key=value,...], e.g.
+    /// `bruteforce:sampling=cosine` or `path:mis=false,light_selection=power`.
+    /// max_depth, rr_depth and hide_emitters carry over unless given.
+    #[arg(long, value_name = "NAME[:key=value,...]")]
+    pub integrator: Option<String>,
     /// Never show the progress bar.
     #[arg(long)]
     pub quiet: bool,

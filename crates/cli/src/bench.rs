@@ -55,8 +55,8 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup"
     );
     for scene in &scenes {
-        let job =
-            penumbra_scene::load_scene(scene, &[], &Overrides { spp: a.spp, seed: None }).map_err(|e| anyhow!(e))?;
+        let job = penumbra_scene::load_scene(scene, &[], &Overrides { spp: a.spp, ..Default::default() })
+            .map_err(|e| anyhow!(e))?;
         // One untimed warm-up pass at 1 spp (page faults, thread start-up).
         let mut warm = job.clone();
         warm.sampler.spp = 1;

@@ -55,7 +55,7 @@ pub fn render_job(job: &RenderJob, pool: &rayon::ThreadPool, quiet: bool) -> (Fi
 fn render(a: &RenderArgs) -> Result<()> {
     // Check the output name before spending time on the render.
     image_io::Format::from_path(&a.output).map_err(|e| anyhow!(e))?;
-    let ov = Overrides { spp: a.spp, seed: a.seed };
+    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone() };
     let job = penumbra_scene::load_scene(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
     let pool = thread_pool(a.threads)?;
     let (film, stats, elapsed) = render_job(&job, &pool, a.quiet);

@@ -5,7 +5,8 @@ use crate::accel::Accel;
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::{Light, LightSample};
-use crate::math::{Spectrum, SHADOW_EPSILON};
+use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
+use crate::sampling::Distribution1D;
 use glam::{Vec2, Vec3};
 
 /// Per-shape attributes beside its geometry.
@@ -17,6 +18,16 @@ pub struct ShapeInfo {
     pub light: Option<u32>,
 }
 
+/// How `sample_light` picks one light (the `light_selection` parameter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LightSelection {
+    /// Every light with the same probability (Mitsuba's choice).
+    #[default]
+    Uniform,
+    /// Proportional to each light's emitted power (luminance of its flux).
+    Power,
+}
+
 #[derive(Debug, Clone)]
 pub struct Scene {
     pub shapes: Vec<Shape>,
@@ -26,6 +37,10 @@ pub struct Scene {
     /// Indices of lights at infinity (hit by escaping rays).
     pub env_lights: Vec<u32>,
     pub accel: Accel,
+    pub light_selection: LightSelection,
+    /// Selection probabilities by power (None when selection is uniform or
+    /// no light has positive power).
+    power_distrib: Option<Distribution1D>,
 }
 
 impl Scene {
@@ -34,7 +49,30 @@ impl Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
-        Scene { shapes, shape_info, bsdfs, lights, env_lights, accel }
+        Scene {
+            shapes,
+            shape_info,
+            bsdfs,
+            lights,
+            env_lights,
+            accel,
+            light_selection: LightSelection::Uniform,
+            power_distrib: None,
+        }
+    }
+
+    /// Chooses the light-selection strategy (precomputing what it needs).
+    pub fn set_light_selection(&mut self, selection: LightSelection) {
+        self.light_selection = selection;
+        self.power_distrib = match selection {
+            LightSelection::Uniform => None,
+            LightSelection::Power => {
+                let radius = self.accel.bounds.bounding_radius().max(1e-3);
+                let w: Vec<f32> =
+                    self.lights.iter().map(|l| luminance(l.power(&self.shapes, radius)).max(0.0)).collect();
+                Distribution1D::new(&w)
+            }
+        };
     }
 
     /// Closest surface hit.
@@ -66,26 +104,40 @@ impl Scene {
         &self.bsdfs[self.shape_info[si.shape as usize].bsdf as usize]
     }
 
-    /// Probability of selecting one light (uniform selection, as Mitsuba).
+    /// Probability that `sample_light` picks light `i`.
     #[inline]
-    fn selection_pmf(&self) -> f32 {
-        1.0 / self.lights.len() as f32
+    pub fn light_pmf(&self, i: usize) -> f32 {
+        match &self.power_distrib {
+            Some(d) => d.pmf(i),
+            None => 1.0 / self.lights.len() as f32,
+        }
     }
 
-    /// Picks a light uniformly with `u2.x` (then rescaled to [0, 1) for reuse,
-    /// as Mitsuba's `sample_emitter`) and samples a direction towards it. The
+    /// Picks a light with `u2.x` (then rescaled to [0, 1) for reuse, as
+    /// Mitsuba's `sample_emitter`) and samples a direction towards it. The
     /// returned pdf includes the selection probability. No visibility test.
     #[inline]
     pub fn sample_light(&self, p_ref: Vec3, mut u2: Vec2) -> Option<LightSample> {
         if self.lights.is_empty() {
             return None;
         }
-        let n = self.lights.len();
-        let scaled = u2.x * n as f32;
-        let i = (scaled as usize).min(n - 1);
-        u2.x = (scaled - i as f32).min(1.0 - f32::EPSILON / 2.0);
+        let (i, pmf) = match &self.power_distrib {
+            Some(d) => {
+                let (i, pmf, u_re) = d.sample_discrete(u2.x);
+                u2.x = u_re;
+                (i, pmf)
+            }
+            None => {
+                let n = self.lights.len();
+                let scaled = u2.x * n as f32;
+                let i = (scaled as usize).min(n - 1);
+                u2.x = (scaled - i as f32).min(1.0 - f32::EPSILON / 2.0);
+                (i, 1.0 / n as f32)
+            }
+        };
         let mut s = self.lights[i].sample_li(p_ref, u2, &self.shapes)?;
-        s.pdf *= self.selection_pmf();
+        // Delta lights keep pdf = 1 times the selection probability.
+        s.pdf *= pmf;
         Some(s)
     }
 
@@ -107,7 +159,7 @@ impl Scene {
     #[inline]
     pub fn light_pdf(&self, p_ref: Vec3, si: &SurfaceInteraction) -> f32 {
         match self.shape_info[si.shape as usize].light {
-            Some(_) => self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n) * self.selection_pmf(),
+            Some(l) => self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n) * self.light_pmf(l as usize),
             None => 0.0,
         }
     }
@@ -115,14 +167,13 @@ impl Scene {
     /// Radiance from lights at infinity along direction `d`, and the
     /// solid-angle density (selection included) of sampling that direction.
     #[inline]
-    pub fn environment(&self, _d: Vec3) -> (Spectrum, f32) {
+    pub fn environment(&self, d: Vec3) -> (Spectrum, f32) {
         let mut le = Spectrum::ZERO;
         let mut pdf = 0.0;
         for &i in &self.env_lights {
-            if let Light::Constant(c) = &self.lights[i as usize] {
-                le += c.radiance;
-                pdf += c.pdf() * self.selection_pmf();
-            }
+            let (l, p) = self.lights[i as usize].environment(d);
+            le += l;
+            pdf += p * self.light_pmf(i as usize);
         }
         (le, pdf)
     }

@@ -3,20 +3,24 @@
 //! object kind. Every property a plugin reads is marked; whatever is left
 //! unread is reported as unsupported (see `props.rs`).
 
-use crate::desc::{Kind, Node, SceneDesc};
+use crate::desc::{Kind, Node, Property, SceneDesc, Value};
+use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
-use crate::{obj, ply};
+use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
 use penumbra_render::bsdf::{presets, Bsdf, Conductor, Dielectric, Diffuse};
 use penumbra_render::camera::{FovAxis, PerspectiveCamera};
 use penumbra_render::film::{Filter, FilterKind};
 use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
-use penumbra_render::integrator::{Integrator, PathIntegrator};
-use penumbra_render::light::{AreaLight, ConstantLight, Light};
+use penumbra_render::integrator::{
+    BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
+};
+use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
 use penumbra_render::math::Spectrum;
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::{Sampler, SamplerKind};
-use penumbra_render::scene::{Scene, ShapeInfo};
+use penumbra_render::scene::{LightSelection, Scene, ShapeInfo};
+use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -26,11 +30,13 @@ use std::rc::Rc;
 pub struct Overrides {
     pub spp: Option<u32>,
     pub seed: Option<u64>,
+    /// `--integrator NAME[:key=value,...]`, replacing the scene's integrator.
+    pub integrator: Option<String>,
 }
 
 const SHAPES: &[&str] = &["rectangle", "cube", "sphere", "disk", "obj", "ply"];
 const BSDFS: &[&str] = &["diffuse", "dielectric", "conductor", "twosided"];
-const EMITTERS: &[&str] = &["area (inside a shape)", "constant"];
+const EMITTERS: &[&str] = &["area (inside a shape)", "constant", "envmap", "point", "spot", "directional"];
 
 fn unsupported(node: &Node, supported: &[&str]) -> LoadError {
     node.error(format!(
@@ -57,7 +63,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
         match node.kind {
             Kind::Shape => b.shape(node)?,
             Kind::Emitter => {
-                let light = b.environment_emitter(node)?;
+                let light = b.top_level_emitter(node)?;
                 b.lights.push(light);
             }
             Kind::Sensor => {
@@ -70,7 +76,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
                 if integrator.is_some() {
                     return Err(LoadError::at(&child.loc, "the scene has more than one integrator"));
                 }
-                integrator = Some(build_integrator(node)?);
+                integrator = Some(node.clone());
             }
             // Declared for later reference; built (and checked) when used.
             Kind::Bsdf => {
@@ -90,11 +96,23 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
-    let scene = Scene::new(b.shapes, b.infos, b.bsdfs, b.lights);
+    let (integrator, selection) = match (&ov.integrator, &integrator) {
+        (Some(spec), scene_node) => build_integrator(&integrator_from_spec(spec, scene_node.as_deref())?)?,
+        (None, Some(node)) => build_integrator(node)?,
+        (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
+    };
+    let mut scene = Scene::new(b.shapes, b.infos, b.bsdfs, b.lights);
+    let radius = scene.bounds().bounding_radius();
+    for l in &mut scene.lights {
+        if let Light::Directional(d) = l {
+            d.scene_radius = radius;
+        }
+    }
+    scene.set_light_selection(selection);
     Ok(RenderJob {
         scene,
         camera,
-        integrator: integrator.unwrap_or(Integrator::Path(PathIntegrator::default())),
+        integrator,
         sampler,
         filter,
         width: film.crop_size.0,
@@ -223,11 +241,78 @@ impl Builder {
         Ok(())
     }
 
-    fn environment_emitter(&mut self, node: &Node) -> Result<Light> {
+    /// Emitters declared at the top level (not attached to a shape).
+    fn top_level_emitter(&mut self, node: &Node) -> Result<Light> {
         let light = match node.plugin.as_str() {
             "constant" => {
                 let radiance = node.get_rgb("radiance")?.unwrap_or([1.0; 3]);
                 Light::Constant(ConstantLight { radiance: rgb(radiance) })
+            }
+            "point" => {
+                let to_world = node.transform("to_world")?;
+                let position = match node.get_point("position")? {
+                    Some(p) if node.has("to_world") => {
+                        return Err(LoadError::at(
+                            node.loc_of("position"),
+                            format!("point light: give either 'position' ({p}) or 'to_world', not both"),
+                        ))
+                    }
+                    Some(p) => p,
+                    None => to_world.transform_point3(DVec3::ZERO),
+                };
+                let intensity = rgb(node.get_rgb("intensity")?.unwrap_or([1.0; 3]));
+                Light::Point(PointLight { position: position.as_vec3(), intensity })
+            }
+            "spot" => {
+                let to_world = node.transform("to_world")?;
+                let intensity = rgb(node.get_rgb("intensity")?.unwrap_or([1.0; 3]));
+                let cutoff = node.float("cutoff_angle", 20.0)?;
+                let beam = node.float("beam_width", cutoff * 0.75)?;
+                if !(cutoff > 0.0 && cutoff <= 180.0 && beam >= 0.0 && beam < cutoff) {
+                    return Err(node.error("spot light: need 0 <= beam_width < cutoff_angle <= 180 (degrees)"));
+                }
+                Light::Spot(SpotLight::new(to_world.as_mat4(), intensity, cutoff as f32, beam as f32))
+            }
+            "directional" => {
+                let to_world = node.transform("to_world")?;
+                let dir = match node.get_point("direction")? {
+                    Some(_) if node.has("to_world") => {
+                        return Err(node.error("directional light: give either 'direction' or 'to_world', not both"))
+                    }
+                    Some(d) => d,
+                    None => to_world.transform_vector3(DVec3::Z),
+                };
+                if !(dir.length() > 0.0) {
+                    return Err(node.error("directional light: the direction must not be zero"));
+                }
+                let irradiance = rgb(node.get_rgb("irradiance")?.unwrap_or([1.0; 3]));
+                // The scene radius is filled in once all shapes are known.
+                Light::Directional(DirectionalLight {
+                    direction: dir.normalize().as_vec3(),
+                    irradiance,
+                    scene_radius: 0.0,
+                })
+            }
+            "envmap" => {
+                let (file, loc) = node
+                    .get_string("filename")?
+                    .ok_or_else(|| node.error("envmap needs a 'filename' (.exr, .hdr, .png or .jpg)"))?;
+                let path = resolve(&loc.file, &file);
+                if !path.exists() {
+                    return Err(LoadError::at(&loc, format!("environment map '{}' not found", path.display())));
+                }
+                let img = image_io::read_image(&path).map_err(|e| LoadError::at(&loc, e))?;
+                let scale = node.float("scale", 1.0)?;
+                let to_world = node.transform("to_world")?;
+                let light = EnvMapLight::new(
+                    img.width as usize,
+                    img.height as usize,
+                    img.pixels,
+                    to_world.as_mat4(),
+                    scale as f32,
+                )
+                .map_err(|e| LoadError::at(&loc, format!("'{}': {e}", path.display())))?;
+                Light::EnvMap(light)
             }
             "area" => return Err(node.error("an 'area' emitter must be nested inside a shape")),
             _ => return Err(unsupported(node, EMITTERS)),
@@ -326,27 +411,147 @@ fn build_bsdf(node: &Node) -> Result<Bsdf> {
     Ok(bsdf)
 }
 
-fn build_integrator(node: &Node) -> Result<Integrator> {
-    match node.plugin.as_str() {
-        "path" => {
-            let max_depth = node.int("max_depth", -1)?;
-            let rr_depth = node.int("rr_depth", 5)?;
-            if max_depth < -1 {
-                return Err(LoadError::at(node.loc_of("max_depth"), "max_depth must be -1 (unbounded) or >= 0"));
-            }
-            if rr_depth <= 0 {
-                return Err(LoadError::at(node.loc_of("rr_depth"), "rr_depth must be positive"));
-            }
-            let hide_emitters = node.bool("hide_emitters", false)?;
-            node.check_all_used(&[])?;
-            Ok(Integrator::Path(PathIntegrator {
-                max_depth: if max_depth < 0 { u32::MAX } else { max_depth as u32 },
-                rr_depth: rr_depth.min(u32::MAX as i64) as u32,
-                hide_emitters,
-            }))
-        }
-        _ => Err(unsupported(node, &["path"])),
+const INTEGRATORS: &[&str] = &["path", "direct", "bruteforce"];
+
+/// Termination parameters shared by `path` and `bruteforce`.
+fn termination(node: &Node) -> Result<Termination> {
+    let max_depth = node.int("max_depth", -1)?;
+    let rr_depth = node.int("rr_depth", 5)?;
+    if max_depth < -1 {
+        return Err(LoadError::at(node.loc_of("max_depth"), "max_depth must be -1 (unbounded) or >= 0"));
     }
+    if rr_depth <= 0 {
+        return Err(LoadError::at(node.loc_of("rr_depth"), "rr_depth must be positive"));
+    }
+    let threshold = node.float("throughput_threshold", 0.0)?;
+    if !(threshold >= 0.0) {
+        return Err(LoadError::at(node.loc_of("throughput_threshold"), "throughput_threshold must be >= 0"));
+    }
+    Ok(Termination {
+        max_depth: if max_depth < 0 { u32::MAX } else { max_depth.min(u32::MAX as i64 - 1) as u32 },
+        rr_depth: rr_depth.min(u32::MAX as i64) as u32,
+        throughput_threshold: threshold as f32,
+    })
+}
+
+fn light_selection(node: &Node) -> Result<LightSelection> {
+    match node.string("light_selection", "uniform")?.as_str() {
+        "uniform" => Ok(LightSelection::Uniform),
+        "power" => Ok(LightSelection::Power),
+        other => Err(LoadError::at(
+            node.loc_of("light_selection"),
+            format!("light_selection '{other}' is not one of uniform, power"),
+        )),
+    }
+}
+
+fn count(node: &Node, name: &str, default: i64) -> Result<u32> {
+    let v = node.int(name, default)?;
+    if !(0..=1 << 20).contains(&v) {
+        return Err(LoadError::at(node.loc_of(name), format!("{name} must be between 0 and 2^20")));
+    }
+    Ok(v as u32)
+}
+
+/// Builds an integrator and the light-selection strategy it asks for.
+fn build_integrator(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let result = match node.plugin.as_str() {
+        "path" => (
+            Integrator::Path(PathIntegrator {
+                term: termination(node)?,
+                hide_emitters: node.bool("hide_emitters", false)?,
+                mis: node.bool("mis", true)?,
+            }),
+            light_selection(node)?,
+        ),
+        "direct" => {
+            let shading = node.get_int("shading_samples")?;
+            let default = shading.unwrap_or(1);
+            (
+                Integrator::Direct(DirectIntegrator {
+                    emitter_samples: count(node, "emitter_samples", default)?,
+                    bsdf_samples: count(node, "bsdf_samples", default)?,
+                    hide_emitters: node.bool("hide_emitters", false)?,
+                }),
+                light_selection(node)?,
+            )
+        }
+        "bruteforce" => {
+            let sampling = match node.string("sampling", "cosine")?.as_str() {
+                "uniform" => HemisphereSampling::Uniform,
+                "cosine" => HemisphereSampling::Cosine,
+                "bsdf" => HemisphereSampling::Bsdf,
+                other => {
+                    return Err(LoadError::at(
+                        node.loc_of("sampling"),
+                        format!("sampling '{other}' is not one of uniform, cosine, bsdf"),
+                    ))
+                }
+            };
+            (
+                Integrator::BruteForce(BruteForceIntegrator {
+                    term: termination(node)?,
+                    hide_emitters: node.bool("hide_emitters", false)?,
+                    sampling,
+                }),
+                LightSelection::Uniform,
+            )
+        }
+        _ => return Err(unsupported(node, INTEGRATORS)),
+    };
+    node.check_all_used(&[])?;
+    Ok(result)
+}
+
+/// Parameters that carry over from the scene's integrator to one chosen on
+/// the command line, so estimators compare on equal terms.
+const SHARED_INTEGRATOR_PARAMS: &[&str] = &["max_depth", "rr_depth", "hide_emitters"];
+
+/// Turns `--integrator NAME[:key=value,...]` into an integrator node, typing
+/// each value as Mitsuba's XML would (boolean, integer, float, else string)
+/// and filling unset shared parameters from the scene's integrator.
+pub fn integrator_from_spec(spec: &str, scene_integrator: Option<&Node>) -> Result<Node> {
+    let loc = FileLoc { file: std::sync::Arc::new(PathBuf::from("--integrator")), line: 0, col: 0 };
+    let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
+    let mut props = Vec::new();
+    for kv in rest.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (k, v) = kv.split_once('=').ok_or_else(|| {
+            LoadError::new(None, format!("--integrator: '{kv}' is not of the form key=value (in '{spec}')"))
+        })?;
+        let value = match v {
+            "true" => Value::Boolean(true),
+            "false" => Value::Boolean(false),
+            _ => match (v.parse::<i64>(), v.parse::<f64>()) {
+                (Ok(i), _) => Value::Integer(i),
+                (_, Ok(f)) => Value::Float(f),
+                _ => Value::String(v.to_string()),
+            },
+        };
+        props.push(Property { name: k.to_string(), value, loc: loc.clone(), used: Cell::new(false) });
+    }
+    let accepts = |param: &str| match name {
+        "direct" => param == "hide_emitters",
+        _ => true,
+    };
+    if let Some(scene) = scene_integrator {
+        for p in &scene.props {
+            if SHARED_INTEGRATOR_PARAMS.contains(&p.name.as_str())
+                && accepts(&p.name)
+                && !props.iter().any(|q: &Property| q.name == p.name)
+            {
+                props.push(Property { used: Cell::new(false), ..p.clone() });
+            }
+        }
+    }
+    Ok(Node {
+        kind: Kind::Integrator,
+        plugin: name.to_string(),
+        id: None,
+        name: None,
+        props,
+        children: Vec::new(),
+        loc,
+    })
 }
 
 /// Film geometry: full size and the crop window rendered.

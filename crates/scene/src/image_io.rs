@@ -138,6 +138,48 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, String> {
     Ok(RgbImage { width: w as u32, height: h as u32, pixels })
 }
 
+/// Inverse of [`linear_to_srgb`] (IEC 61966-2-1).
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Reads an image as linear RGB by extension: `.exr` (linear float), `.hdr`
+/// (Radiance RGBE, linear), `.png` / `.jpg` / `.jpeg` (8 or 16 bit, sRGB
+/// encoded, decoded to linear as Mitsuba does). Alpha is dropped; grey
+/// images are expanded to RGB.
+pub fn read_image(path: &Path) -> Result<RgbImage, String> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let (format, srgb) = match ext.as_str() {
+        "exr" => return read_exr(path),
+        "hdr" => (image::ImageFormat::Hdr, false),
+        "png" => (image::ImageFormat::Png, true),
+        "jpg" | "jpeg" => (image::ImageFormat::Jpeg, true),
+        _ => {
+            return Err(format!(
+                "cannot read '{}': unsupported image format; use .exr, .hdr, .png or .jpg",
+                path.display()
+            ))
+        }
+    };
+    let fail = |e: &dyn std::fmt::Display| format!("cannot read '{}': {e}", path.display());
+    let mut bytes = fs::read(path).map_err(|e| fail(&e))?;
+    if format == image::ImageFormat::Hdr && bytes.starts_with(b"#?") && !bytes.starts_with(b"#?RADIANCE") {
+        // The decoder accepts only the "#?RADIANCE" signature; Mitsuba and others write "#?RGBE".
+        let eol = bytes.iter().position(|&b| b == b'\n').unwrap_or(bytes.len());
+        bytes.splice(0..eol, b"#?RADIANCE".iter().copied());
+    }
+    // Environment maps can exceed the decoder's default 512 MiB allocation limit.
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    reader.no_limits();
+    let img = reader.decode().map_err(|e| fail(&e))?.to_rgb32f();
+    let decode = |c: f32| if srgb { srgb_to_linear(c) } else { c };
+    Ok(RgbImage { width: img.width(), height: img.height(), pixels: img.pixels().map(|p| p.0.map(decode)).collect() })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,5 +210,52 @@ mod tests {
         assert_eq!(linear_to_srgb(0.0), 0.0);
         assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
         assert!((linear_to_srgb(0.18) - 0.4613).abs() < 1e-3);
+    }
+
+    #[test]
+    fn read_image_decodes_every_input_format() {
+        let dir = std::env::temp_dir().join(format!("penumbra-read-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let img = RgbImage {
+            width: 3,
+            height: 2,
+            pixels: vec![
+                [0.0, 0.5, 1.0],
+                [0.18, 0.02, 0.9],
+                [1.0, 0.0, 0.25],
+                [0.7, 0.7, 0.7],
+                [0.001, 0.3, 0.6],
+                [0.05, 1.0, 0.4],
+            ],
+        };
+        let close = |path: &Path, tol: f32| {
+            let back = read_image(path).unwrap();
+            assert_eq!((back.width, back.height), (3, 2), "{}", path.display());
+            // RGBE and 8-bit quantisation errors scale with the pixel's largest channel.
+            for (a, b) in back.pixels.iter().zip(&img.pixels) {
+                let m = b.iter().fold(0.05f32, |m, &c| m.max(c));
+                assert!((0..3).all(|k| (a[k] - b[k]).abs() <= tol * m), "{}: {a:?} vs {b:?}", path.display());
+            }
+        };
+        for (ext, tol) in [("exr", 0.0), ("hdr", 0.02), ("png", 0.02)] {
+            let p = dir.join(format!("in.{ext}"));
+            write_image(&p, &img).unwrap();
+            close(&p, tol);
+        }
+        // Mitsuba writes RGBE files with the signature "#?RGBE" rather than "#?RADIANCE".
+        let hdr = fs::read(dir.join("in.hdr")).unwrap();
+        assert!(hdr.starts_with(b"#?RADIANCE\n"));
+        fs::write(dir.join("rgbe.hdr"), [b"#?RGBE".as_slice(), &hdr[10..]].concat()).unwrap();
+        close(&dir.join("rgbe.hdr"), 0.02);
+        // An 8-bit sRGB JPEG of a flat colour: mid grey 188 is linear 0.5029.
+        let jpg = dir.join("in.JPG");
+        image::save_buffer(&jpg, &[188u8; 8 * 8 * 3], 8, 8, image::ColorType::Rgb8).unwrap();
+        let back = read_image(&jpg).unwrap();
+        assert!(back.pixels.iter().flatten().all(|c| (c - 0.5029).abs() < 0.01), "{:?}", back.pixels[0]);
+        let err = read_image(&dir.join("in.tga")).unwrap_err();
+        assert!(err.contains("in.tga") && err.contains(".exr, .hdr, .png or .jpg"), "{err}");
+        let err = read_image(&dir.join("missing.hdr")).unwrap_err();
+        assert!(err.contains("missing.hdr"), "{err}");
+        fs::remove_dir_all(&dir).ok();
     }
 }

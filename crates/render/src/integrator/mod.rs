@@ -2,9 +2,19 @@
 //!
 //! An integrator sees the scene only through [`Scene`]'s ray queries, BSDF
 //! lookup and light sampling calls.
+//!
+//! | integrator   | estimator |
+//! |--------------|-----------|
+//! | `path`       | light sampling + BSDF sampling at every vertex, MIS (or the split without it) |
+//! | `direct`     | direct illumination only: N light samples + M BSDF samples, MIS (Mitsuba `direct`) |
+//! | `bruteforce` | hemisphere form only: one sampled direction per vertex, emission only when hit |
 
+pub mod bruteforce;
+pub mod direct;
 pub mod path;
 
+pub use bruteforce::{BruteForceIntegrator, HemisphereSampling};
+pub use direct::DirectIntegrator;
 pub use path::PathIntegrator;
 
 use crate::geometry::Ray;
@@ -28,9 +38,48 @@ impl RayStats {
     }
 }
 
+/// Path termination shared by the multi-bounce integrators.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Termination {
+    /// Longest path in segments (Mitsuba's count); `u32::MAX` for unbounded.
+    pub max_depth: u32,
+    /// Depth from which Russian roulette plays.
+    pub rr_depth: u32,
+    /// Stop once max(β) falls below this (0 = off). Biased: the energy of the
+    /// cut paths is lost, unlike Russian roulette.
+    pub throughput_threshold: f32,
+}
+
+impl Default for Termination {
+    fn default() -> Self {
+        Termination { max_depth: u32::MAX, rr_depth: 5, throughput_threshold: 0.0 }
+    }
+}
+
+impl Termination {
+    /// Decides whether a path with throughput `beta` that has just completed
+    /// `depth` segments goes on. Returns the survival probability to divide
+    /// β by (1 when roulette did not play), or `None` to stop.
+    /// Roulette as Mitsuba: survival q = min(0.95, max(β) η²) from `rr_depth` on.
+    #[inline]
+    pub fn survive(&self, beta: Spectrum, eta: f32, depth: u32, rng: &mut SampleStream) -> Option<f32> {
+        let beta_max = beta.max_element();
+        if !(beta_max > 0.0) || beta_max < self.throughput_threshold {
+            return None;
+        }
+        if depth < self.rr_depth {
+            return Some(1.0);
+        }
+        let q = (beta_max * eta * eta).min(0.95);
+        (rng.next_1d() < q).then_some(q)
+    }
+}
+
 #[derive(Debug, Clone)]
 pub enum Integrator {
     Path(PathIntegrator),
+    Direct(DirectIntegrator),
+    BruteForce(BruteForceIntegrator),
 }
 
 impl Integrator {
@@ -39,6 +88,8 @@ impl Integrator {
     pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut SampleStream, stats: &mut RayStats) -> Spectrum {
         match self {
             Integrator::Path(p) => p.li(scene, ray, rng, stats),
+            Integrator::Direct(d) => d.li(scene, ray, rng, stats),
+            Integrator::BruteForce(b) => b.li(scene, ray, rng, stats),
         }
     }
 }

@@ -8,8 +8,10 @@
 //! | max_depth     | integer | -1 (unbounded); 1 = emitters seen directly, 2 = direct light |
 //! | rr_depth      | integer | 5 (depth at which Russian roulette starts) |
 //! | hide_emitters | boolean | false (camera rays pass through emitters; environment black) |
+//! | mis           | boolean | true: power heuristic; false: the lecture's split, emitted light only through light samples, reflected light only through BSDF samples |
+//! | throughput_threshold | float | 0 (off): stop when max(β) falls below it; biased |
 
-use super::RayStats;
+use super::{RayStats, Termination};
 use crate::geometry::{Ray, SurfaceInteraction};
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
@@ -18,15 +20,16 @@ use crate::scene::Scene;
 
 #[derive(Debug, Clone)]
 pub struct PathIntegrator {
-    /// Longest path in segments; `u32::MAX` for unbounded.
-    pub max_depth: u32,
-    pub rr_depth: u32,
+    pub term: Termination,
     pub hide_emitters: bool,
+    /// Weight light and BSDF samples by the power heuristic; when false,
+    /// each kind of sample estimates its own part of the integral.
+    pub mis: bool,
 }
 
 impl Default for PathIntegrator {
     fn default() -> Self {
-        PathIntegrator { max_depth: u32::MAX, rr_depth: 5, hide_emitters: false }
+        PathIntegrator { term: Termination::default(), hide_emitters: false, mis: true }
     }
 }
 
@@ -35,7 +38,7 @@ impl PathIntegrator {
     /// Kajiya 1986) with one light sample and one BSDF sample per vertex,
     /// each MIS-weighted against the other (Veach 1997, eq. 9.13).
     pub fn li(&self, scene: &Scene, camera_ray: &Ray, rng: &mut SampleStream, stats: &mut RayStats) -> Spectrum {
-        if self.max_depth == 0 {
+        if self.term.max_depth == 0 {
             return Spectrum::ZERO;
         }
         let mut l = Spectrum::ZERO;
@@ -60,8 +63,7 @@ impl PathIntegrator {
                 if !(depth == 0 && self.hide_emitters) {
                     let (le, env_pdf) = scene.environment(ray.d);
                     if le != Spectrum::ZERO {
-                        let w = if prev_delta { 1.0 } else { power_heuristic(prev_bsdf_pdf, env_pdf) };
-                        l += beta * le * w;
+                        l += beta * le * self.bsdf_weight(prev_delta, prev_bsdf_pdf, env_pdf);
                     }
                 }
                 break;
@@ -70,11 +72,12 @@ impl PathIntegrator {
             // Emission at the hit, MIS-weighted against light sampling at the previous vertex.
             let le = scene.emitted(&si);
             if le != Spectrum::ZERO {
-                let w = if prev_delta { 1.0 } else { power_heuristic(prev_bsdf_pdf, scene.light_pdf(prev_p, &si)) };
+                let w =
+                    if prev_delta { 1.0 } else { self.bsdf_weight(false, prev_bsdf_pdf, scene.light_pdf(prev_p, &si)) };
                 l += beta * le * w;
             }
 
-            if depth + 1 >= self.max_depth {
+            if depth + 1 >= self.term.max_depth {
                 break;
             }
             let bsdf = scene.bsdf(&si);
@@ -89,7 +92,7 @@ impl PathIntegrator {
                     if f != Spectrum::ZERO {
                         stats.shadow_rays += 1;
                         if !scene.occluded(&si, ls.wi, ls.dist) {
-                            let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, wi)) };
+                            let w = if ls.delta || !self.mis { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, wi)) };
                             l += beta * f * ls.li * (w / ls.pdf);
                         }
                     }
@@ -109,20 +112,25 @@ impl PathIntegrator {
             ray = scene.spawn_ray(&si, wi);
             depth += 1;
 
-            // Russian roulette (Mitsuba: survival min(0.95, max(β) η²)).
-            let beta_max = beta.max_element();
-            if beta_max <= 0.0 {
-                break;
-            }
-            if depth >= self.rr_depth {
-                let q = (beta_max * eta * eta).min(0.95);
-                if rng.next_1d() >= q {
-                    break;
-                }
-                beta /= q;
+            match self.term.survive(beta, eta, depth, rng) {
+                Some(q) => beta /= q,
+                None => break,
             }
         }
         l
+    }
+
+    /// MIS weight of emission found by BSDF sampling. Without MIS, emission
+    /// after a non-delta bounce belongs to light sampling alone (weight 0).
+    #[inline]
+    fn bsdf_weight(&self, prev_delta: bool, bsdf_pdf: f32, light_pdf: f32) -> f32 {
+        if prev_delta {
+            1.0
+        } else if self.mis {
+            power_heuristic(bsdf_pdf, light_pdf)
+        } else {
+            0.0
+        }
     }
 
     /// With `hide_emitters`, camera rays pass through area emitters (as

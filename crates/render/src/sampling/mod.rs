@@ -5,10 +5,12 @@
 //! the density's measure stated in the doc comment.
 
 pub mod distrib1d;
+pub mod distrib2d;
 pub mod mis;
 pub mod rng;
 pub mod sampler;
 pub mod warp;
 
 pub use distrib1d::Distribution1D;
+pub use distrib2d::Distribution2D;
 pub use sampler::{SampleStream, Sampler, SamplerKind};

@@ -32,6 +32,15 @@ pub fn cosine_hemisphere_pdf(w: Vec3) -> f32 {
     w.z.max(0.0) * INV_PI
 }
 
+/// Uniform direction on the +z hemisphere; density 1 / (2π).
+#[inline]
+pub fn sample_uniform_hemisphere(u: Vec2) -> Vec3 {
+    let z = u.x;
+    let r = safe_sqrt(1.0 - z * z);
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// Uniform direction on the unit sphere; density 1 / (4π).
 #[inline]
 pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {

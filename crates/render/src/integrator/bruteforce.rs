@@ -1,0 +1,105 @@
+//! `bruteforce`: the hemisphere form of the rendering equation alone. At each
+//! hit one direction is sampled and the path goes on; radiance is collected
+//! only when a path happens to hit an emitter, weighted by the product of
+//! f_r cos θ / p along the path. No light sampling, hence no MIS.
+//!
+//! Delta lights (point, spot, directional) contribute nothing: a sampled
+//! direction hits them with probability zero (the lecture's point). Surfaces
+//! whose BSDF is purely specular are continued by BSDF sampling whatever
+//! `sampling` says, since a hemisphere sample never hits a Dirac lobe.
+//!
+//! | parameter     | type    | default |
+//! |---------------|---------|---------|
+//! | sampling      | string  | cosine: `uniform` (p = 1/2π), `cosine` (p = cos θ/π) or `bsdf` |
+//! | max_depth, rr_depth, hide_emitters, throughput_threshold | | as `path` |
+
+use super::{RayStats, Termination};
+use crate::math::{Spectrum, INV_2PI};
+use crate::sampling::{warp, SampleStream};
+use crate::scene::Scene;
+use glam::Vec3;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HemisphereSampling {
+    Uniform,
+    Cosine,
+    Bsdf,
+}
+
+#[derive(Debug, Clone)]
+pub struct BruteForceIntegrator {
+    pub term: Termination,
+    pub hide_emitters: bool,
+    pub sampling: HemisphereSampling,
+}
+
+impl BruteForceIntegrator {
+    pub fn li(
+        &self,
+        scene: &Scene,
+        camera_ray: &crate::geometry::Ray,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+    ) -> Spectrum {
+        let mut l = Spectrum::ZERO;
+        let mut beta = Spectrum::ONE;
+        let mut eta = 1.0f32;
+        let mut ray = *camera_ray;
+        let mut depth = 0u32;
+        if self.term.max_depth == 0 {
+            return l;
+        }
+        loop {
+            stats.rays += 1;
+            let visible = !(depth == 0 && self.hide_emitters);
+            let Some(si) = scene.intersect(&ray) else {
+                if visible {
+                    l += beta * scene.environment(ray.d).0;
+                }
+                break;
+            };
+            if visible {
+                l += beta * scene.emitted(&si);
+            }
+            if depth + 1 >= self.term.max_depth {
+                break;
+            }
+            let bsdf = scene.bsdf(&si);
+            let wo = si.to_local(si.wo);
+            let u = rng.next_1d();
+            let u2 = rng.next_2d();
+            let (wi, weight, step_eta) = if self.sampling == HemisphereSampling::Bsdf || !bsdf.has_smooth() {
+                let Some(bs) = bsdf.sample(wo, u, u2) else { break };
+                (bs.wi, bs.weight, bs.eta)
+            } else {
+                // Hemisphere on the side `wo` lies on: f cos / p with p uniform or cosine.
+                let (mut wi, pdf) = match self.sampling {
+                    HemisphereSampling::Uniform => {
+                        let w = warp::sample_uniform_hemisphere(u2);
+                        (w, INV_2PI)
+                    }
+                    _ => {
+                        let w = warp::sample_cosine_hemisphere(u2);
+                        (w, warp::cosine_hemisphere_pdf(w))
+                    }
+                };
+                if !(pdf > 0.0) {
+                    break;
+                }
+                if wo.z < 0.0 {
+                    wi = Vec3::new(wi.x, wi.y, -wi.z);
+                }
+                (wi, bsdf.eval(wo, wi) * (wi.z.abs() / pdf), 1.0)
+            };
+            beta *= weight;
+            eta *= step_eta;
+            ray = scene.spawn_ray(&si, si.to_world(wi));
+            depth += 1;
+            match self.term.survive(beta, eta, depth, rng) {
+                Some(q) => beta /= q,
+                None => break,
+            }
+        }
+        l
+    }
+}

@@ -1,0 +1,31 @@
+//! Mitsuba `directional`: light arriving from one direction with constant
+//! irradiance, a Dirac delta in direction (only light sampling reaches it).
+//!
+//! | parameter  | type      | default |
+//! |------------|-----------|---------|
+//! | direction  | vector    | (or local +z of `to_world`): the direction light travels |
+//! | irradiance | rgb       | 1 (W/m²) |
+
+use super::LightSample;
+use crate::math::{Spectrum, PI};
+use glam::Vec3;
+
+#[derive(Debug, Clone)]
+pub struct DirectionalLight {
+    /// Unit direction in which the light travels.
+    pub direction: Vec3,
+    pub irradiance: Spectrum,
+    /// Radius of the scene's bounding sphere (for `power`).
+    pub scene_radius: f32,
+}
+
+impl DirectionalLight {
+    pub fn sample_li(&self) -> Option<LightSample> {
+        Some(LightSample { wi: -self.direction, dist: f32::INFINITY, pdf: 1.0, li: self.irradiance, delta: true })
+    }
+
+    /// Flux through the scene's bounding disk: π r² E.
+    pub fn power(&self) -> Spectrum {
+        PI * self.scene_radius * self.scene_radius * self.irradiance
+    }
+}

@@ -1,0 +1,180 @@
+//! Piecewise-constant 2D distribution over [0, 1)² (pbrt-v3 §13.6.7): a
+//! marginal distribution over rows (the row sums), then the conditional
+//! distribution over the columns of the chosen row.
+
+use super::Distribution1D;
+use glam::Vec2;
+
+/// Density proportional to a `width` × `height` grid of non-negative cell
+/// weights; x runs along columns, y along rows (row 0 at y = 0).
+#[derive(Debug, Clone)]
+pub struct Distribution2D {
+    /// One distribution over columns per row; `None` for rows of zero weight.
+    conditional: Vec<Option<Distribution1D>>,
+    /// Distribution over rows, weighted by the row sums.
+    marginal: Distribution1D,
+    width: usize,
+    height: usize,
+    /// Cell count over the total weight: density of a cell = weight · inv_mean.
+    inv_mean: f32,
+}
+
+impl Distribution2D {
+    /// `weights` is row-major, row 0 first. Returns `None` when the sizes do
+    /// not match, no weight is positive, or a weight is negative or not finite.
+    pub fn new(weights: &[f32], width: usize, height: usize) -> Option<Distribution2D> {
+        if width == 0 || height == 0 || weights.len() != width * height {
+            return None;
+        }
+        if weights.iter().any(|w| !w.is_finite() || *w < 0.0) {
+            return None;
+        }
+        let conditional: Vec<_> = weights.chunks_exact(width).map(Distribution1D::new).collect();
+        let row_sums: Vec<f32> = conditional.iter().map(|c| c.as_ref().map_or(0.0, |c| c.total as f32)).collect();
+        let marginal = Distribution1D::new(&row_sums)?;
+        let inv_mean = ((width * height) as f64 / marginal.total) as f32;
+        Some(Distribution2D { conditional, marginal, width, height, inv_mean })
+    }
+
+    /// Samples a point p ∈ [0, 1)² (p.x along columns, p.y along rows) and
+    /// returns it with its density w.r.t. area on the unit square (cell
+    /// weight / mean weight).
+    pub fn sample(&self, u: Vec2) -> (Vec2, f32) {
+        let (row, _, uy) = self.marginal.sample_discrete(u.y);
+        // The marginal never picks a row of zero weight, so its conditional exists.
+        let cond = self.conditional[row].as_ref().expect("row of zero weight sampled");
+        let (col, _, ux) = cond.sample_discrete(u.x);
+        let p = Vec2::new(point_in_cell(col, ux, self.width), point_in_cell(row, uy, self.height));
+        (p, cond.func[col] * self.inv_mean)
+    }
+
+    /// Density at `p` w.r.t. area on the unit square (0 outside [0, 1]²).
+    pub fn pdf(&self, p: Vec2) -> f32 {
+        if !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y) {
+            return 0.0;
+        }
+        let col = ((p.x * self.width as f32) as usize).min(self.width - 1);
+        let row = ((p.y * self.height as f32) as usize).min(self.height - 1);
+        self.conditional[row].as_ref().map_or(0.0, |c| c.func[col] * self.inv_mean)
+    }
+}
+
+/// (i + t) / n, nudged by rounding steps so that it maps back to cell i
+/// (as `pdf` computes cells), and so stays below 1.
+fn point_in_cell(i: usize, t: f32, n: usize) -> f32 {
+    let cell = |x: f32| (x * n as f32) as usize;
+    let mut x = (i as f32 + t) / n as f32;
+    while cell(x) > i {
+        x = f32::from_bits(x.to_bits() - 1);
+    }
+    while cell(x) < i {
+        x = f32::from_bits(x.to_bits() + 1);
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::rng::{hash_words, to_unit_f32};
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+    /// 5 × 4 grid with an empty row (1) and an empty column (3).
+    const W: usize = 5;
+    const H: usize = 4;
+    #[rustfmt::skip]
+    const WEIGHTS: [f32; W * H] = [
+        1.0, 2.0, 0.5, 0.0, 4.0,
+        0.0, 0.0, 0.0, 0.0, 0.0,
+        3.0, 0.1, 7.0, 0.0, 1.0,
+        0.2, 9.0, 1.0, 0.0, 2.5,
+    ];
+
+    fn random_u(seed: u64, i: u64) -> Vec2 {
+        Vec2::new(to_unit_f32(hash_words(&[seed, i, 0])), to_unit_f32(hash_words(&[seed, i, 1])))
+    }
+
+    #[test]
+    fn pdf_integrates_to_one_and_is_weight_over_mean() {
+        let d = Distribution2D::new(&WEIGHTS, W, H).unwrap();
+        let mean = WEIGHTS.iter().sum::<f32>() / (W * H) as f32;
+        // Midpoint rule on a sub-grid aligned with the cells: exact for a piecewise-constant pdf.
+        let n = 40;
+        let mut integral = 0.0f64;
+        for a in 0..n * H {
+            for b in 0..n * W {
+                let p = Vec2::new((b as f32 + 0.5) / (n * W) as f32, (a as f32 + 0.5) / (n * H) as f32);
+                let pdf = d.pdf(p);
+                assert!((pdf - WEIGHTS[(a / n) * W + b / n] / mean).abs() < 1e-5);
+                integral += pdf as f64;
+            }
+        }
+        integral /= (n * n * W * H) as f64;
+        assert!((integral - 1.0).abs() < 1e-5, "∫ pdf = {integral}");
+        assert_eq!(d.pdf(Vec2::new(1.5, 0.5)), 0.0);
+        assert_eq!(d.pdf(Vec2::new(0.5, -0.1)), 0.0);
+    }
+
+    #[test]
+    fn samples_carry_their_pdf_and_avoid_empty_cells() {
+        let d = Distribution2D::new(&WEIGHTS, W, H).unwrap();
+        // Includes the corners of the unit square of random numbers.
+        let us = (0..20_000).map(|i| random_u(7, i)).chain([Vec2::ZERO, Vec2::ONE, Vec2::new(1.0 - f32::EPSILON, 0.0)]);
+        for u in us {
+            let (p, pdf) = d.sample(u);
+            assert!((0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y), "{p}");
+            assert!(pdf > 0.0);
+            assert_eq!(pdf, d.pdf(p), "u = {u}, p = {p}");
+            let (col, row) = ((p.x * W as f32) as usize, (p.y * H as f32) as usize);
+            assert!(row != 1 && col != 3, "sampled an empty cell ({row}, {col})");
+        }
+    }
+
+    #[test]
+    fn cell_frequencies_pass_chi_square() {
+        let d = Distribution2D::new(&WEIGHTS, W, H).unwrap();
+        let total: f64 = WEIGHTS.iter().map(|&w| w as f64).sum();
+        let n = 200_000;
+        // Histogram on a grid twice as fine as the cells: also checks uniformity within a cell.
+        let (gw, gh) = (2 * W, 2 * H);
+        let mut observed = vec![0f64; gw * gh];
+        for i in 0..n {
+            let (p, _) = d.sample(random_u(11, i));
+            observed[(p.y * gh as f32) as usize * gw + (p.x * gw as f32) as usize] += 1.0;
+        }
+        let (mut chi2, mut dof) = (0.0, 0);
+        for (k, &o) in observed.iter().enumerate() {
+            let expected = n as f64 * WEIGHTS[(k / gw / 2) * W + (k % gw) / 2] as f64 / total / 4.0;
+            if expected == 0.0 {
+                assert_eq!(o, 0.0, "samples in an empty cell");
+                continue;
+            }
+            chi2 += (o - expected).powi(2) / expected;
+            dof += 1;
+        }
+        let p = 1.0 - ChiSquared::new((dof - 1) as f64).unwrap().cdf(chi2);
+        eprintln!("distribution2d chi-square: p = {p}");
+        assert!(p > crate::testing::chi2::alpha(1), "p = {p}");
+    }
+
+    #[test]
+    fn rejects_degenerate_grids() {
+        assert!(Distribution2D::new(&[0.0; 6], 3, 2).is_none());
+        assert!(Distribution2D::new(&[1.0, -1.0, 0.5, 0.5], 2, 2).is_none());
+        assert!(Distribution2D::new(&[1.0, f32::INFINITY, 0.5, 0.5], 2, 2).is_none());
+        assert!(Distribution2D::new(&[1.0; 5], 3, 2).is_none());
+        assert!(Distribution2D::new(&[], 0, 0).is_none());
+    }
+
+    #[test]
+    fn point_in_cell_stays_in_its_cell() {
+        for n in [1usize, 3, 7, 1000, 4097] {
+            for i in [0, n / 2, n - 1] {
+                for t in [0.0, 0.5, 1.0 - f32::EPSILON / 2.0] {
+                    let x = point_in_cell(i, t, n);
+                    assert!(x < 1.0 && ((x * n as f32) as usize) == i, "n {n} i {i} t {t}: {x}");
+                }
+            }
+        }
+    }
+}

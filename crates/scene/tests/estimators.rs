@@ -1,0 +1,33 @@
+//! Every estimator converges to the same image: brute force (uniform,
+//! cosine and BSDF sampling), path tracing with and without MIS, with power
+//! light selection, and `direct` against `path` at max_depth 2.
+
+mod common;
+
+use common::{assert_agree, render_with_variance, root};
+
+#[test]
+fn all_estimators_agree_on_the_diffuse_box() {
+    let scene = root().join("tests/scenes/cbox_diffuse.xml");
+    let reference = render_with_variance(&scene, 256, 8, Some("path"), 1);
+    for (spec, spp) in [
+        ("path:mis=false", 256),
+        ("path:light_selection=power", 256),
+        ("bruteforce:sampling=bsdf", 1024),
+        ("bruteforce:sampling=cosine", 1024),
+        ("bruteforce:sampling=uniform", 1024),
+    ] {
+        let est = render_with_variance(&scene, spp, 8, Some(spec), 2);
+        assert_agree(spec, &est, &reference, 0.01);
+    }
+}
+
+#[test]
+fn direct_matches_path_at_depth_two() {
+    let scene = root().join("tests/scenes/direct_light.xml");
+    let path = render_with_variance(&scene, 256, 8, Some("path:max_depth=2"), 1);
+    for spec in ["direct", "direct:emitter_samples=4,bsdf_samples=0", "direct:emitter_samples=0,bsdf_samples=4"] {
+        let est = render_with_variance(&scene, 256, 8, Some(spec), 2);
+        assert_agree(spec, &est, &path, 0.01);
+    }
+}
