@@ -16,6 +16,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Time the bundled scenes: samples/s and rays/s (and Mitsuba 3, if installed).
     Bench(BenchArgs),
+    /// Compare an image with a reference: per-channel means, MSE and relMSE
+    /// (mean of (a-b)²/(b²+0.01), B the reference), optionally a false-colour error image.
+    Diff(DiffArgs),
 }
 
 #[derive(Debug, Args)]
@@ -64,6 +67,17 @@ pub struct BenchArgs {
     /// Mitsuba variant for the comparison.
     #[arg(long, default_value = "llvm_ad_rgb")]
     pub mitsuba_variant: String,
+}
+
+#[derive(Debug, Args)]
+pub struct DiffArgs {
+    /// The image to measure (.exr, .hdr, .png or .jpg).
+    pub a: PathBuf,
+    /// The reference image, same size.
+    pub b: PathBuf,
+    /// Write a false-colour image of the per-pixel relMSE (log scale) here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 fn parse_define(s: &str) -> Result<(String, String), String> {

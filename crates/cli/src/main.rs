@@ -1,7 +1,9 @@
-//! The `penumbra` command: `render` a scene, or `bench` the bundled scenes.
+//! The `penumbra` command: `render` a scene, `bench` the bundled scenes, or
+//! `diff` an image against a reference.
 
 mod args;
 mod bench;
+mod imgtool;
 mod progress;
 
 use anyhow::{anyhow, Context, Result};
@@ -19,6 +21,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => render(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::Diff(a) => imgtool::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

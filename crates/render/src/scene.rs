@@ -113,30 +113,31 @@ impl Scene {
         }
     }
 
-    /// Picks a light with `u2.x` (then rescaled to [0, 1) for reuse, as
-    /// Mitsuba's `sample_emitter`) and samples a direction towards it. The
-    /// returned pdf includes the selection probability. No visibility test.
+    /// Picks a light with `u` in [0, 1): (index, probability, `u` rescaled to
+    /// [0, 1) within the choice, for reuse as in Mitsuba's `sample_emitter`).
     #[inline]
-    pub fn sample_light(&self, p_ref: Vec3, mut u2: Vec2) -> Option<LightSample> {
+    pub fn select_light(&self, u: f32) -> Option<(usize, f32, f32)> {
         if self.lights.is_empty() {
             return None;
         }
-        let (i, pmf) = match &self.power_distrib {
-            Some(d) => {
-                let (i, pmf, u_re) = d.sample_discrete(u2.x);
-                u2.x = u_re;
-                (i, pmf)
-            }
+        match &self.power_distrib {
+            Some(d) => Some(d.sample_discrete(u)),
             None => {
                 let n = self.lights.len();
-                let scaled = u2.x * n as f32;
+                let scaled = u * n as f32;
                 let i = (scaled as usize).min(n - 1);
-                u2.x = (scaled - i as f32).min(1.0 - f32::EPSILON / 2.0);
-                (i, 1.0 / n as f32)
+                Some((i, 1.0 / n as f32, (scaled - i as f32).min(1.0 - f32::EPSILON / 2.0)))
             }
-        };
-        let mut s = self.lights[i].sample_li(p_ref, u2, &self.shapes)?;
-        // Delta lights keep pdf = 1 times the selection probability.
+        }
+    }
+
+    /// Picks a light with `u2.x` and samples a direction towards it with the
+    /// rest. The returned pdf includes the selection probability (delta
+    /// lights: pdf 1 times it). No visibility test.
+    #[inline]
+    pub fn sample_light(&self, p_ref: Vec3, u2: Vec2) -> Option<LightSample> {
+        let (i, pmf, u_re) = self.select_light(u2.x)?;
+        let mut s = self.lights[i].sample_li(p_ref, Vec2::new(u_re, u2.y), &self.shapes)?;
         s.pdf *= pmf;
         Some(s)
     }
@@ -181,5 +182,54 @@ impl Scene {
     /// Bounds of all geometry.
     pub fn bounds(&self) -> crate::geometry::Aabb {
         self.accel.bounds
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::Diffuse;
+    use crate::light::{AreaLight, PointLight};
+
+    fn three_lights() -> Scene {
+        let shapes = vec![Shape::sphere(Vec3::new(0.0, 3.0, 0.0), 0.5, false)];
+        let info = vec![ShapeInfo { bsdf: 0, light: Some(2) }];
+        let bsdfs = vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(0.5) })];
+        let lights = vec![
+            Light::Point(PointLight { position: Vec3::X, intensity: Vec3::splat(1.0) }),
+            Light::Point(PointLight { position: Vec3::Y, intensity: Vec3::splat(5.0) }),
+            Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(2.0) }),
+        ];
+        Scene::new(shapes, info, bsdfs, lights)
+    }
+
+    /// Selection frequencies equal `light_pmf`, and the pmfs sum to one.
+    #[test]
+    fn light_selection_frequencies_match_the_pmf() {
+        for sel in [LightSelection::Uniform, LightSelection::Power] {
+            let mut scene = three_lights();
+            scene.set_light_selection(sel);
+            let n = 100_000;
+            let mut counts = [0usize; 3];
+            for k in 0..n {
+                let (i, pmf, u_re) = scene.select_light((k as f32 + 0.5) / n as f32).unwrap();
+                assert_eq!(pmf, scene.light_pmf(i));
+                assert!((0.0..1.0).contains(&u_re));
+                counts[i] += 1;
+            }
+            let total: f32 = (0..3).map(|i| scene.light_pmf(i)).sum();
+            assert!((total - 1.0).abs() < 1e-6);
+            for (i, &c) in counts.iter().enumerate() {
+                assert!((c as f32 / n as f32 - scene.light_pmf(i)).abs() < 1e-3, "{sel:?} light {i}");
+            }
+        }
+        // Power: 4π·1, 4π·5 and π·(4π 0.25)·2 = 2π² → proportional to 4, 20, 2π.
+        let mut scene = three_lights();
+        scene.set_light_selection(LightSelection::Power);
+        let w = [4.0, 20.0, 2.0 * std::f32::consts::PI];
+        let sum: f32 = w.iter().sum();
+        for i in 0..3 {
+            assert!((scene.light_pmf(i) - w[i] / sum).abs() < 1e-5);
+        }
     }
 }
