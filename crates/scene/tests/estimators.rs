@@ -36,8 +36,8 @@ fn direct_matches_path_at_depth_two() {
 fn delta_lights_agree_between_direct_and_path() {
     for name in ["point_light", "spot_light"] {
         let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-        let path = render_with_variance(&scene, 128, 8, Some("path:max_depth=2"), 1);
-        let direct = render_with_variance(&scene, 128, 8, Some("direct:emitter_samples=2"), 2);
+        let path = render_with_variance(&scene, 256, 16, Some("path:max_depth=2"), 1);
+        let direct = render_with_variance(&scene, 256, 16, Some("direct:emitter_samples=2"), 2);
         assert_agree(name, &direct, &path, 0.01);
     }
 }
