@@ -8,7 +8,16 @@ use penumbra_scene::Overrides;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const DEFAULT_SCENES: &[&str] = &["scenes/cornell-box.xml"];
+/// The standard scenes with the `-D` parameters they are timed at.
+const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
+    ("scenes/cornell-box.xml", &[]),
+    ("tests/scenes/envmap_sun.xml", &[("res", "256"), ("spp", "64")]),
+    ("tests/scenes/many_lights.xml", &[("res", "256"), ("spp", "64")]),
+];
+
+/// Light-selection comparison: this scene against its converged reference.
+const SELECTION_SCENE: &str = "tests/scenes/many_lights.xml";
+const SELECTION_REF: &str = "tests/refs/many_lights.exr";
 
 fn mitsuba_python(a: &BenchArgs) -> Option<PathBuf> {
     if let Some(p) = &a.mitsuba {
@@ -23,11 +32,22 @@ fn mitsuba_python(a: &BenchArgs) -> Option<PathBuf> {
 
 /// Runs tools/mitsuba_bench.py; returns Mitsuba's seconds for the render
 /// that excludes its JIT warm-up.
-fn time_mitsuba(python: &Path, variant: &str, scene: &Path, spp: u32, threads: usize) -> Result<f64> {
-    let out = Command::new(python)
-        .args(["tools/mitsuba_bench.py", "--variant", variant, "--spp", &spp.to_string()])
+fn time_mitsuba(
+    python: &Path,
+    variant: &str,
+    scene: &Path,
+    defines: &[(String, String)],
+    spp: u32,
+    threads: usize,
+) -> Result<f64> {
+    let mut cmd = Command::new(python);
+    cmd.args(["tools/mitsuba_bench.py", "--variant", variant, "--spp", &spp.to_string()])
         .arg("--threads")
-        .arg(threads.to_string())
+        .arg(threads.to_string());
+    for (k, v) in defines {
+        cmd.arg("-D").arg(format!("{k}={v}"));
+    }
+    let out = cmd
         .arg(scene)
         .output()
         .map_err(|e| anyhow!("cannot run {}: {e}", python.display()))?;
@@ -45,18 +65,24 @@ fn time_mitsuba(python: &Path, variant: &str, scene: &Path, spp: u32, threads: u
 }
 
 pub fn run(a: &BenchArgs) -> Result<()> {
-    let scenes: Vec<PathBuf> =
-        if a.scenes.is_empty() { DEFAULT_SCENES.iter().map(PathBuf::from).collect() } else { a.scenes.clone() };
+    let scenes: Vec<(PathBuf, Vec<(String, String)>)> = if a.scenes.is_empty() {
+        DEFAULT_SCENES
+            .iter()
+            .map(|(p, d)| (PathBuf::from(p), d.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()))
+            .collect()
+    } else {
+        a.scenes.iter().map(|p| (p.clone(), Vec::new())).collect()
+    };
     let pool = crate::thread_pool(a.threads)?;
     let threads = pool.current_num_threads();
     let mitsuba = mitsuba_python(a);
     println!(
-        "{:<28} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8}",
+        "{:<20} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8}",
         "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup"
     );
-    for scene in &scenes {
-        let job = penumbra_scene::load_scene(scene, &[], &Overrides { spp: a.spp, ..Default::default() })
-            .map_err(|e| anyhow!(e))?;
+    for (scene, defines) in &scenes {
+        let ov = Overrides { spp: a.spp, ..Default::default() };
+        let job = penumbra_scene::load_scene(scene, defines, &ov).map_err(|e| anyhow!(e))?;
         // One untimed warm-up pass at 1 spp (page faults, thread start-up).
         let mut warm = job.clone();
         warm.sampler.spp = 1;
@@ -65,7 +91,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         let secs = elapsed.as_secs_f64();
         let rays = (stats.rays.rays + stats.rays.shadow_rays) as f64;
         let (mi, ratio) = match &mitsuba {
-            Some(py) => match time_mitsuba(py, &a.mitsuba_variant, scene, job.sampler.spp, threads) {
+            Some(py) => match time_mitsuba(py, &a.mitsuba_variant, scene, defines, job.sampler.spp, threads) {
                 Ok(t) => (format!("{t:.2}"), format!("{:.2}x", t / secs)),
                 Err(e) => {
                     eprintln!("note: Mitsuba timing skipped: {e}");
@@ -75,7 +101,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
             None => ("-".into(), "-".into()),
         };
         println!(
-            "{:<28} {:>9} {:>6} {:>9.2} {:>11.3} {:>10.2} {:>11} {:>8}",
+            "{:<20} {:>9} {:>6} {:>9.2} {:>11.3} {:>10.2} {:>11} {:>8}",
             scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
             format!("{}x{}", job.width, job.height),
             job.sampler.spp,
@@ -90,5 +116,37 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         println!("(Mitsuba 3 not found: pass --mitsuba PYTHON or set PENUMBRA_MITSUBA_PYTHON to compare)");
     }
     println!("threads: {threads}; speedup = Mitsuba seconds / Penumbra seconds at equal spp ({})", a.mitsuba_variant);
+    if a.scenes.is_empty() {
+        light_selection_table(&pool)?;
+    }
+    Ok(())
+}
+
+/// Each light-selection strategy on the many-lights scene: time and error
+/// against the converged reference. For unbiased estimators relMSE falls as
+/// 1/time, so relMSE x seconds is the error at equal time (lower is better).
+fn light_selection_table(pool: &rayon::ThreadPool) -> Result<()> {
+    let reference = penumbra_scene::image_io::read_exr(Path::new(SELECTION_REF)).map_err(|e| anyhow!(e))?;
+    println!("\nlight selection on {SELECTION_SCENE} (64x64, vs {SELECTION_REF}):");
+    println!("{:<10} {:>6} {:>9} {:>12} {:>16}", "strategy", "spp", "time s", "relMSE", "relMSE x time");
+    for strategy in ["uniform", "power", "bvh"] {
+        let ov = Overrides {
+            spp: Some(64),
+            seed: None,
+            integrator: Some(format!("path:light_selection={strategy}")),
+        };
+        let job = match penumbra_scene::load_scene(Path::new(SELECTION_SCENE), &[], &ov) {
+            Ok(j) => j,
+            Err(e) => {
+                println!("{strategy:<10} skipped: {e}");
+                continue;
+            }
+        };
+        let (film, _, elapsed) = crate::render_job(&job, pool, true);
+        let img = penumbra_scene::image_io::RgbImage { width: job.width, height: job.height, pixels: film.develop() };
+        let rel = crate::imgtool::diff(&img, &reference)?.rel_mse;
+        let secs = elapsed.as_secs_f64();
+        println!("{strategy:<10} {:>6} {secs:>9.3} {rel:>12.4e} {:>16.4e}", job.sampler.spp, rel * secs);
+    }
     Ok(())
 }
