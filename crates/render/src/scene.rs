@@ -104,40 +104,45 @@ impl Scene {
         &self.bsdfs[self.shape_info[si.shape as usize].bsdf as usize]
     }
 
-    /// Probability that `sample_light` picks light `i`.
+    /// Probability that `sample_light` picks light `i` for a receiver at
+    /// `p` with normal `n` (`Vec3::ZERO` when there is none, e.g. the camera).
     #[inline]
-    pub fn light_pmf(&self, i: usize) -> f32 {
+    pub fn light_pmf(&self, p: Vec3, n: Vec3, i: usize) -> f32 {
+        let _ = (p, n); // Uniform and power selection ignore the receiver.
         match &self.power_distrib {
             Some(d) => d.pmf(i),
             None => 1.0 / self.lights.len() as f32,
         }
     }
 
-    /// Picks a light with `u` in [0, 1): (index, probability, `u` rescaled to
-    /// [0, 1) within the choice, for reuse as in Mitsuba's `sample_emitter`).
+    /// Picks a light for a receiver at (`p`, `n`) with `u` in [0, 1):
+    /// (index, probability).
     #[inline]
-    pub fn select_light(&self, u: f32) -> Option<(usize, f32, f32)> {
+    pub fn select_light(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
+        let _ = (p, n);
         if self.lights.is_empty() {
             return None;
         }
         match &self.power_distrib {
-            Some(d) => Some(d.sample_discrete(u)),
+            Some(d) => {
+                let (i, pmf, _) = d.sample_discrete(u);
+                Some((i, pmf))
+            }
             None => {
                 let n = self.lights.len();
-                let scaled = u * n as f32;
-                let i = (scaled as usize).min(n - 1);
-                Some((i, 1.0 / n as f32, (scaled - i as f32).min(1.0 - f32::EPSILON / 2.0)))
+                Some((((u * n as f32) as usize).min(n - 1), 1.0 / n as f32))
             }
         }
     }
 
-    /// Picks a light with `u2.x` and samples a direction towards it with the
-    /// rest. The returned pdf includes the selection probability (delta
-    /// lights: pdf 1 times it). No visibility test.
+    /// Picks a light with `u` and samples a direction towards it with `u2`,
+    /// for a receiver at `p_ref` with normal `n_ref`. The returned pdf
+    /// includes the selection probability (delta lights: pdf 1 times it).
+    /// No visibility test.
     #[inline]
-    pub fn sample_light(&self, p_ref: Vec3, u2: Vec2) -> Option<LightSample> {
-        let (i, pmf, u_re) = self.select_light(u2.x)?;
-        let mut s = self.lights[i].sample_li(p_ref, Vec2::new(u_re, u2.y), &self.shapes)?;
+    pub fn sample_light(&self, p_ref: Vec3, n_ref: Vec3, u: f32, u2: Vec2) -> Option<LightSample> {
+        let (i, pmf) = self.select_light(p_ref, n_ref, u)?;
+        let mut s = self.lights[i].sample_li(p_ref, u2, &self.shapes)?;
         s.pdf *= pmf;
         Some(s)
     }
@@ -158,23 +163,27 @@ impl Scene {
     /// Solid-angle density (selection included) with which `sample_light`
     /// from `p_ref` would have produced the emitter point `si`.
     #[inline]
-    pub fn light_pdf(&self, p_ref: Vec3, si: &SurfaceInteraction) -> f32 {
+    pub fn light_pdf(&self, p_ref: Vec3, n_ref: Vec3, si: &SurfaceInteraction) -> f32 {
         match self.shape_info[si.shape as usize].light {
-            Some(l) => self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n) * self.light_pmf(l as usize),
+            Some(l) => {
+                self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n)
+                    * self.light_pmf(p_ref, n_ref, l as usize)
+            }
             None => 0.0,
         }
     }
 
     /// Radiance from lights at infinity along direction `d`, and the
-    /// solid-angle density (selection included) of sampling that direction.
+    /// solid-angle density (selection included) with which `sample_light`
+    /// for a receiver at (`p_ref`, `n_ref`) samples that direction.
     #[inline]
-    pub fn environment(&self, d: Vec3) -> (Spectrum, f32) {
+    pub fn environment(&self, p_ref: Vec3, n_ref: Vec3, d: Vec3) -> (Spectrum, f32) {
         let mut le = Spectrum::ZERO;
         let mut pdf = 0.0;
         for &i in &self.env_lights {
             let (l, p) = self.lights[i as usize].environment(d);
             le += l;
-            pdf += p * self.light_pmf(i as usize);
+            pdf += p * self.light_pmf(p_ref, n_ref, i as usize);
         }
         (le, pdf)
     }
@@ -212,15 +221,17 @@ mod tests {
             let n = 100_000;
             let mut counts = [0usize; 3];
             for k in 0..n {
-                let (i, pmf, u_re) = scene.select_light((k as f32 + 0.5) / n as f32).unwrap();
-                assert_eq!(pmf, scene.light_pmf(i));
-                assert!((0.0..1.0).contains(&u_re));
+                let (i, pmf) = scene.select_light(Vec3::ZERO, Vec3::Y, (k as f32 + 0.5) / n as f32).unwrap();
+                assert_eq!(pmf, scene.light_pmf(Vec3::ZERO, Vec3::Y, i));
                 counts[i] += 1;
             }
-            let total: f32 = (0..3).map(|i| scene.light_pmf(i)).sum();
+            let total: f32 = (0..3).map(|i| scene.light_pmf(Vec3::ZERO, Vec3::Y, i)).sum();
             assert!((total - 1.0).abs() < 1e-6);
             for (i, &c) in counts.iter().enumerate() {
-                assert!((c as f32 / n as f32 - scene.light_pmf(i)).abs() < 1e-3, "{sel:?} light {i}");
+                assert!(
+                    (c as f32 / n as f32 - scene.light_pmf(Vec3::ZERO, Vec3::Y, i)).abs() < 1e-3,
+                    "{sel:?} light {i}"
+                );
             }
         }
         // Power: 4π·1, 4π·5 and π·(4π 0.25)·2 = 2π² → proportional to 4, 20, 2π.
@@ -229,7 +240,7 @@ mod tests {
         let w = [4.0, 20.0, 2.0 * std::f32::consts::PI];
         let sum: f32 = w.iter().sum();
         for i in 0..3 {
-            assert!((scene.light_pmf(i) - w[i] / sum).abs() < 1e-5);
+            assert!((scene.light_pmf(Vec3::ZERO, Vec3::Y, i) - w[i] / sum).abs() < 1e-5);
         }
     }
 }

@@ -54,7 +54,7 @@ impl BruteForceIntegrator {
             let visible = !(depth == 0 && self.hide_emitters);
             let Some(si) = scene.intersect(&ray) else {
                 if visible {
-                    l += beta * scene.environment(ray.d).0;
+                    l += beta * scene.environment(ray.o, Vec3::ZERO, ray.d).0;
                 }
                 break;
             };

@@ -45,7 +45,11 @@ impl DirectIntegrator {
     ) -> Spectrum {
         stats.rays += 1;
         let Some(si) = scene.intersect(ray) else {
-            return if self.hide_emitters { Spectrum::ZERO } else { scene.environment(ray.d).0 };
+            return if self.hide_emitters {
+                Spectrum::ZERO
+            } else {
+                scene.environment(ray.o, glam::Vec3::ZERO, ray.d).0
+            };
         };
         let mut l = if self.hide_emitters { Spectrum::ZERO } else { scene.emitted(&si) };
         let total = (self.emitter_samples + self.bsdf_samples) as f32;
@@ -59,7 +63,8 @@ impl DirectIntegrator {
         // Light sampling: N_s shadow rays, each averaged with weight 1/N_s.
         if bsdf.has_smooth() {
             for _ in 0..self.emitter_samples {
-                let Some(ls) = scene.sample_light(si.p, rng.next_2d()) else { continue };
+                let (u, u2) = (rng.next_1d(), rng.next_2d());
+                let Some(ls) = scene.sample_light(si.p, si.n, u, u2) else { continue };
                 let wi = si.to_local(ls.wi);
                 let f = bsdf.eval(wo, wi) * wi.z.abs();
                 if f == Spectrum::ZERO {
@@ -82,8 +87,8 @@ impl DirectIntegrator {
             let ray = scene.spawn_ray(&si, wi);
             stats.rays += 1;
             let (le, light_pdf) = match scene.intersect(&ray) {
-                Some(hit) => (scene.emitted(&hit), scene.light_pdf(si.p, &hit)),
-                None => scene.environment(wi),
+                Some(hit) => (scene.emitted(&hit), scene.light_pdf(si.p, si.n, &hit)),
+                None => scene.environment(si.p, si.n, wi),
             };
             if le == Spectrum::ZERO {
                 continue;

@@ -17,6 +17,7 @@ use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
+use glam::Vec3;
 
 #[derive(Debug, Clone)]
 pub struct PathIntegrator {
@@ -48,6 +49,7 @@ impl PathIntegrator {
         let mut depth = 0u32;
         // The previous vertex, for MIS of emitters hit by BSDF sampling.
         let mut prev_p = ray.o;
+        let mut prev_n = Vec3::ZERO;
         let mut prev_bsdf_pdf = 1.0f32;
         let mut prev_delta = true;
 
@@ -61,7 +63,7 @@ impl PathIntegrator {
             let Some(si) = hit else {
                 // Escaped: environment emission, MIS-weighted against light sampling.
                 if !(depth == 0 && self.hide_emitters) {
-                    let (le, env_pdf) = scene.environment(ray.d);
+                    let (le, env_pdf) = scene.environment(prev_p, prev_n, ray.d);
                     if le != Spectrum::ZERO {
                         l += beta * le * self.bsdf_weight(prev_delta, prev_bsdf_pdf, env_pdf);
                     }
@@ -72,8 +74,11 @@ impl PathIntegrator {
             // Emission at the hit, MIS-weighted against light sampling at the previous vertex.
             let le = scene.emitted(&si);
             if le != Spectrum::ZERO {
-                let w =
-                    if prev_delta { 1.0 } else { self.bsdf_weight(false, prev_bsdf_pdf, scene.light_pdf(prev_p, &si)) };
+                let w = if prev_delta {
+                    1.0
+                } else {
+                    self.bsdf_weight(false, prev_bsdf_pdf, scene.light_pdf(prev_p, prev_n, &si))
+                };
                 l += beta * le * w;
             }
 
@@ -84,9 +89,9 @@ impl PathIntegrator {
             let wo = si.to_local(si.wo);
 
             // Light sampling (next-event estimation).
-            let u_light = rng.next_2d();
+            let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
             if bsdf.has_smooth() {
-                if let Some(ls) = scene.sample_light(si.p, u_light) {
+                if let Some(ls) = scene.sample_light(si.p, si.n, u_sel, u_light) {
                     let wi = si.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi) * wi.z.abs();
                     if f != Spectrum::ZERO {
@@ -107,6 +112,7 @@ impl PathIntegrator {
             eta *= bs.eta;
             let wi = si.to_world(bs.wi);
             prev_p = si.p;
+            prev_n = si.n;
             prev_bsdf_pdf = bs.pdf;
             prev_delta = bs.delta;
             ray = scene.spawn_ray(&si, wi);
