@@ -4,6 +4,7 @@
 use crate::accel::Accel;
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
+use crate::light::bvh::LightBvh;
 use crate::light::{Light, LightSample};
 use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
 use crate::sampling::Distribution1D;
@@ -26,6 +27,9 @@ pub enum LightSelection {
     Uniform,
     /// Proportional to each light's emitted power (luminance of its flux).
     Power,
+    /// Proportional to each light's estimated contribution at the receiver,
+    /// through a light BVH (pbrt-v4's BVH light sampler).
+    Bvh,
 }
 
 #[derive(Debug, Clone)]
@@ -41,6 +45,7 @@ pub struct Scene {
     /// Selection probabilities by power (None when selection is uniform or
     /// no light has positive power).
     power_distrib: Option<Distribution1D>,
+    light_bvh: Option<LightBvh>,
 }
 
 impl Scene {
@@ -58,21 +63,25 @@ impl Scene {
             accel,
             light_selection: LightSelection::Uniform,
             power_distrib: None,
+            light_bvh: None,
         }
     }
 
     /// Chooses the light-selection strategy (precomputing what it needs).
     pub fn set_light_selection(&mut self, selection: LightSelection) {
         self.light_selection = selection;
-        self.power_distrib = match selection {
-            LightSelection::Uniform => None,
+        let radius = self.accel.bounds.bounding_radius().max(1e-3);
+        self.power_distrib = None;
+        self.light_bvh = None;
+        match selection {
+            LightSelection::Uniform => {}
             LightSelection::Power => {
-                let radius = self.accel.bounds.bounding_radius().max(1e-3);
                 let w: Vec<f32> =
                     self.lights.iter().map(|l| luminance(l.power(&self.shapes, radius)).max(0.0)).collect();
-                Distribution1D::new(&w)
+                self.power_distrib = Distribution1D::new(&w);
             }
-        };
+            LightSelection::Bvh => self.light_bvh = Some(LightBvh::build(&self.lights, &self.shapes, radius)),
+        }
     }
 
     /// Closest surface hit.
@@ -108,7 +117,9 @@ impl Scene {
     /// `p` with normal `n` (`Vec3::ZERO` when there is none, e.g. the camera).
     #[inline]
     pub fn light_pmf(&self, p: Vec3, n: Vec3, i: usize) -> f32 {
-        let _ = (p, n); // Uniform and power selection ignore the receiver.
+        if let Some(bvh) = &self.light_bvh {
+            return bvh.pmf(p, n, i);
+        }
         match &self.power_distrib {
             Some(d) => d.pmf(i),
             None => 1.0 / self.lights.len() as f32,
@@ -119,9 +130,13 @@ impl Scene {
     /// (index, probability).
     #[inline]
     pub fn select_light(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
-        let _ = (p, n);
         if self.lights.is_empty() {
             return None;
+        }
+        if let Some(bvh) = &self.light_bvh {
+            // `None` means no light is picked for this sample (the BVH found
+            // zero importance); retrying would bias the estimate.
+            return bvh.sample(p, n, u);
         }
         match &self.power_distrib {
             Some(d) => {
@@ -215,7 +230,7 @@ mod tests {
     /// Selection frequencies equal `light_pmf`, and the pmfs sum to one.
     #[test]
     fn light_selection_frequencies_match_the_pmf() {
-        for sel in [LightSelection::Uniform, LightSelection::Power] {
+        for sel in [LightSelection::Uniform, LightSelection::Power, LightSelection::Bvh] {
             let mut scene = three_lights();
             scene.set_light_selection(sel);
             let n = 100_000;
@@ -226,6 +241,7 @@ mod tests {
                 counts[i] += 1;
             }
             let total: f32 = (0..3).map(|i| scene.light_pmf(Vec3::ZERO, Vec3::Y, i)).sum();
+            // (The BVH may pick no light at some receivers; not at this one.)
             assert!((total - 1.0).abs() < 1e-6);
             for (i, &c) in counts.iter().enumerate() {
                 assert!(

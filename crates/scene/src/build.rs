@@ -438,9 +438,10 @@ fn light_selection(node: &Node) -> Result<LightSelection> {
     match node.string("light_selection", "uniform")?.as_str() {
         "uniform" => Ok(LightSelection::Uniform),
         "power" => Ok(LightSelection::Power),
+        "bvh" => Ok(LightSelection::Bvh),
         other => Err(LoadError::at(
             node.loc_of("light_selection"),
-            format!("light_selection '{other}' is not one of uniform, power"),
+            format!("light_selection '{other}' is not one of uniform, power, bvh"),
         )),
     }
 }

@@ -13,6 +13,7 @@ fn all_estimators_agree_on_the_diffuse_box() {
     for (spec, spp) in [
         ("path:mis=false", 256),
         ("path:light_selection=power", 256),
+        ("path:light_selection=bvh", 256),
         ("bruteforce:sampling=bsdf", 1024),
         ("bruteforce:sampling=cosine", 1024),
         ("bruteforce:sampling=uniform", 1024),
@@ -29,6 +30,21 @@ fn direct_matches_path_at_depth_two() {
     for spec in ["direct", "direct:emitter_samples=4,bsdf_samples=0", "direct:emitter_samples=0,bsdf_samples=4"] {
         let est = render_with_variance(&scene, 256, 8, Some(spec), 2);
         assert_agree(spec, &est, &path, 0.01);
+    }
+}
+
+#[test]
+fn light_selection_strategies_agree_on_many_lights() {
+    let scene = root().join("tests/scenes/many_lights.xml");
+    let uniform = render_with_variance(&scene, 256, 16, Some("path:light_selection=uniform"), 1);
+    for spec in ["path:light_selection=power", "path:light_selection=bvh", "direct:light_selection=bvh"] {
+        let reference = if spec.starts_with("direct") {
+            render_with_variance(&scene, 256, 16, Some("path:max_depth=2,light_selection=power"), 1)
+        } else {
+            uniform.clone()
+        };
+        let est = render_with_variance(&scene, 256, 16, Some(spec), 2);
+        assert_agree(spec, &est, &reference, 0.01);
     }
 }
 

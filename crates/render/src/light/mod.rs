@@ -8,6 +8,7 @@
 //! the contribution in every case.
 
 pub mod area;
+pub mod bvh;
 pub mod constant;
 pub mod directional;
 pub mod envmap;

@@ -10,6 +10,7 @@ pub fn root() -> PathBuf {
 }
 
 /// A rendered image: per-pixel mean and the variance of that mean.
+#[derive(Clone)]
 pub struct Estimate {
     pub width: u32,
     pub height: u32,
