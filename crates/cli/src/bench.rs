@@ -18,6 +18,7 @@ const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
 /// Light-selection comparison: this scene against its converged reference.
 const SELECTION_SCENE: &str = "tests/scenes/many_lights.xml";
 const SELECTION_REF: &str = "tests/refs/many_lights.exr";
+const SELECTION_SPP: u32 = 256;
 
 fn mitsuba_python(a: &BenchArgs) -> Option<PathBuf> {
     if let Some(p) = &a.mitsuba {
@@ -47,10 +48,7 @@ fn time_mitsuba(
     for (k, v) in defines {
         cmd.arg("-D").arg(format!("{k}={v}"));
     }
-    let out = cmd
-        .arg(scene)
-        .output()
-        .map_err(|e| anyhow!("cannot run {}: {e}", python.display()))?;
+    let out = cmd.arg(scene).output().map_err(|e| anyhow!("cannot run {}: {e}", python.display()))?;
     let text = String::from_utf8_lossy(&out.stdout);
     // The last machine-readable line is the warm (second) render.
     let line = text
@@ -130,11 +128,7 @@ fn light_selection_table(pool: &rayon::ThreadPool) -> Result<()> {
     println!("\nlight selection on {SELECTION_SCENE} (64x64, vs {SELECTION_REF}):");
     println!("{:<10} {:>6} {:>9} {:>12} {:>16}", "strategy", "spp", "time s", "relMSE", "relMSE x time");
     for strategy in ["uniform", "power", "bvh"] {
-        let ov = Overrides {
-            spp: Some(64),
-            seed: None,
-            integrator: Some(format!("path:light_selection={strategy}")),
-        };
+        let ov = Overrides { spp: Some(64), seed: None, integrator: Some(format!("path:light_selection={strategy}")) };
         let job = match penumbra_scene::load_scene(Path::new(SELECTION_SCENE), &[], &ov) {
             Ok(j) => j,
             Err(e) => {
