@@ -114,6 +114,22 @@ pub fn chi2_test(
     1.0 - dist.cdf(chi2)
 }
 
+/// ∫ pdf dω over the sphere by the midpoint rule on a fine (cos θ, φ) grid.
+pub fn integrate_over_sphere(pdf: impl Fn(Vec3) -> f64) -> f64 {
+    let (nz, np) = (400, 800);
+    let (dz, dp) = (2.0 / nz as f64, 2.0 * std::f64::consts::PI / np as f64);
+    let mut acc = 0.0;
+    for i in 0..nz {
+        let z = -1.0 + (i as f64 + 0.5) * dz;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        for j in 0..np {
+            let phi = (j as f64 + 0.5) * dp;
+            acc += pdf(Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32));
+        }
+    }
+    acc * dz * dp
+}
+
 /// Significance level per test (1 %, Šidák-corrected for the number of
 /// tests a module runs).
 pub fn alpha(tests: usize) -> f64 {
@@ -236,6 +252,37 @@ mod tests {
                 })
                 .unwrap_or(0.0),
         }
+    }
+
+    #[test]
+    fn pdfs_integrate_to_one() {
+        let cases: Vec<(&str, Box<dyn Fn(Vec3) -> f64>)> = vec![
+            ("uniform hemisphere", Box::new(|w: Vec3| if w.z >= 0.0 { 0.5 / PI as f64 } else { 0.0 })),
+            ("cosine hemisphere", Box::new(|w| warp::cosine_hemisphere_pdf(w) as f64)),
+            ("uniform sphere", Box::new(|_| warp::uniform_sphere_pdf() as f64)),
+            ("cone", Box::new(|w: Vec3| if w.z >= 0.6 { warp::uniform_cone_pdf(0.6) as f64 } else { 0.0 })),
+            (
+                "diffuse BSDF",
+                Box::new(|w| {
+                    Bsdf::Diffuse(Diffuse { reflectance: Vec3::ONE }).pdf(Vec3::new(0.3, 0.0, 0.95).normalize(), w)
+                        as f64
+                }),
+            ),
+        ];
+        for (name, pdf) in cases {
+            let total = integrate_over_sphere(pdf);
+            // The grid's error at the support edge is below 1e-2 of a row.
+            assert!((total - 1.0).abs() < 5e-3, "{name}: ∫ pdf = {total}");
+        }
+        let s = Shape::sphere(Vec3::new(0.3, -0.2, 2.0), 0.8, false);
+        let total = integrate_over_sphere(|w| {
+            let ray = crate::geometry::Ray::new(Vec3::ZERO, w, f32::INFINITY);
+            s.intersect_analytic(&ray).map_or(0.0, |(t, _)| {
+                let p = ray.at(t);
+                s.pdf_direction(Vec3::ZERO, p, (p - Vec3::new(0.3, -0.2, 2.0)).normalize()) as f64
+            })
+        });
+        assert!((total - 1.0).abs() < 5e-3, "sphere light: ∫ pdf = {total}");
     }
 
     #[test]
