@@ -128,7 +128,11 @@ fn light_selection_table(pool: &rayon::ThreadPool) -> Result<()> {
     println!("\nlight selection on {SELECTION_SCENE} (64x64, vs {SELECTION_REF}):");
     println!("{:<10} {:>6} {:>9} {:>12} {:>16}", "strategy", "spp", "time s", "relMSE", "relMSE x time");
     for strategy in ["uniform", "power", "bvh"] {
-        let ov = Overrides { spp: Some(SELECTION_SPP), seed: None, integrator: Some(format!("path:light_selection={strategy}")) };
+        let ov = Overrides {
+            spp: Some(SELECTION_SPP),
+            seed: None,
+            integrator: Some(format!("path:light_selection={strategy}")),
+        };
         let job = match penumbra_scene::load_scene(Path::new(SELECTION_SCENE), &[], &ov) {
             Ok(j) => j,
             Err(e) => {

@@ -10,6 +10,14 @@ use super::LightSample;
 use crate::math::{Spectrum, PI};
 use glam::Vec3;
 
+/// Unit direction and distance from `from` to `to` (None if they coincide).
+#[inline]
+pub(super) fn towards(from: Vec3, to: Vec3) -> Option<(Vec3, f32)> {
+    let d = to - from;
+    let dist = d.length();
+    (dist > 0.0).then(|| (d / dist, dist))
+}
+
 #[derive(Debug, Clone)]
 pub struct PointLight {
     pub position: Vec3,
@@ -20,13 +28,8 @@ impl PointLight {
     /// Incident radiance is a delta: the sample's `li` is I / d², the
     /// irradiance-like weight the estimator uses with pdf 1.
     pub fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
-        let d = self.position - p_ref;
-        let dist2 = d.length_squared();
-        if dist2 == 0.0 {
-            return None;
-        }
-        let dist = dist2.sqrt();
-        Some(LightSample { wi: d / dist, dist, pdf: 1.0, li: self.intensity / dist2, delta: true })
+        let (wi, dist) = towards(p_ref, self.position)?;
+        Some(LightSample { wi, dist, pdf: 1.0, li: self.intensity / (dist * dist), delta: true })
     }
 
     /// Radiant flux Φ = 4π I.

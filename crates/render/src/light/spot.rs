@@ -53,13 +53,8 @@ impl SpotLight {
     }
 
     pub fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
-        let d = self.position - p_ref;
-        let dist2 = d.length_squared();
-        if dist2 == 0.0 {
-            return None;
-        }
-        let dist = dist2.sqrt();
-        let wi = d / dist;
+        let (wi, dist) = super::point::towards(p_ref, self.position)?;
+        let dist2 = dist * dist;
         let local = self.light_from_world.transform_vector3(-wi).normalize();
         let f = self.falloff(local.z);
         if f <= 0.0 {
