@@ -57,3 +57,22 @@ fn delta_lights_agree_between_direct_and_path() {
         assert_agree(name, &direct, &path, 0.01);
     }
 }
+
+#[test]
+fn throughput_threshold_only_removes_energy() {
+    // The threshold cuts paths whose weight max(β) fell below it: a tiny one
+    // changes nothing, a large one loses the energy of the cut paths (biased
+    // dark), and the loss grows with the threshold.
+    let scene = root().join("tests/scenes/cbox_diffuse.xml");
+    let mean = |spec: &str| {
+        let e = render_with_variance(&scene, 64, 4, Some(spec), 3);
+        e.mean.iter().map(|p| p[0] + p[1] + p[2]).sum::<f64>()
+    };
+    let full = mean("path");
+    assert_eq!(mean("path:throughput_threshold=1e-12"), full);
+    let cut_low = mean("path:throughput_threshold=0.05");
+    let cut_high = mean("path:throughput_threshold=0.5");
+    assert!(cut_low < full && cut_high < cut_low, "{full} {cut_low} {cut_high}");
+    // A threshold above any path weight keeps only emission and direct light at the first hit.
+    assert!(cut_high > 0.3 * full, "{full} {cut_high}");
+}
