@@ -173,3 +173,17 @@ fn a_crop_window_renders_exactly_its_part_of_the_full_image() {
     }
     fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn bench_prints_its_table() {
+    let o = bin()
+        .current_dir(root())
+        .args(["bench", "--spp", "1", "--mitsuba", "/nonexistent/python", "scenes/cornell-box.xml"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("Msamples/s") && stdout.contains("cornell-box.xml"), "{stdout}");
+    // Mitsuba could not be run: its column is empty and a note says why.
+    assert!(String::from_utf8_lossy(&o.stderr).contains("Mitsuba timing skipped"));
+}
