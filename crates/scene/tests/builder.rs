@@ -62,3 +62,15 @@ fn output_only_film_parameters_are_accepted_and_unknown_ones_rejected() {
     let e = job("<float name=\"fov\" value=\"40\"/>", &typo).unwrap_err().to_string();
     assert!(e.contains("widht") && e.contains("test.xml:1"), "{e}");
 }
+
+#[test]
+fn stratified_sample_counts_round_up_to_squares_as_mitsuba() {
+    // mi.load_dict({'type': 'stratified', 'sample_count': n}).sample_count()
+    for (n, expect) in [(1, 1), (2, 4), (9, 9), (10, 16), (20, 25), (30, 36)] {
+        let body = format!(
+            "<float name=\"fov\" value=\"40\"/><sampler type=\"stratified\"><integer name=\"sample_count\" value=\"{n}\"/></sampler>"
+        );
+        let j = job(&body, W100_H50).unwrap();
+        assert_eq!(j.sampler.spp, expect, "{n}");
+    }
+}
