@@ -484,6 +484,44 @@ impl LightBvh {
             return None;
         }
         u = ((u - self.p_infinite) / self.p_tree).min(ONE_MINUS_EPSILON);
+        let (light, pmf) = self.descend(p, n, |p0| {
+            // Go to the second child with probability 1 - p0, remapping u.
+            let right = u >= p0;
+            u = if right {
+                ((u - p0) / (1.0 - p0)).clamp(0.0, ONE_MINUS_EPSILON)
+            } else {
+                (u / p0).min(ONE_MINUS_EPSILON)
+            };
+            right
+        })?;
+        Some((light, pmf, u))
+    }
+
+    /// Probability that `sample(p, n, ·)` returns `light`: bit-identical to
+    /// the probability `sample` returns with it, since both walk the tree
+    /// through [`LightBvh::descend`]; 0 for lights never picked there (and
+    /// for indices out of range).
+    pub fn pmf(&self, p: Vec3, n: Vec3, light: usize) -> f32 {
+        let mut trail = match self.slots.get(light) {
+            None | Some(Slot::None) => return 0.0,
+            Some(Slot::Infinite) => return self.pmf_infinite,
+            Some(Slot::Tree(trail)) => *trail,
+        };
+        let steer = |_p0: f32| {
+            let right = trail & 1 == 1;
+            trail >>= 1;
+            right
+        };
+        self.descend(p, n, steer).map_or(0.0, |(_, pmf)| pmf)
+    }
+
+    /// Walks from the root to a leaf, choosing at each interior node between
+    /// children in proportion to their importance; `go_right(p0)` decides,
+    /// given the first child's probability p0. Returns the leaf's light and
+    /// the product of the choices' probabilities (times the tree's share),
+    /// or None where the receiver sees zero importance.
+    #[inline]
+    fn descend(&self, p: Vec3, n: Vec3, mut go_right: impl FnMut(f32) -> bool) -> Option<(usize, f32)> {
         let mut pmf = self.p_tree;
         let mut index = 0;
         loop {
@@ -491,7 +529,7 @@ impl LightBvh {
             if node.is_leaf {
                 // Below the root a leaf was only reached through its positive importance.
                 let reachable = index > 0 || node.bounds.importance(p, n) > 0.0;
-                return (reachable && pmf > 0.0).then_some((node.child_or_light as usize, pmf, u));
+                return (reachable && pmf > 0.0).then_some((node.child_or_light as usize, pmf));
             }
             let second = node.child_or_light as usize;
             let c0 = self.nodes[index + 1].bounds.importance(p, n);
@@ -500,50 +538,13 @@ impl LightBvh {
                 return None;
             }
             let p0 = c0 / (c0 + c1);
-            if u < p0 {
+            if go_right(p0) {
+                pmf *= c1 / (c0 + c1);
+                index = second;
+            } else {
                 pmf *= p0;
-                u = (u / p0).min(ONE_MINUS_EPSILON);
                 index += 1;
-            } else {
-                pmf *= c1 / (c0 + c1);
-                u = ((u - p0) / (1.0 - p0)).clamp(0.0, ONE_MINUS_EPSILON);
-                index = second;
             }
-        }
-    }
-
-    /// Probability that `sample(p, n, ·)` returns `light`: bit-identical to
-    /// the probability `sample` returns with it; 0 for lights never picked
-    /// there (and for indices out of range).
-    pub fn pmf(&self, p: Vec3, n: Vec3, light: usize) -> f32 {
-        let mut trail = match self.slots.get(light) {
-            None | Some(Slot::None) => return 0.0,
-            Some(Slot::Infinite) => return self.pmf_infinite,
-            Some(Slot::Tree(trail)) => *trail,
-        };
-        // The descent of `sample_remapped`, steered by the trail.
-        let mut pmf = self.p_tree;
-        let mut index = 0;
-        loop {
-            let node = &self.nodes[index];
-            if node.is_leaf {
-                let reachable = index > 0 || node.bounds.importance(p, n) > 0.0;
-                return if reachable { pmf } else { 0.0 };
-            }
-            let second = node.child_or_light as usize;
-            let c0 = self.nodes[index + 1].bounds.importance(p, n);
-            let c1 = self.nodes[second].bounds.importance(p, n);
-            if c0 == 0.0 && c1 == 0.0 {
-                return 0.0;
-            }
-            if trail & 1 == 0 {
-                pmf *= c0 / (c0 + c1);
-                index += 1;
-            } else {
-                pmf *= c1 / (c0 + c1);
-                index = second;
-            }
-            trail >>= 1;
         }
     }
 
