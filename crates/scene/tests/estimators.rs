@@ -76,3 +76,12 @@ fn throughput_threshold_only_removes_energy() {
     // A threshold above any path weight keeps only emission and direct light at the first hit.
     assert!(cut_high > 0.3 * full, "{full} {cut_high}");
 }
+
+#[test]
+fn estimators_agree_on_hidden_emitters() {
+    // Camera rays pass through hidden emitters in every integrator alike.
+    let scene = root().join("tests/scenes/hidden_emitters.xml");
+    let path = render_with_variance(&scene, 256, 16, Some("path"), 1);
+    let brute = render_with_variance(&scene, 1024, 16, Some("bruteforce:sampling=bsdf"), 2);
+    assert_agree("hidden_emitters bruteforce", &brute, &path, 0.01);
+}

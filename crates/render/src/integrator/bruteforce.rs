@@ -13,7 +13,7 @@
 //! | sampling      | string  | cosine: `uniform` (p = 1/2π), `cosine` (p = cos θ/π) or `bsdf` |
 //! | max_depth, rr_depth, hide_emitters, throughput_threshold | | as `path` |
 
-use super::{RayStats, Termination};
+use super::{camera_hit, RayStats, Termination};
 use crate::math::{Spectrum, INV_2PI};
 use crate::sampling::{warp, SampleStream};
 use crate::scene::Scene;
@@ -50,17 +50,21 @@ impl BruteForceIntegrator {
             return l;
         }
         loop {
-            stats.rays += 1;
             let visible = !(depth == 0 && self.hide_emitters);
-            let Some(si) = scene.intersect(&ray) else {
+            let hit = if depth == 0 {
+                camera_hit(scene, &ray, self.hide_emitters, stats)
+            } else {
+                stats.rays += 1;
+                scene.intersect(&ray)
+            };
+            let Some(si) = hit else {
                 if visible {
                     l += beta * scene.environment(ray.o, Vec3::ZERO, ray.d).0;
                 }
                 break;
             };
-            if visible {
-                l += beta * scene.emitted(&si);
-            }
+            // (With hide_emitters the camera ray has passed through emitters.)
+            l += beta * scene.emitted(&si);
             if depth + 1 >= self.term.max_depth {
                 break;
             }

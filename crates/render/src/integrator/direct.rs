@@ -9,9 +9,9 @@
 //! | emitter_samples | integer | 1 (N_s; with `bsdf_samples` 0, pure light sampling) |
 //! | bsdf_samples    | integer | 1 |
 //! | shading_samples | integer | sets both |
-//! | hide_emitters   | boolean | false |
+//! | hide_emitters   | boolean | false (camera rays pass through emitters; environment black) |
 
-use super::RayStats;
+use super::{camera_hit, RayStats};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
@@ -43,15 +43,15 @@ impl DirectIntegrator {
         rng: &mut SampleStream,
         stats: &mut RayStats,
     ) -> Spectrum {
-        stats.rays += 1;
-        let Some(si) = scene.intersect(ray) else {
+        let Some(si) = camera_hit(scene, ray, self.hide_emitters, stats) else {
             return if self.hide_emitters {
                 Spectrum::ZERO
             } else {
                 scene.environment(ray.o, glam::Vec3::ZERO, ray.d).0
             };
         };
-        let mut l = if self.hide_emitters { Spectrum::ZERO } else { scene.emitted(&si) };
+        // With hide_emitters the camera ray has passed through any emitter.
+        let mut l = scene.emitted(&si);
         let total = (self.emitter_samples + self.bsdf_samples) as f32;
         if total == 0.0 {
             return l;

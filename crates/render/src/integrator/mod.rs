@@ -38,6 +38,30 @@ impl RayStats {
     }
 }
 
+/// First hit of a camera ray. With `hide_emitters`, camera rays pass
+/// through area emitters (as Mitsuba 3 does), revealing what lies behind
+/// them; every integrator uses this, so they agree on hidden emitters.
+#[inline]
+pub(crate) fn camera_hit(
+    scene: &Scene,
+    ray: &Ray,
+    hide_emitters: bool,
+    stats: &mut RayStats,
+) -> Option<crate::geometry::SurfaceInteraction> {
+    stats.rays += 1;
+    let mut hit = scene.intersect(ray);
+    if hide_emitters {
+        while let Some(si) = hit {
+            if scene.shape_info[si.shape as usize].light.is_none() {
+                return Some(si);
+            }
+            stats.rays += 1;
+            hit = scene.intersect(&scene.spawn_ray(&si, ray.d));
+        }
+    }
+    hit
+}
+
 /// Path termination shared by the multi-bounce integrators.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Termination {

@@ -11,8 +11,8 @@
 //! | mis           | boolean | true: power heuristic; false: the lecture's split, emitted light only through light samples, reflected light only through BSDF samples |
 //! | throughput_threshold | float | 0 (off): stop when max(β) falls below it; biased |
 
-use super::{RayStats, Termination};
-use crate::geometry::{Ray, SurfaceInteraction};
+use super::{camera_hit, RayStats, Termination};
+use crate::geometry::Ray;
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
 use crate::sampling::SampleStream;
@@ -54,11 +54,12 @@ impl PathIntegrator {
         let mut prev_delta = true;
 
         loop {
-            stats.rays += 1;
-            let mut hit = scene.intersect(&ray);
-            if depth == 0 && self.hide_emitters {
-                hit = self.skip_emitters(scene, &ray, hit, stats);
-            }
+            let hit = if depth == 0 {
+                camera_hit(scene, &ray, self.hide_emitters, stats)
+            } else {
+                stats.rays += 1;
+                scene.intersect(&ray)
+            };
 
             let Some(si) = hit else {
                 // Escaped: environment emission, MIS-weighted against light sampling.
@@ -137,25 +138,5 @@ impl PathIntegrator {
         } else {
             0.0
         }
-    }
-
-    /// With `hide_emitters`, camera rays pass through area emitters (as
-    /// Mitsuba 3 does), revealing what lies behind them.
-    fn skip_emitters(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        mut hit: Option<SurfaceInteraction>,
-        stats: &mut RayStats,
-    ) -> Option<SurfaceInteraction> {
-        while let Some(si) = hit {
-            if scene.shape_info[si.shape as usize].light.is_none() {
-                return Some(si);
-            }
-            stats.rays += 1;
-            let next = scene.spawn_ray(&si, ray.d);
-            hit = scene.intersect(&next);
-        }
-        None
     }
 }
