@@ -2,7 +2,7 @@
 //! crate builds a [`render::RenderJob`] and this crate renders it.
 //!
 //! Layers, bottom up: `math` → `sampling` → `geometry` → `accel` →
-//! `bsdf` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
+//! `texture` → `bsdf` → `material` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
 
 pub mod accel;
 pub mod bsdf;
@@ -11,9 +11,11 @@ pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
+pub mod material;
 pub mod math;
 pub mod render;
 pub mod sampling;
 pub mod scene;
 #[cfg(test)]
 pub mod testing;
+pub mod texture;

@@ -6,6 +6,7 @@ use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::bvh::LightBvh;
 use crate::light::{Light, LightSample};
+use crate::material::Material;
 use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
 use crate::sampling::Distribution1D;
 use glam::{Vec2, Vec3};
@@ -13,8 +14,8 @@ use glam::{Vec2, Vec3};
 /// Per-shape attributes beside its geometry.
 #[derive(Debug, Clone, Copy)]
 pub struct ShapeInfo {
-    /// Index into [`Scene::bsdfs`].
-    pub bsdf: u32,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
     /// Index into [`Scene::lights`] when the shape is an area emitter.
     pub light: Option<u32>,
 }
@@ -36,7 +37,7 @@ pub enum LightSelection {
 pub struct Scene {
     pub shapes: Vec<Shape>,
     pub shape_info: Vec<ShapeInfo>,
-    pub bsdfs: Vec<Bsdf>,
+    pub materials: Vec<Material>,
     pub lights: Vec<Light>,
     /// Indices of lights at infinity (hit by escaping rays).
     pub env_lights: Vec<u32>,
@@ -50,14 +51,14 @@ pub struct Scene {
 
 impl Scene {
     /// Assembles a scene and builds its acceleration structure.
-    pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, bsdfs: Vec<Bsdf>, lights: Vec<Light>) -> Scene {
+    pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
         Scene {
             shapes,
             shape_info,
-            bsdfs,
+            materials,
             lights,
             env_lights,
             accel,
@@ -108,9 +109,11 @@ impl Scene {
         Ray::new(offset_origin(si.p, si.n, wi), wi, f32::INFINITY)
     }
 
+    /// The BSDF at a hit, with textures evaluated. May replace
+    /// `si.sh_frame` (see [`Material::bsdf`]).
     #[inline]
-    pub fn bsdf(&self, si: &SurfaceInteraction) -> &Bsdf {
-        &self.bsdfs[self.shape_info[si.shape as usize].bsdf as usize]
+    pub fn bsdf(&self, si: &mut SurfaceInteraction) -> Bsdf<'_> {
+        self.materials[self.shape_info[si.shape as usize].material as usize].bsdf(si)
     }
 
     /// Probability that `sample_light` picks light `i` for a receiver at
@@ -212,19 +215,18 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bsdf::Diffuse;
     use crate::light::{AreaLight, PointLight};
 
     fn three_lights() -> Scene {
         let shapes = vec![Shape::sphere(Vec3::new(0.0, 3.0, 0.0), 0.5, false)];
-        let info = vec![ShapeInfo { bsdf: 0, light: Some(2) }];
-        let bsdfs = vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(0.5) })];
+        let info = vec![ShapeInfo { material: 0, light: Some(2) }];
+        let materials = vec![Material::Diffuse { reflectance: Vec3::splat(0.5).into() }];
         let lights = vec![
             Light::Point(PointLight { position: Vec3::X, intensity: Vec3::splat(1.0) }),
             Light::Point(PointLight { position: Vec3::Y, intensity: Vec3::splat(5.0) }),
             Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(2.0) }),
         ];
-        Scene::new(shapes, info, bsdfs, lights)
+        Scene::new(shapes, info, materials, lights)
     }
 
     /// Selection frequencies equal `light_pmf`, and the pmfs sum to one.

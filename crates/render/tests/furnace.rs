@@ -2,12 +2,12 @@
 //! radiance. Tolerances come from the estimator's measured per-pixel spread
 //! (4 standard errors of the image mean), not from tuning.
 
-use penumbra_render::bsdf::{Bsdf, Diffuse};
 use penumbra_render::camera::{FovAxis, PerspectiveCamera};
 use penumbra_render::film::{Film, Filter, FilterKind};
 use penumbra_render::geometry::Shape;
 use penumbra_render::integrator::{Integrator, PathIntegrator};
 use penumbra_render::light::{AreaLight, ConstantLight, Light};
+use penumbra_render::material::Material;
 use penumbra_render::math::{look_at, Vec3};
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::{Sampler, SamplerKind};
@@ -48,8 +48,8 @@ fn mean_and_error(job: &RenderJob, spp: u32) -> (Vec<[f32; 3]>, f64, f64) {
 fn white_sphere_in_constant_env(reflectance: f32) -> Scene {
     Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, false)],
-        vec![ShapeInfo { bsdf: 0, light: None }],
-        vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(reflectance) })],
+        vec![ShapeInfo { material: 0, light: None }],
+        vec![Material::Diffuse { reflectance: Vec3::splat(reflectance).into() }],
         vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
     )
 }
@@ -81,8 +81,8 @@ fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
     let (le, rho) = (0.5f32, 0.6f32);
     let scene = Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, true)],
-        vec![ShapeInfo { bsdf: 0, light: Some(0) }],
-        vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(rho) })],
+        vec![ShapeInfo { material: 0, light: Some(0) }],
+        vec![Material::Diffuse { reflectance: Vec3::splat(rho).into() }],
         vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le) })],
     );
     let spp = 256;
@@ -99,8 +99,8 @@ fn non_finite_samples_are_dropped_and_counted() {
     // samples must be counted and kept off the film.
     let scene = Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, false)],
-        vec![ShapeInfo { bsdf: 0, light: None }],
-        vec![Bsdf::Diffuse(Diffuse { reflectance: Vec3::splat(f32::NAN) })],
+        vec![ShapeInfo { material: 0, light: None }],
+        vec![Material::Diffuse { reflectance: Vec3::splat(f32::NAN).into() }],
         vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
     );
     let j = job(scene, Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, 4);

@@ -11,7 +11,7 @@ use super::BsdfSample;
 use crate::math::Spectrum;
 use glam::Vec3;
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 pub struct Conductor {
     pub eta: Spectrum,
     pub k: Spectrum,

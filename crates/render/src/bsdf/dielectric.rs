@@ -12,7 +12,7 @@ use super::BsdfSample;
 use crate::math::Spectrum;
 use glam::{Vec2, Vec3};
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 pub struct Dielectric {
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,

@@ -9,7 +9,7 @@ use crate::math::{Spectrum, INV_PI};
 use crate::sampling::warp;
 use glam::{Vec2, Vec3};
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Copy)]
 pub struct Diffuse {
     pub reflectance: Spectrum,
 }

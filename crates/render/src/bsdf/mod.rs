@@ -1,6 +1,8 @@
-//! BSDFs. All methods work in the local shading frame (normal = +z).
+//! BSDFs: the scattering functions an integrator evaluates and samples at a
+//! hit. A [`crate::material::Material`] (parameters that may be textured)
+//! produces one [`Bsdf`] per hit with every parameter evaluated there.
 //!
-//! Contract (see CONVENTIONS.md):
+//! Contract (see CONVENTIONS.md), in the local shading frame (normal = +z):
 //! - `wo` points towards the camera side, `wi` is the light / sampled direction.
 //! - [`Bsdf::eval`] returns f(wo, wi) *without* the cosine; integrators
 //!   multiply by |cos θ_i|. Delta lobes evaluate to zero.
@@ -8,17 +10,29 @@
 //! - [`BsdfSample::weight`] is f · |cos θ_i| / pdf (the discrete probability
 //!   for delta lobes), ready to multiply into the path throughput.
 //! - BSDFs are one-sided like Mitsuba's (black when `wo.z <= 0`) except
-//!   dielectrics, unless wrapped in [`Bsdf::TwoSided`].
+//!   dielectrics; `twosided` is resolved by the material (it flips the frame).
 
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
+pub mod microfacet;
+pub mod plastic;
 pub mod presets;
+pub mod roughconductor;
+pub mod roughdielectric;
+pub mod roughplastic;
+pub mod thindielectric;
 
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use microfacet::{Microfacet, MicrofacetType};
+pub use plastic::Plastic;
+pub use roughconductor::RoughConductor;
+pub use roughdielectric::RoughDielectric;
+pub use roughplastic::{RoughPlastic, RoughPlasticTables};
+pub use thindielectric::ThinDielectric;
 
 use crate::math::Spectrum;
 use glam::{Vec2, Vec3};
@@ -37,77 +51,111 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
-#[derive(Debug, Clone)]
-pub enum Bsdf {
+/// One scattering model with its parameters evaluated at a hit.
+#[derive(Debug, Clone, Copy)]
+pub enum BsdfKind<'a> {
     Diffuse(Diffuse),
     Dielectric(Dielectric),
+    ThinDielectric(ThinDielectric),
     Conductor(Conductor),
-    /// Mitsuba `twosided`: the back side mirrors `back` (usually the same BSDF).
-    TwoSided(Box<Bsdf>, Box<Bsdf>),
+    RoughConductor(RoughConductor),
+    RoughDielectric(RoughDielectric),
+    Plastic(Plastic),
+    RoughPlastic(RoughPlastic<'a>),
+    /// Mitsuba `null`: light passes straight through.
+    Null,
 }
 
-impl Bsdf {
+/// The BSDF at a hit: a model and Mitsuba `mask`'s opacity (1 when unmasked).
+/// With probability 1 − opacity a ray passes straight through (a delta
+/// "null" lobe); eval and pdf of the model scale by the opacity.
+#[derive(Debug, Clone, Copy)]
+pub struct Bsdf<'a> {
+    pub kind: BsdfKind<'a>,
+    pub opacity: f32,
+}
+
+impl<'a> From<BsdfKind<'a>> for Bsdf<'a> {
+    fn from(kind: BsdfKind<'a>) -> Bsdf<'a> {
+        Bsdf { kind, opacity: 1.0 }
+    }
+}
+
+impl Bsdf<'_> {
     /// Whether any lobe is non-delta, i.e. light sampling can help.
+    #[inline]
     pub fn has_smooth(&self) -> bool {
-        match self {
-            Bsdf::Diffuse(_) => true,
-            Bsdf::Dielectric(_) | Bsdf::Conductor(_) => false,
-            Bsdf::TwoSided(a, b) => a.has_smooth() || b.has_smooth(),
-        }
+        self.opacity > 0.0
+            && match self.kind {
+                BsdfKind::Diffuse(_)
+                | BsdfKind::RoughConductor(_)
+                | BsdfKind::RoughDielectric(_)
+                | BsdfKind::Plastic(_)
+                | BsdfKind::RoughPlastic(_) => true,
+                BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
+                    false
+                }
+            }
     }
 
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
-        match self {
-            Bsdf::Diffuse(d) => d.eval(wo, wi),
-            Bsdf::Dielectric(_) | Bsdf::Conductor(_) => Spectrum::ZERO,
-            Bsdf::TwoSided(front, back) => {
-                if wo.z >= 0.0 {
-                    front.eval(wo, wi)
-                } else {
-                    back.eval(flip(wo), flip(wi))
-                }
+        let f = match &self.kind {
+            BsdfKind::Diffuse(d) => d.eval(wo, wi),
+            BsdfKind::RoughConductor(b) => b.eval(wo, wi),
+            BsdfKind::RoughDielectric(b) => b.eval(wo, wi),
+            BsdfKind::Plastic(b) => b.eval(wo, wi),
+            BsdfKind::RoughPlastic(b) => b.eval(wo, wi),
+            BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
+                Spectrum::ZERO
             }
-        }
+        };
+        f * self.opacity
     }
 
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Bsdf::Diffuse(d) => d.pdf(wo, wi),
-            Bsdf::Dielectric(_) | Bsdf::Conductor(_) => 0.0,
-            Bsdf::TwoSided(front, back) => {
-                if wo.z >= 0.0 {
-                    front.pdf(wo, wi)
-                } else {
-                    back.pdf(flip(wo), flip(wi))
-                }
-            }
-        }
+        let p = match &self.kind {
+            BsdfKind::Diffuse(d) => d.pdf(wo, wi),
+            BsdfKind::RoughConductor(b) => b.pdf(wo, wi),
+            BsdfKind::RoughDielectric(b) => b.pdf(wo, wi),
+            BsdfKind::Plastic(b) => b.pdf(wo, wi),
+            BsdfKind::RoughPlastic(b) => b.pdf(wo, wi),
+            BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => 0.0,
+        };
+        p * self.opacity
     }
 
     /// Samples `wi` given `wo`; `u` picks a lobe, `u2` the direction.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
-        match self {
-            Bsdf::Diffuse(d) => d.sample(wo, u2),
-            Bsdf::Dielectric(d) => d.sample(wo, u, u2),
-            Bsdf::Conductor(c) => c.sample(wo),
-            Bsdf::TwoSided(front, back) => {
-                if wo.z >= 0.0 {
-                    front.sample(wo, u, u2)
-                } else {
-                    back.sample(flip(wo), u, u2).map(|mut s| {
-                        s.wi = flip(s.wi);
-                        s
-                    })
-                }
+        let mut u = u;
+        if self.opacity < 1.0 {
+            // Mask: pass through with probability 1 − opacity, weight 1;
+            // otherwise reuse the rescaled number for the model.
+            if u >= self.opacity || matches!(self.kind, BsdfKind::Null) {
+                return Some(BsdfSample {
+                    wi: -wo,
+                    pdf: 1.0 - self.opacity,
+                    weight: Spectrum::ONE,
+                    delta: true,
+                    eta: 1.0,
+                });
             }
+            u /= self.opacity;
         }
+        let mut s = match &self.kind {
+            BsdfKind::Diffuse(d) => d.sample(wo, u2),
+            BsdfKind::Dielectric(d) => d.sample(wo, u, u2),
+            BsdfKind::ThinDielectric(d) => d.sample(wo, u),
+            BsdfKind::Conductor(c) => c.sample(wo),
+            BsdfKind::RoughConductor(b) => b.sample(wo, u, u2),
+            BsdfKind::RoughDielectric(b) => b.sample(wo, u, u2),
+            BsdfKind::Plastic(b) => b.sample(wo, u, u2),
+            BsdfKind::RoughPlastic(b) => b.sample(wo, u, u2),
+            BsdfKind::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 }),
+        }?;
+        s.pdf *= self.opacity;
+        Some(s)
     }
-}
-
-#[inline]
-fn flip(w: Vec3) -> Vec3 {
-    Vec3::new(w.x, w.y, -w.z)
 }

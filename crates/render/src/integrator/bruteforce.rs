@@ -57,7 +57,7 @@ impl BruteForceIntegrator {
                 stats.rays += 1;
                 scene.intersect(&ray)
             };
-            let Some(si) = hit else {
+            let Some(mut si) = hit else {
                 if visible {
                     l += beta * scene.environment(ray.o, Vec3::ZERO, ray.d).0;
                 }
@@ -68,7 +68,7 @@ impl BruteForceIntegrator {
             if depth + 1 >= self.term.max_depth {
                 break;
             }
-            let bsdf = scene.bsdf(&si);
+            let bsdf = scene.bsdf(&mut si);
             let wo = si.to_local(si.wo);
             let u = rng.next_1d();
             let u2 = rng.next_2d();

@@ -43,7 +43,7 @@ impl DirectIntegrator {
         rng: &mut SampleStream,
         stats: &mut RayStats,
     ) -> Spectrum {
-        let Some(si) = camera_hit(scene, ray, self.hide_emitters, stats) else {
+        let Some(mut si) = camera_hit(scene, ray, self.hide_emitters, stats) else {
             return if self.hide_emitters {
                 Spectrum::ZERO
             } else {
@@ -57,7 +57,7 @@ impl DirectIntegrator {
             return l;
         }
         let (frac_lum, frac_bsdf) = (self.emitter_samples as f32 / total, self.bsdf_samples as f32 / total);
-        let bsdf = scene.bsdf(&si);
+        let bsdf = scene.bsdf(&mut si);
         let wo = si.to_local(si.wo);
 
         // Light sampling: N_s shadow rays, each averaged with weight 1/N_s.

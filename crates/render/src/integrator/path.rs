@@ -61,7 +61,7 @@ impl PathIntegrator {
                 scene.intersect(&ray)
             };
 
-            let Some(si) = hit else {
+            let Some(mut si) = hit else {
                 // Escaped: environment emission, MIS-weighted against light sampling.
                 if !(depth == 0 && self.hide_emitters) {
                     let (le, env_pdf) = scene.environment(prev_p, prev_n, ray.d);
@@ -86,7 +86,7 @@ impl PathIntegrator {
             if depth + 1 >= self.term.max_depth {
                 break;
             }
-            let bsdf = scene.bsdf(&si);
+            let bsdf = scene.bsdf(&mut si);
             let wo = si.to_local(si.wo);
 
             // Light sampling (next-event estimation).

@@ -3,12 +3,17 @@
 //! object kind. Every property a plugin reads is marked; whatever is left
 //! unread is reported as unsupported (see `props.rs`).
 
+mod bsdf;
+mod texture;
+
+use bsdf::build_material;
+use texture::Textures;
+
 use crate::desc::{Kind, Node, Property, SceneDesc, Value};
 use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
 use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
-use penumbra_render::bsdf::{presets, Bsdf, Conductor, Dielectric, Diffuse};
 use penumbra_render::camera::{FovAxis, PerspectiveCamera};
 use penumbra_render::film::{Filter, FilterKind};
 use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
@@ -16,6 +21,7 @@ use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
 };
 use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
+use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::{Sampler, SamplerKind};
@@ -35,7 +41,6 @@ pub struct Overrides {
 }
 
 const SHAPES: &[&str] = &["rectangle", "cube", "sphere", "disk", "obj", "ply"];
-const BSDFS: &[&str] = &["diffuse", "dielectric", "conductor", "twosided"];
 const EMITTERS: &[&str] = &["area (inside a shape)", "constant", "envmap", "point", "spot", "directional"];
 
 fn unsupported(node: &Node, supported: &[&str]) -> LoadError {
@@ -82,6 +87,9 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             Kind::Bsdf => {
                 b.bsdf(node)?;
             }
+            Kind::Texture => {
+                b.textures.build(node)?;
+            }
             _ => {
                 return Err(LoadError::at(
                     &child.loc,
@@ -93,7 +101,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             }
         }
     }
-    root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf])?;
+    root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf, Kind::Texture])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
     let (integrator, selection) = match (&ov.integrator, &integrator) {
@@ -101,7 +109,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
         (None, Some(node)) => build_integrator(node)?,
         (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
     };
-    let mut scene = Scene::new(b.shapes, b.infos, b.bsdfs, b.lights);
+    let mut scene = Scene::new(b.shapes, b.infos, b.materials, b.lights);
     let radius = scene.bounds().bounding_radius();
     for l in &mut scene.lights {
         if let Light::Directional(d) = l {
@@ -126,7 +134,8 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
 struct Builder {
     shapes: Vec<Shape>,
     infos: Vec<ShapeInfo>,
-    bsdfs: Vec<Bsdf>,
+    materials: Vec<Material>,
+    textures: Textures,
     lights: Vec<Light>,
     /// BSDF nodes already built, by node identity (shared through `<ref>`).
     bsdf_index: HashMap<*const Node, u32>,
@@ -140,9 +149,9 @@ impl Builder {
         if let Some(&i) = self.bsdf_index.get(&key) {
             return Ok(i);
         }
-        let bsdf = build_bsdf(node)?;
-        let i = self.bsdfs.len() as u32;
-        self.bsdfs.push(bsdf);
+        let m = build_material(node, &mut self.textures)?;
+        let i = self.materials.len() as u32;
+        self.materials.push(m);
         self.bsdf_index.insert(key, i);
         Ok(i)
     }
@@ -208,12 +217,12 @@ impl Builder {
             // emitters (checked against Mitsuba 3.9: an emitter without a BSDF
             // reflects nothing).
             None if emitter.is_some() => *self.default_emitter_bsdf.get_or_insert_with(|| {
-                self.bsdfs.push(Bsdf::Diffuse(Diffuse { reflectance: Spectrum::ZERO }));
-                (self.bsdfs.len() - 1) as u32
+                self.materials.push(Material::Diffuse { reflectance: Spectrum::ZERO.into() });
+                (self.materials.len() - 1) as u32
             }),
             None => *self.default_bsdf.get_or_insert_with(|| {
-                self.bsdfs.push(Bsdf::Diffuse(Diffuse { reflectance: Spectrum::splat(0.5) }));
-                (self.bsdfs.len() - 1) as u32
+                self.materials.push(Material::Diffuse { reflectance: Spectrum::splat(0.5).into() });
+                (self.materials.len() - 1) as u32
             }),
         };
         let shape_id = self.shapes.len() as u32;
@@ -237,7 +246,7 @@ impl Builder {
         };
         node.check_all_used(&[Kind::Bsdf, Kind::Emitter])?;
         self.shapes.push(shape);
-        self.infos.push(ShapeInfo { bsdf, light });
+        self.infos.push(ShapeInfo { material: bsdf, light });
         Ok(())
     }
 
@@ -330,85 +339,6 @@ fn resolve(scene_file: &Path, name: &str) -> PathBuf {
     } else {
         scene_file.parent().unwrap_or(Path::new(".")).join(p)
     }
-}
-
-fn ior(node: &Node, name: &str, default: f64) -> Result<f64> {
-    if let Some((s, loc)) = node.get_string(name).ok().flatten() {
-        return presets::named_ior(&s).map(|v| v as f64).ok_or_else(|| {
-            LoadError::at(&loc, format!("unknown IOR name '{s}'; known names: {}", presets::IOR_NAMES.join(", ")))
-        });
-    }
-    node.float(name, default)
-}
-
-fn build_bsdf(node: &Node) -> Result<Bsdf> {
-    let reject_textures = |node: &Node| -> Result<()> {
-        if let Some(t) = node.children_of(Kind::Texture).next() {
-            return Err(LoadError::at(&t.loc, "textures are not supported yet; give a constant <rgb> value"));
-        }
-        Ok(())
-    };
-    reject_textures(node)?;
-    let bsdf = match node.plugin.as_str() {
-        "diffuse" => Bsdf::Diffuse(Diffuse { reflectance: rgb(node.get_rgb("reflectance")?.unwrap_or([0.5; 3])) }),
-        "dielectric" => {
-            let int = ior(node, "int_ior", 1.5046)?;
-            let ext = ior(node, "ext_ior", 1.000277)?;
-            if !(int > 0.0 && ext > 0.0) {
-                return Err(node.error("dielectric: int_ior and ext_ior must be positive"));
-            }
-            Bsdf::Dielectric(Dielectric {
-                eta: (int / ext) as f32,
-                specular_reflectance: rgb(node.get_rgb("specular_reflectance")?.unwrap_or([1.0; 3])),
-                specular_transmittance: rgb(node.get_rgb("specular_transmittance")?.unwrap_or([1.0; 3])),
-            })
-        }
-        "conductor" => {
-            let eta = node.get_rgb("eta")?;
-            let k = node.get_rgb("k")?;
-            let material = node.get_string("material")?;
-            let (eta, k) = match (material, eta.is_some() || k.is_some()) {
-                (Some((_, loc)), true) => {
-                    return Err(LoadError::at(&loc, "conductor: give either 'material' or 'eta'/'k', not both"))
-                }
-                (Some((name, loc)), false) => match presets::named_conductor(&name) {
-                    Some((e, k)) => (Vec3::from(e), Vec3::from(k)),
-                    None => {
-                        return Err(LoadError::at(
-                            &loc,
-                            format!(
-                                "unknown conductor material '{name}'; known: {}",
-                                presets::CONDUCTOR_NAMES.join(", ")
-                            ),
-                        ))
-                    }
-                },
-                (None, true) => (rgb(eta.unwrap_or([0.0; 3])), rgb(k.unwrap_or([1.0; 3]))),
-                // Mitsuba's default material "none": a perfect mirror.
-                (None, false) => (Vec3::ZERO, Vec3::ONE),
-            };
-            Bsdf::Conductor(Conductor {
-                eta,
-                k,
-                specular_reflectance: rgb(node.get_rgb("specular_reflectance")?.unwrap_or([1.0; 3])),
-            })
-        }
-        "twosided" => {
-            let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
-            let (front, back) = match inner.as_slice() {
-                [one] => (build_bsdf(&one.node)?, build_bsdf(&one.node)?),
-                [a, b] => (build_bsdf(&a.node)?, build_bsdf(&b.node)?),
-                _ => return Err(node.error("twosided needs one or two nested BSDFs")),
-            };
-            if matches!(front, Bsdf::TwoSided(..)) || matches!(back, Bsdf::TwoSided(..)) {
-                return Err(node.error("twosided cannot wrap another twosided BSDF"));
-            }
-            Bsdf::TwoSided(Box::new(front), Box::new(back))
-        }
-        _ => return Err(unsupported(node, BSDFS)),
-    };
-    node.check_all_used(&[Kind::Bsdf])?;
-    Ok(bsdf)
 }
 
 const INTEGRATORS: &[&str] = &["path", "direct", "bruteforce"];

@@ -1,0 +1,218 @@
+//! Materials: Mitsuba's BSDF plugins as the scene stores them, with
+//! parameters that may be textures. At a hit, [`Material::bsdf`] evaluates
+//! the textures, resolves the wrappers (`twosided`, `mask`, `normalmap`,
+//! `bumpmap`) and returns a plain [`Bsdf`] (pbrt-v4's Material → BSDF split).
+
+pub mod bumpmap;
+pub mod normalmap;
+
+use crate::bsdf::{
+    Bsdf, BsdfKind, Conductor, Dielectric, Diffuse, Microfacet, MicrofacetType, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
+};
+use crate::geometry::SurfaceInteraction;
+use crate::math::Frame;
+use crate::texture::Texture;
+
+/// Parameters shared by `roughconductor` and `roughdielectric`: a
+/// distribution with (possibly textured) roughness along s and t.
+#[derive(Debug, Clone)]
+pub struct Roughness {
+    pub kind: MicrofacetType,
+    pub alpha_u: Texture,
+    pub alpha_v: Texture,
+}
+
+impl Roughness {
+    #[inline]
+    fn eval(&self, si: &SurfaceInteraction) -> Microfacet {
+        // Mitsuba clamps nothing here; tiny values only need to stay positive.
+        let a = |t: &Texture| t.eval_1(si).max(1e-4);
+        Microfacet { kind: self.kind, alpha_u: a(&self.alpha_u), alpha_v: a(&self.alpha_v) }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub enum Material {
+    Diffuse {
+        reflectance: Texture,
+    },
+    Dielectric {
+        eta: f32,
+        specular_reflectance: Texture,
+        specular_transmittance: Texture,
+    },
+    ThinDielectric {
+        eta: f32,
+        specular_reflectance: Texture,
+        specular_transmittance: Texture,
+    },
+    Conductor {
+        eta: Texture,
+        k: Texture,
+        specular_reflectance: Texture,
+    },
+    RoughConductor {
+        roughness: Roughness,
+        eta: Texture,
+        k: Texture,
+        specular_reflectance: Texture,
+    },
+    RoughDielectric {
+        roughness: Roughness,
+        eta: f32,
+        specular_reflectance: Texture,
+        specular_transmittance: Texture,
+    },
+    Plastic {
+        eta: f32,
+        diffuse_reflectance: Texture,
+        specular_reflectance: Texture,
+        nonlinear: bool,
+        fdr_int: f32,
+        specular_sampling_weight: f32,
+    },
+    RoughPlastic {
+        distr: Microfacet,
+        eta: f32,
+        diffuse_reflectance: Texture,
+        specular_reflectance: Texture,
+        nonlinear: bool,
+        specular_sampling_weight: f32,
+        tables: RoughPlasticTables,
+    },
+    /// Mitsuba `null`: invisible to every ray (a shape that only emits).
+    Null,
+    /// The front material, and the one seen from the back side.
+    TwoSided(Box<Material>, Box<Material>),
+    Mask {
+        opacity: Texture,
+        inner: Box<Material>,
+    },
+    NormalMap {
+        normals: Texture,
+        inner: Box<Material>,
+    },
+    BumpMap {
+        height: Texture,
+        scale: f32,
+        inner: Box<Material>,
+    },
+}
+
+impl Material {
+    /// The BSDF at a hit. Wrappers may replace `si.sh_frame` (a flipped
+    /// frame on the back of `twosided`, a perturbed one for normal and
+    /// bump maps); integrators must use the frame after this call.
+    pub fn bsdf<'a>(&'a self, si: &mut SurfaceInteraction) -> Bsdf<'a> {
+        let mut m = self;
+        let mut opacity = 1.0f32;
+        loop {
+            let kind = match m {
+                Material::TwoSided(front, back) => {
+                    // Mitsuba's twosided: seen from below, the back material in
+                    // a frame whose normal is negated (local z ↦ −z).
+                    if si.to_local(si.wo).z < 0.0 {
+                        let f = si.sh_frame;
+                        si.sh_frame = Frame { s: f.s, t: f.t, n: -f.n };
+                        m = back;
+                    } else {
+                        m = front;
+                    }
+                    continue;
+                }
+                Material::Mask { opacity: o, inner } => {
+                    opacity *= o.eval_1(si).clamp(0.0, 1.0);
+                    m = inner;
+                    continue;
+                }
+                Material::NormalMap { normals, inner } => {
+                    si.sh_frame = normalmap::perturbed_frame(si, normals.eval(si));
+                    m = inner;
+                    continue;
+                }
+                Material::BumpMap { height, scale, inner } => {
+                    si.sh_frame = bumpmap::perturbed_frame(si, height, *scale);
+                    m = inner;
+                    continue;
+                }
+                Material::Diffuse { reflectance } => BsdfKind::Diffuse(Diffuse { reflectance: reflectance.eval(si) }),
+                Material::Dielectric { eta, specular_reflectance, specular_transmittance } => {
+                    BsdfKind::Dielectric(Dielectric {
+                        eta: *eta,
+                        specular_reflectance: specular_reflectance.eval(si),
+                        specular_transmittance: specular_transmittance.eval(si),
+                    })
+                }
+                Material::ThinDielectric { eta, specular_reflectance, specular_transmittance } => {
+                    BsdfKind::ThinDielectric(ThinDielectric {
+                        eta: *eta,
+                        specular_reflectance: specular_reflectance.eval(si),
+                        specular_transmittance: specular_transmittance.eval(si),
+                    })
+                }
+                Material::Conductor { eta, k, specular_reflectance } => BsdfKind::Conductor(Conductor {
+                    eta: eta.eval(si),
+                    k: k.eval(si),
+                    specular_reflectance: specular_reflectance.eval(si),
+                }),
+                Material::RoughConductor { roughness, eta, k, specular_reflectance } => {
+                    BsdfKind::RoughConductor(RoughConductor {
+                        distr: roughness.eval(si),
+                        eta: eta.eval(si),
+                        k: k.eval(si),
+                        specular_reflectance: specular_reflectance.eval(si),
+                    })
+                }
+                Material::RoughDielectric { roughness, eta, specular_reflectance, specular_transmittance } => {
+                    BsdfKind::RoughDielectric(RoughDielectric {
+                        distr: roughness.eval(si),
+                        eta: *eta,
+                        specular_reflectance: specular_reflectance.eval(si),
+                        specular_transmittance: specular_transmittance.eval(si),
+                    })
+                }
+                Material::Plastic {
+                    eta,
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    nonlinear,
+                    fdr_int,
+                    specular_sampling_weight,
+                } => BsdfKind::Plastic(Plastic {
+                    eta: *eta,
+                    diffuse_reflectance: diffuse_reflectance.eval(si),
+                    specular_reflectance: specular_reflectance.eval(si),
+                    nonlinear: *nonlinear,
+                    fdr_int: *fdr_int,
+                    specular_sampling_weight: *specular_sampling_weight,
+                }),
+                Material::RoughPlastic {
+                    distr,
+                    eta,
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    nonlinear,
+                    specular_sampling_weight,
+                    tables,
+                } => BsdfKind::RoughPlastic(RoughPlastic {
+                    distr: *distr,
+                    eta: *eta,
+                    diffuse_reflectance: diffuse_reflectance.eval(si),
+                    specular_reflectance: specular_reflectance.eval(si),
+                    nonlinear: *nonlinear,
+                    specular_sampling_weight: *specular_sampling_weight,
+                    tables,
+                }),
+                Material::Null => BsdfKind::Null,
+            };
+            return Bsdf { kind, opacity };
+        }
+    }
+
+    /// Whether a hit on this material can scatter light at all (false for
+    /// `null`, which rays pass through).
+    pub fn is_null(&self) -> bool {
+        matches!(self, Material::Null)
+    }
+}

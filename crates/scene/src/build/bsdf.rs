@@ -1,0 +1,235 @@
+//! `<bsdf>` nodes → [`Material`]s: one function per Mitsuba plugin family,
+//! with Mitsuba 3.9's defaults. Parameters Mitsuba accepts as textures are
+//! read through [`Textures`].
+
+use super::texture::Textures;
+use super::unsupported;
+use crate::desc::{Kind, Node};
+use crate::error::{LoadError, Result};
+use glam::Vec3;
+use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
+use penumbra_render::bsdf::{presets, Microfacet, MicrofacetType, RoughPlasticTables};
+use penumbra_render::material::{Material, Roughness};
+use penumbra_render::math::Spectrum;
+use penumbra_render::texture::Texture;
+
+pub(crate) const BSDFS: &[&str] = &[
+    "diffuse",
+    "dielectric",
+    "thindielectric",
+    "roughdielectric",
+    "conductor",
+    "roughconductor",
+    "plastic",
+    "roughplastic",
+    "twosided",
+    "mask",
+    "normalmap",
+    "bumpmap",
+    "null",
+];
+
+/// An IOR given as a number or one of Mitsuba's named materials.
+pub(crate) fn ior(node: &Node, name: &str, default: &str) -> Result<f32> {
+    let (s, loc) = match node.get_string(name).ok().flatten() {
+        Some(v) => v,
+        None => match node.get_float(name)? {
+            Some(v) => return Ok(v as f32),
+            None => (default.to_string(), node.loc.clone()),
+        },
+    };
+    presets::named_ior(&s).ok_or_else(|| {
+        LoadError::at(&loc, format!("unknown IOR name '{s}'; known names: {}", presets::IOR_NAMES.join(", ")))
+    })
+}
+
+/// int_ior / ext_ior, both positive (and different, where Mitsuba requires it).
+fn relative_ior(node: &Node, int_default: &str, must_differ: bool) -> Result<f32> {
+    let int = ior(node, "int_ior", int_default)?;
+    let ext = ior(node, "ext_ior", "air")?;
+    if !(int > 0.0 && ext > 0.0) || (must_differ && int == ext) {
+        return Err(node.error(format!(
+            "{}: int_ior and ext_ior must be positive{}",
+            node.describe(),
+            if must_differ { " and differ" } else { "" }
+        )));
+    }
+    Ok(int / ext)
+}
+
+fn distribution(node: &Node) -> Result<MicrofacetType> {
+    match node.get_string("distribution")? {
+        None => Ok(MicrofacetType::Beckmann),
+        Some((s, loc)) => match s.to_lowercase().as_str() {
+            "beckmann" => Ok(MicrofacetType::Beckmann),
+            "ggx" => Ok(MicrofacetType::Ggx),
+            _ => Err(LoadError::at(&loc, format!("distribution '{s}' is not one of beckmann, ggx"))),
+        },
+    }
+}
+
+/// `alpha`, or `alpha_u` and `alpha_v` (both), as Mitsuba's microfacet plugins.
+fn roughness(node: &Node, tex: &mut Textures) -> Result<Roughness> {
+    let kind = distribution(node)?;
+    // Visible-normal sampling is always used; `sample_visible = false`
+    // selects Mitsuba's older sampler of the same distribution, whose
+    // variance is never lower.
+    node.bool("sample_visible", true)?;
+    let has = |n: &str| node.has(n) || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some(n));
+    if has("alpha_u") || has("alpha_v") {
+        if !(has("alpha_u") && has("alpha_v")) {
+            return Err(node.error(format!("{}: give both 'alpha_u' and 'alpha_v'", node.describe())));
+        }
+        if has("alpha") {
+            return Err(node.error(format!("{}: give either 'alpha' or 'alpha_u'/'alpha_v'", node.describe())));
+        }
+        Ok(Roughness { kind, alpha_u: tex.float(node, "alpha_u", 0.1)?, alpha_v: tex.float(node, "alpha_v", 0.1)? })
+    } else {
+        let a = tex.float(node, "alpha", 0.1)?;
+        Ok(Roughness { kind, alpha_u: a.clone(), alpha_v: a })
+    }
+}
+
+/// Complex IOR of a conductor: `material` (a name) or `eta`/`k`; Mitsuba's
+/// default "none" is eta 0, k 1, a perfect mirror.
+fn complex_ior(node: &Node, tex: &mut Textures) -> Result<(Texture, Texture)> {
+    let material = node.get_string("material")?;
+    let explicit = node.has("eta")
+        || node.has("k")
+        || node.children_of(Kind::Texture).any(|c| matches!(c.name.as_deref(), Some("eta") | Some("k")));
+    match material {
+        Some((name, loc)) if name != "none" => {
+            if explicit {
+                return Err(LoadError::at(
+                    &loc,
+                    format!("{}: give either 'material' or 'eta'/'k', not both", node.describe()),
+                ));
+            }
+            match presets::named_conductor(&name) {
+                Some((e, k)) => Ok((Texture::Constant(Vec3::from(e)), Texture::Constant(Vec3::from(k)))),
+                None => Err(LoadError::at(
+                    &loc,
+                    format!("unknown conductor material '{name}'; known: {}", presets::CONDUCTOR_NAMES.join(", ")),
+                )),
+            }
+        }
+        _ => Ok((tex.spectrum(node, "eta", Spectrum::ZERO)?, tex.spectrum(node, "k", Spectrum::ONE)?)),
+    }
+}
+
+/// The single nested BSDF of a wrapper.
+fn nested(node: &Node, tex: &mut Textures) -> Result<Box<Material>> {
+    let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
+    match inner.as_slice() {
+        [one] => Ok(Box::new(build_material(&one.node, tex)?)),
+        _ => Err(node.error(format!("{} needs exactly one nested BSDF", node.describe()))),
+    }
+}
+
+pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let one = Spectrum::ONE;
+    let m = match node.plugin.as_str() {
+        "diffuse" => Material::Diffuse { reflectance: tex.spectrum(node, "reflectance", Spectrum::splat(0.5))? },
+        "dielectric" | "thindielectric" => {
+            let eta = relative_ior(node, "bk7", false)?;
+            let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
+            let specular_transmittance = tex.spectrum(node, "specular_transmittance", one)?;
+            if node.plugin == "dielectric" {
+                Material::Dielectric { eta, specular_reflectance, specular_transmittance }
+            } else {
+                Material::ThinDielectric { eta, specular_reflectance, specular_transmittance }
+            }
+        }
+        "roughdielectric" => Material::RoughDielectric {
+            eta: relative_ior(node, "bk7", true)?,
+            roughness: roughness(node, tex)?,
+            specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
+            specular_transmittance: tex.spectrum(node, "specular_transmittance", one)?,
+        },
+        "conductor" => {
+            let (eta, k) = complex_ior(node, tex)?;
+            Material::Conductor { eta, k, specular_reflectance: tex.spectrum(node, "specular_reflectance", one)? }
+        }
+        "roughconductor" => {
+            let (eta, k) = complex_ior(node, tex)?;
+            Material::RoughConductor {
+                roughness: roughness(node, tex)?,
+                eta,
+                k,
+                specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
+            }
+        }
+        "plastic" | "roughplastic" => {
+            let eta = relative_ior(node, "polypropylene", node.plugin == "roughplastic")?;
+            let diffuse_reflectance = tex.spectrum(node, "diffuse_reflectance", Spectrum::splat(0.5))?;
+            let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
+            let nonlinear = node.bool("nonlinear", false)?;
+            // Mitsuba steers lobe selection by the textures' mean values.
+            let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
+            let specular_sampling_weight = s_mean / (d_mean + s_mean);
+            if node.plugin == "plastic" {
+                Material::Plastic {
+                    eta,
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    nonlinear,
+                    fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
+                    specular_sampling_weight,
+                }
+            } else {
+                let r = roughness(node, tex)?;
+                let (Some(au), Some(av)) = (r.alpha_u.constant(), r.alpha_v.constant()) else {
+                    return Err(node.error("roughplastic: alpha must be a number, not a texture (as in Mitsuba)"));
+                };
+                if au != av {
+                    return Err(node.error("roughplastic does not support anisotropic roughness (as in Mitsuba)"));
+                }
+                let distr = Microfacet { kind: r.kind, alpha_u: au.x.max(1e-4), alpha_v: av.x.max(1e-4) };
+                Material::RoughPlastic {
+                    distr,
+                    eta,
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    nonlinear,
+                    specular_sampling_weight,
+                    tables: RoughPlasticTables::new(distr, eta),
+                }
+            }
+        }
+        "twosided" => {
+            let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
+            let (front, back) = match inner.as_slice() {
+                [one] => (build_material(&one.node, tex)?, build_material(&one.node, tex)?),
+                [a, b] => (build_material(&a.node, tex)?, build_material(&b.node, tex)?),
+                _ => return Err(node.error("twosided needs one or two nested BSDFs")),
+            };
+            if matches!(front, Material::TwoSided(..)) || matches!(back, Material::TwoSided(..)) {
+                return Err(node.error("twosided cannot wrap another twosided BSDF"));
+            }
+            Material::TwoSided(Box::new(front), Box::new(back))
+        }
+        "mask" => Material::Mask { opacity: tex.float(node, "opacity", 0.5)?, inner: nested(node, tex)? },
+        "normalmap" => {
+            let child = node
+                .children_of(Kind::Texture)
+                .find(|c| c.name.as_deref() == Some("normalmap"))
+                .ok_or_else(|| node.error("normalmap needs a texture named 'normalmap'"))?;
+            let normals = tex.build(&child.node)?;
+            node.accept(&["flip_invalid_normals", "use_shadowing_function"]);
+            Material::NormalMap { normals, inner: nested(node, tex)? }
+        }
+        "bumpmap" => {
+            let textures: Vec<_> = node.children_of(Kind::Texture).collect();
+            let [t] = textures.as_slice() else {
+                return Err(node.error("bumpmap needs exactly one nested texture (the height field)"));
+            };
+            let height = tex.build(&t.node)?;
+            node.accept(&["flip_invalid_normals", "use_shadowing_function"]);
+            Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? }
+        }
+        "null" => Material::Null,
+        _ => return Err(unsupported(node, BSDFS)),
+    };
+    node.check_all_used(&[Kind::Bsdf, Kind::Texture])?;
+    Ok(m)
+}
