@@ -62,6 +62,8 @@ SPP = {
     "envmap_sun": 65536,
     "many_lights": 65536,
     "direct_integrator": 16384,
+    "rough_spheres": 65536,
+    "textured": 16384,
 }
 DEFAULT_SPP = 8192
 # Largest single mi.render call (spp); keeps LLVM wavefronts at a few M lanes.

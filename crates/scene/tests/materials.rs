@@ -1,0 +1,248 @@
+//! BSDF plugins in scene files: parameters and defaults as Mitsuba 3.9.1
+//! reads them, errors naming file and line, and behaviour of the wrappers
+//! (`twosided`, `mask`, `null`) checked by rendering.
+
+mod common;
+
+use common::{assert_agree, render_with_variance};
+use penumbra_render::bsdf::MicrofacetType;
+use penumbra_render::material::Material;
+use penumbra_render::math::Spectrum;
+use penumbra_render::texture::Texture;
+use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::mitsuba::parse_str;
+use std::path::{Path, PathBuf};
+
+const SENSOR: &str = r#"<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
+<integer name="height" value="4"/></film></sensor>"#;
+
+/// Builds a scene with one sphere carrying `bsdf`; returns its material.
+fn material(bsdf: &str) -> Result<Material, penumbra_scene::LoadError> {
+    let xml = format!("<scene version=\"3.0.0\">{SENSOR}\n<shape type=\"sphere\">\n{bsdf}\n</shape></scene>");
+    let job = build(&parse_str(&xml, Path::new("mat.xml"), &[])?, &Overrides::default())?;
+    Ok(job.scene.materials[job.scene.shape_info[0].material as usize].clone())
+}
+
+fn error(bsdf: &str) -> String {
+    material(bsdf).err().expect("the scene should be rejected").to_string()
+}
+
+fn constant(t: &Texture) -> Spectrum {
+    t.constant().expect("a constant")
+}
+
+#[test]
+fn defaults_follow_mitsuba() {
+    match material(r#"<bsdf type="roughconductor"/>"#).unwrap() {
+        Material::RoughConductor { roughness, eta, k, specular_reflectance } => {
+            assert_eq!(roughness.kind, MicrofacetType::Beckmann);
+            assert_eq!(constant(&roughness.alpha_u), Spectrum::splat(0.1));
+            assert_eq!(constant(&roughness.alpha_v), Spectrum::splat(0.1));
+            // material "none": eta 0, k 1, a perfect mirror
+            assert_eq!((constant(&eta), constant(&k)), (Spectrum::ZERO, Spectrum::ONE));
+            assert_eq!(constant(&specular_reflectance), Spectrum::ONE);
+        }
+        m => panic!("{m:?}"),
+    }
+    match material(r#"<bsdf type="roughdielectric"/>"#).unwrap() {
+        // bk7 / air
+        Material::RoughDielectric { eta, .. } => assert!((eta - 1.5046 / 1.000277).abs() < 1e-5),
+        m => panic!("{m:?}"),
+    }
+    match material(r#"<bsdf type="plastic"/>"#).unwrap() {
+        Material::Plastic { eta, diffuse_reflectance, nonlinear, specular_sampling_weight, fdr_int, .. } => {
+            // polypropylene / air; weight = s_mean / (d_mean + s_mean) = 1 / 1.5
+            assert!((eta - 1.49 / 1.000277).abs() < 1e-5);
+            assert_eq!(constant(&diffuse_reflectance), Spectrum::splat(0.5));
+            assert!(!nonlinear);
+            assert!((specular_sampling_weight - 1.0 / 1.5).abs() < 1e-6);
+            assert!(fdr_int > 0.5 && fdr_int < 0.7, "internal diffuse Fresnel reflectance {fdr_int}");
+        }
+        m => panic!("{m:?}"),
+    }
+    match material(r#"<bsdf type="mask"><bsdf type="diffuse"/></bsdf>"#).unwrap() {
+        Material::Mask { opacity, inner } => {
+            assert_eq!(constant(&opacity), Spectrum::splat(0.5));
+            assert!(matches!(*inner, Material::Diffuse { .. }));
+        }
+        m => panic!("{m:?}"),
+    }
+    assert!(matches!(material(r#"<bsdf type="thindielectric"/>"#).unwrap(), Material::ThinDielectric { .. }));
+    assert!(matches!(material(r#"<bsdf type="null"/>"#).unwrap(), Material::Null));
+}
+
+#[test]
+fn parameters_are_read() {
+    let m = material(
+        r#"<bsdf type="roughconductor"><string name="distribution" value="GGX"/>
+           <float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/>
+           <rgb name="eta" value="0.2, 0.9, 1.1"/><rgb name="k" value="3, 2.5, 2"/></bsdf>"#,
+    )
+    .unwrap();
+    match m {
+        Material::RoughConductor { roughness, eta, .. } => {
+            assert_eq!(roughness.kind, MicrofacetType::Ggx);
+            assert_eq!(constant(&roughness.alpha_u).x, 0.05);
+            assert_eq!(constant(&roughness.alpha_v).x, 0.3);
+            assert_eq!(constant(&eta), Spectrum::new(0.2, 0.9, 1.1));
+        }
+        m => panic!("{m:?}"),
+    }
+    match material(r#"<bsdf type="roughplastic"><string name="int_ior" value="water"/><float name="alpha" value="0.3"/><boolean name="nonlinear" value="true"/></bsdf>"#).unwrap() {
+        Material::RoughPlastic { eta, distr, nonlinear, .. } => {
+            assert!((eta - 1.333 / 1.000277).abs() < 1e-4);
+            assert_eq!((distr.alpha_u, distr.alpha_v), (0.3, 0.3));
+            assert!(nonlinear);
+        }
+        m => panic!("{m:?}"),
+    }
+    // A named conductor (Mitsuba's RGB eta/k for gold)
+    match material(r#"<bsdf type="roughconductor"><string name="material" value="Au"/></bsdf>"#).unwrap() {
+        Material::RoughConductor { eta, k, .. } => {
+            let (e, k) = (constant(&eta), constant(&k));
+            assert!(e.x < 0.5 && e.z > 1.0 && k.x > 2.0, "gold eta {e} k {k}");
+        }
+        m => panic!("{m:?}"),
+    }
+}
+
+#[test]
+fn errors_name_the_line_and_what_to_do() {
+    let cases: &[(&str, &[&str])] = &[
+        (r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf>"#, &["mat.xml:4", "alpha_v"]),
+        (
+            r#"<bsdf type="roughconductor"><float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.1"/></bsdf>"#,
+            &["mat.xml:4", "either 'alpha'"],
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="phong"/></bsdf>"#,
+            &["mat.xml:4", "beckmann, ggx"],
+        ),
+        (
+            r#"<bsdf type="roughplastic"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+            &["mat.xml:4", "anisotropic"],
+        ),
+        (
+            r#"<bsdf type="roughconductor"><string name="material" value="Unobtainium"/></bsdf>"#,
+            &["mat.xml:4", "Unobtainium", "Au"],
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><float name="int_ior" value="1.0"/><float name="ext_ior" value="1.0"/></bsdf>"#,
+            &["mat.xml:4", "differ"],
+        ),
+        (r#"<bsdf type="mask"><float name="opacity" value="0.5"/></bsdf>"#, &["mat.xml:4", "nested BSDF"]),
+        (
+            r#"<bsdf type="plastic"><float name="roughness" value="0.5"/></bsdf>"#,
+            &["mat.xml:4", "roughness", "not supported"],
+        ),
+        (r#"<bsdf type="hair"/>"#, &["mat.xml:4", "hair", "roughconductor", "mask"]),
+        (
+            r#"<bsdf type="twosided"><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>"#,
+            &["mat.xml:4", "twosided"],
+        ),
+    ];
+    for (bsdf, words) in cases {
+        let e = error(bsdf);
+        for w in *words {
+            assert!(e.contains(w), "error for {bsdf}\n  was: {e}\n  should mention: {w}");
+        }
+    }
+}
+
+fn temp_scene(name: &str, xml: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("penumbra-materials-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, xml).unwrap();
+    p
+}
+
+/// A camera looking at a rectangle (facing +z, the camera at +z or −z),
+/// lit by a uniform white environment.
+fn plane_scene(camera_z: f32, bsdf: &str, extra: &str) -> String {
+    plane_scene_with(
+        camera_z,
+        bsdf,
+        extra,
+        r#"<emitter type="constant"><rgb name="radiance" value="1, 1, 1"/></emitter>"#,
+    )
+}
+
+fn plane_scene_with(camera_z: f32, bsdf: &str, extra: &str, env: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="4"/></integrator>
+<sensor type="perspective"><float name="fov" value="30"/>
+  <transform name="to_world"><lookat origin="0, 0, {camera_z}" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
+</sensor>
+{env}
+<shape type="rectangle"><transform name="to_world"><scale value="3"/></transform>{bsdf}</shape>
+{extra}
+</scene>"#
+    )
+}
+
+#[test]
+fn twosided_shows_the_back_material_from_behind() {
+    let diffuse = r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>"#;
+    let twosided = r#"<bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.2, 0.2"/></bsdf><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.2, 0.8"/></bsdf></bsdf>"#;
+    let centre = |e: &common::Estimate| e.mean[8 * 16 + 8];
+    // One-sided from behind: black. A lone plane in a white furnace reflects
+    // its albedo (nothing occludes the hemisphere).
+    let back = render_with_variance(&temp_scene("back.xml", &plane_scene(-4.0, diffuse, "")), 16, 4, None, 1);
+    assert_eq!(centre(&back), [0.0; 3]);
+    let front = render_with_variance(&temp_scene("front.xml", &plane_scene(4.0, twosided, "")), 16, 4, None, 1);
+    let behind = render_with_variance(&temp_scene("behind.xml", &plane_scene(-4.0, twosided, "")), 16, 4, None, 1);
+    for (e, want) in [(&front, [0.8, 0.2, 0.2]), (&behind, [0.2, 0.2, 0.8])] {
+        let (got, var) = (centre(e), e.var[8 * 16 + 8]);
+        for c in 0..3 {
+            assert!((got[c] - want[c]).abs() < 5.0 * var[c].sqrt() + 1e-4, "{got:?} vs {want:?} (var {var:?})");
+        }
+    }
+}
+
+#[test]
+fn masks_and_null_let_light_through_in_expectation() {
+    // A red emitting plane seen through a second plane in front of it that
+    // is (a) absent, (b) a null BSDF, (c) a mask of opacity 0, (d) opacity
+    // 0.4 over black: (d) must be 0.6 of (a); (b) and (c) must equal (a).
+    let red = r#"<emitter type="area"><rgb name="radiance" value="0.8, 0.3, 0.2"/></emitter>"#;
+    let cover = |bsdf: &str| {
+        format!(
+            r#"<shape type="rectangle"><transform name="to_world"><scale value="3"/><translate z="1"/></transform>{bsdf}</shape>"#
+        )
+    };
+    let black = r#"<bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>"#;
+    let render = |name: &str, extra: &str, seed: u64| {
+        render_with_variance(&temp_scene(name, &plane_scene_with(4.0, red, extra, "")), 64, 8, None, seed)
+    };
+    let plain = render("plain.xml", "", 1);
+    let null = render("null.xml", &cover(r#"<bsdf type="null"/>"#), 2);
+    let clear = render(
+        "clear.xml",
+        &cover(&format!(r#"<bsdf type="mask"><float name="opacity" value="0"/>{black}</bsdf>"#)),
+        3,
+    );
+    // Every path passes straight through: no noise at all.
+    for (name, e) in [("null", &null), ("mask opacity 0", &clear)] {
+        for (a, b) in e.mean.iter().zip(&plain.mean) {
+            assert!((0..3).all(|c| (a[c] - b[c]).abs() < 1e-6), "{name}: {a:?} vs {b:?}");
+        }
+    }
+    assert_eq!(plain.mean[8 * 16 + 8], [0.8f32 as f64, 0.3f32 as f64, 0.2f32 as f64]);
+    let partial = render(
+        "partial.xml",
+        &cover(&format!(r#"<bsdf type="mask"><float name="opacity" value="0.4"/>{black}</bsdf>"#)),
+        4,
+    );
+    let mut scaled = plain.clone();
+    for (m, v) in scaled.mean.iter_mut().zip(scaled.var.iter_mut()) {
+        for c in 0..3 {
+            m[c] *= 0.6;
+            v[c] *= 0.36;
+        }
+    }
+    assert_agree("mask opacity 0.4", &partial, &scaled, 0.01);
+}
