@@ -13,6 +13,8 @@ const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
     ("scenes/cornell-box.xml", &[]),
     ("tests/scenes/envmap_sun.xml", &[("res", "256"), ("spp", "64")]),
     ("tests/scenes/many_lights.xml", &[("res", "256"), ("spp", "64")]),
+    // Glossy and textured: rough metals and glass, plastics, a normal map.
+    ("scenes/material-showcase.xml", &[("width", "384"), ("height", "160"), ("spp", "64")]),
 ];
 
 /// Light-selection comparison: this scene against its converged reference.
