@@ -146,6 +146,40 @@ mod tests {
         }
     }
 
+    /// The diffuse lobe's samples follow pdf(); the specular (delta) lobe is
+    /// chosen with the remaining probability, so the pdf integrates to it.
+    #[test]
+    fn chi2_diffuse_lobe_matches_pdf() {
+        use crate::testing::chi2::{alpha, chi2_test, integrate_over_sphere};
+        let cases = [(0.5f32, 1.0f32), (0.8, 0.5), (0.1, 0.05), (0.9, 0.02)];
+        let a = alpha(cases.len() + 1);
+        for (k, (d, cos)) in cases.into_iter().enumerate() {
+            let b = plastic(d, k % 2 == 1);
+            let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+            let p = chi2_test(
+                400_000,
+                100 + k as u64,
+                |u1, u2| b.sample(wo, u1, u2).filter(|s| !s.delta).map(|s| s.wi),
+                |wi| b.pdf(wo, wi) as f64,
+            );
+            assert!(p > a, "plastic d={d} cos={cos}: p = {p}");
+            let f_i = fresnel_dielectric(cos, b.eta).0;
+            let total = integrate_over_sphere(|wi| b.pdf(wo, wi) as f64);
+            assert!((total - (1.0 - b.prob_specular(f_i)) as f64).abs() < 5e-3, "∫ pdf = {total}");
+        }
+        // Power: a uniform-hemisphere pdf with the same total must fail.
+        let b = plastic(0.5, false);
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let scale = 1.0 - b.prob_specular(fresnel_dielectric(0.8, b.eta).0);
+        let p = chi2_test(
+            400_000,
+            120,
+            |u1, u2| b.sample(wo, u1, u2).filter(|s| !s.delta).map(|s| s.wi),
+            |wi| if wi.z > 0.0 { (scale * 0.5 * INV_PI) as f64 } else { 0.0 },
+        );
+        assert!(p < a, "a wrong pdf passed: p = {p}");
+    }
+
     #[test]
     fn sampling_weights_agree_with_eval_over_pdf() {
         let b = plastic(0.6, false);
