@@ -392,3 +392,82 @@ mod tests {
         assert!(p < a, "wrong pdf accepted: p = {p}");
     }
 }
+
+/// Test helpers shared by the microfacet BSDFs' tests.
+#[cfg(test)]
+pub(crate) mod checks {
+    use crate::bsdf::BsdfSample;
+    use crate::math::Spectrum;
+    use crate::testing::TestRng;
+    use glam::{Vec2, Vec3};
+
+    /// A direction with the given cosine, at azimuth φ.
+    pub fn dir(cos: f32, phi: f32) -> Vec3 {
+        let s = (1.0 - cos * cos).max(0.0).sqrt();
+        Vec3::new(s * phi.cos(), s * phi.sin(), cos)
+    }
+
+    /// ∫ f dω over the whole sphere, uniform in (θ, φ) with many θ rows so
+    /// that narrow lobes are resolved.
+    pub fn integrate_sphere_fine(nt: usize, np: usize, f: impl Fn(Vec3) -> f64) -> f64 {
+        let (dt, dp) = (std::f64::consts::PI / nt as f64, 2.0 * std::f64::consts::PI / np as f64);
+        let mut acc = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) * dt;
+            let (st, ct) = t.sin_cos();
+            let mut row = 0.0;
+            for j in 0..np {
+                let p = (j as f64 + 0.5) * dp;
+                row += f(Vec3::new((st * p.cos()) as f32, (st * p.sin()) as f32, ct as f32));
+            }
+            acc += row * st;
+        }
+        acc * dt * dp
+    }
+
+    /// Checks at many random (wo, u) that a sample's weight equals
+    /// eval · |cos| / pdf and its pdf equals pdf(); returns the count checked.
+    pub fn check_weights(
+        seed: u64,
+        wos: &[Vec3],
+        sample: impl Fn(Vec3, f32, Vec2) -> Option<BsdfSample>,
+        eval: impl Fn(Vec3, Vec3) -> Spectrum,
+        pdf: impl Fn(Vec3, Vec3) -> f32,
+    ) -> usize {
+        let mut rng = TestRng::new(seed);
+        let mut n = 0;
+        for &wo in wos {
+            for _ in 0..2000 {
+                let Some(s) = sample(wo, rng.next_f32(), rng.next_2d()) else { continue };
+                assert!(!s.delta && s.pdf > 0.0 && s.weight.is_finite(), "{s:?}");
+                let p = pdf(wo, s.wi);
+                assert!((s.pdf - p).abs() <= 2e-3 * p.max(1e-3), "wo={wo} wi={}: pdf {} vs {p}", s.wi, s.pdf);
+                let expect = eval(wo, s.wi) * s.wi.z.abs() / p;
+                let tol = 2e-3 * expect.max_element().max(1e-2);
+                assert!(
+                    (s.weight - expect).abs().max_element() <= tol,
+                    "wo={wo} wi={}: {} vs {expect}",
+                    s.wi,
+                    s.weight
+                );
+                n += 1;
+            }
+        }
+        n
+    }
+
+    /// Mean sample weight (first channel) and its standard error.
+    pub fn albedo(n: usize, seed: u64, wo: Vec3, sample: impl Fn(Vec3, f32, Vec2) -> Option<BsdfSample>) -> (f64, f64) {
+        let mut rng = TestRng::new(seed);
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            if let Some(s) = sample(wo, rng.next_f32(), rng.next_2d()) {
+                let w = s.weight.x as f64;
+                s1 += w;
+                s2 += w * w;
+            }
+        }
+        let mean = s1 / n as f64;
+        (mean, ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
+    }
+}
