@@ -198,6 +198,13 @@ impl Microfacet {
     /// with its density (Heitz & d'Eon 2014: stretch, sample the slopes of
     /// the α = 1 configuration, rotate and unstretch).
     pub fn sample(&self, wi: Vec3, u: Vec2) -> (Vec3, f32) {
+        let st = self.stretch(wi);
+        let m = self.normal_from_slope(&st, self.sample_visible_11(st.cos_theta, u));
+        (m, self.pdf(wi, m))
+    }
+
+    /// Step 1 of visible-normal sampling: `wi` in the α = 1 configuration.
+    pub(crate) fn stretch(&self, wi: Vec3) -> Stretched {
         let (au, av) = self.alphas();
         let wi_p = Vec3::new(au * wi.x, av * wi.y, wi.z).normalize();
         let sin_theta = safe_sqrt(1.0 - wi_p.z * wi_p.z);
@@ -206,37 +213,22 @@ impl Microfacet {
         } else {
             ((wi_p.y / sin_theta).clamp(-1.0, 1.0), (wi_p.x / sin_theta).clamp(-1.0, 1.0))
         };
-        let slope = self.sample_visible_11(wi_p.z, u);
-        let sx = (cos_phi * slope.x - sin_phi * slope.y) * au;
-        let sy = (sin_phi * slope.x + cos_phi * slope.y) * av;
-        let m = Vec3::new(-sx, -sy, 1.0).normalize();
-        (m, self.pdf(wi, m))
+        Stretched { au, av, sin_phi, cos_phi, cos_theta: wi_p.z }
+    }
+
+    /// Step 3: rotate and unstretch a sampled α = 1 slope into a normal.
+    #[inline]
+    pub(crate) fn normal_from_slope(&self, st: &Stretched, slope: Vec2) -> Vec3 {
+        let sx = (st.cos_phi * slope.x - st.sin_phi * slope.y) * st.au;
+        let sy = (st.sin_phi * slope.x + st.cos_phi * slope.y) * st.av;
+        Vec3::new(-sx, -sy, 1.0).normalize()
     }
 
     /// Samples the slopes of visible normals for α = 1 and incidence cos θ_i
     /// (in the plane φ = 0).
     fn sample_visible_11(&self, cos_theta_i: f32, u: Vec2) -> Vec2 {
         match self.kind {
-            MicrofacetType::Beckmann => {
-                // Numerical inversion of the visible-slope CDF in the erf
-                // domain (Jakob's improved routine, as Mitsuba).
-                let ci = cos_theta_i as f64;
-                let tan_i = (1.0 - ci * ci).max(0.0).sqrt() / ci;
-                let cot_i = 1.0 / tan_i;
-                let maxval = erf(cot_i);
-                let ux = (u.x as f64).clamp(1e-6, 1.0 - 1e-6);
-                let uy = (u.y as f64).clamp(1e-6, 1.0 - 1e-6);
-                let mut x = maxval - (maxval + 1.0) * erf((-ux.ln()).sqrt());
-                let tail = if tan_i == 0.0 { 0.0 } else { INV_SQRT_PI * tan_i * (-cot_i * cot_i).exp() };
-                let target = ux * (1.0 + maxval + tail);
-                for _ in 0..3 {
-                    let slope = erfinv(x);
-                    let value = 1.0 + x + INV_SQRT_PI * tan_i * (-slope * slope).exp() - target;
-                    let derivative = 1.0 - slope * tan_i;
-                    x -= value / derivative;
-                }
-                Vec2::new(erfinv(x) as f32, erfinv(2.0 * uy - 1.0) as f32)
-            }
+            MicrofacetType::Beckmann => Vec2::new(beckmann_slope_x(cos_theta_i, u.x), beckmann_slope_y(u.y)),
             MicrofacetType::Ggx => {
                 // Heitz 2018: sample the projected hemisphere of the
                 // stretched configuration.
@@ -252,6 +244,41 @@ impl Microfacet {
             }
         }
     }
+}
+
+/// The stretched incident direction of visible-normal sampling.
+pub(crate) struct Stretched {
+    au: f32,
+    av: f32,
+    sin_phi: f32,
+    cos_phi: f32,
+    pub cos_theta: f32,
+}
+
+/// Beckmann visible slopes for α = 1, x component (in the incidence plane):
+/// numerical inversion of its CDF in the erf domain (Jakob's improved
+/// routine, as Mitsuba). The x and y slopes are independent.
+pub(crate) fn beckmann_slope_x(cos_theta_i: f32, ux: f32) -> f32 {
+    let ci = cos_theta_i as f64;
+    let tan_i = (1.0 - ci * ci).max(0.0).sqrt() / ci;
+    let cot_i = 1.0 / tan_i;
+    let maxval = erf(cot_i);
+    let ux = (ux as f64).clamp(1e-6, 1.0 - 1e-6);
+    let mut x = maxval - (maxval + 1.0) * erf((-ux.ln()).sqrt());
+    let tail = if tan_i == 0.0 { 0.0 } else { INV_SQRT_PI * tan_i * (-cot_i * cot_i).exp() };
+    let target = ux * (1.0 + maxval + tail);
+    for _ in 0..3 {
+        let slope = erfinv(x);
+        let value = 1.0 + x + INV_SQRT_PI * tan_i * (-slope * slope).exp() - target;
+        let derivative = 1.0 - slope * tan_i;
+        x -= value / derivative;
+    }
+    erfinv(x) as f32
+}
+
+/// Beckmann visible slopes for α = 1, y component (a standard normal / √2).
+pub(crate) fn beckmann_slope_y(uy: f32) -> f32 {
+    erfinv(2.0 * (uy as f64).clamp(1e-6, 1.0 - 1e-6) - 1.0) as f32
 }
 
 /// Mirror reflection of `v` about the microfacet normal `m`.
