@@ -1,5 +1,20 @@
 //! Microfacet distributions (Beckmann, GGX), anisotropic, with sampling of
-//! visible normals. Placeholder API: implemented in the microfacet change.
+//! the distribution of visible normals, following Mitsuba 3's
+//! `MicrofacetDistribution` (always `sample_visible = true`).
+//!
+//! Conventions (as Mitsuba): D(m) is normalised over projected area,
+//! ∫ D(m) cos θ_m dω_m = 1; the Smith masking term G1(v, m) is zero when
+//! v sees the back of the microfacet (dot(v, m) · cos θ_v <= 0); the visible
+//! normal density is D_v(m) = G1(v, m) |dot(v, m)| D(m) / cos θ_v.
+//!
+//! Deliberate difference from Mitsuba: its Beckmann G1 is a rational fit
+//! of Λ (relative error up to ~0.35 %, see `beckmann_g1_fit` and the test
+//! `beckmann_fit_vs_exact`), while its sampler draws from the *exact* visible
+//! normal distribution. We use the exact Λ(a) = (erf(a) − 1)/2 +
+//! exp(−a²)/(2a√π) so that the density and the sampler agree.
+
+use crate::math::{safe_sqrt, PI};
+use glam::{Vec2, Vec3};
 
 /// Which normal distribution function.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -15,4 +30,471 @@ pub struct Microfacet {
     pub kind: MicrofacetType,
     pub alpha_u: f32,
     pub alpha_v: f32,
+}
+
+const INV_SQRT_PI: f64 = 0.564_189_583_547_756_3;
+
+/// Complementary error function in f64, relative error < 1.2e-7 everywhere
+/// (the Chebyshev-fitted form of Numerical Recipes, `erfcc`).
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let poly = -z * z - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    let r = t * poly.exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// Error function (absolute error < 1.2e-7).
+#[inline]
+pub fn erf(x: f64) -> f64 {
+    1.0 - erfc(x)
+}
+
+/// Inverse error function on (−1, 1): Giles' single-precision approximation
+/// refined by two Newton steps against [`erf`] (f32-level accuracy).
+pub fn erfinv(y: f64) -> f64 {
+    if y <= -1.0 {
+        return f64::NEG_INFINITY;
+    }
+    if y >= 1.0 {
+        return f64::INFINITY;
+    }
+    let w = -((1.0 - y) * (1.0 + y)).ln();
+    let mut x = if w < 5.0 {
+        let w = w - 2.5;
+        let mut p = 2.810_226_36e-08;
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
+            p = c + p * w;
+        }
+        p * y
+    } else {
+        let w = w.sqrt() - 3.0;
+        let mut p = -0.000_200_214_257;
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
+            p = c + p * w;
+        }
+        p * y
+    };
+    for _ in 0..2 {
+        let d = 2.0 * INV_SQRT_PI * (-x * x).exp();
+        if d > 0.0 {
+            x -= (erf(x) - y) / d;
+        }
+    }
+    x
+}
+
+/// Smith's Λ for the Beckmann distribution, exact, at a = 1 / (α tan θ).
+pub fn beckmann_lambda(a: f64) -> f64 {
+    if a <= 0.0 {
+        return f64::INFINITY;
+    }
+    // (erf(a) − 1)/2 + exp(−a²)/(2a√π), written with erfc to avoid cancellation.
+    0.5 * ((-a * a).exp() * INV_SQRT_PI / a - erfc(a))
+}
+
+/// Mitsuba's rational fit of the Beckmann G1 (kept for comparison only).
+pub fn beckmann_g1_fit(a: f32) -> f32 {
+    if a >= 1.6 {
+        1.0
+    } else {
+        (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    }
+}
+
+impl Microfacet {
+    pub fn isotropic(kind: MicrofacetType, alpha: f32) -> Microfacet {
+        Microfacet { kind, alpha_u: alpha, alpha_v: alpha }
+    }
+
+    /// Roughness values clamped to Mitsuba's minimum of 1e-4.
+    #[inline]
+    fn alphas(&self) -> (f32, f32) {
+        (self.alpha_u.max(1e-4), self.alpha_v.max(1e-4))
+    }
+
+    /// D(m), normalised over projected area.
+    pub fn eval(&self, m: Vec3) -> f32 {
+        let (au, av) = self.alphas();
+        let cos2 = m.z * m.z;
+        let r = match self.kind {
+            MicrofacetType::Beckmann => {
+                (-((m.x / au).powi(2) + (m.y / av).powi(2)) / cos2).exp() / (PI * au * av * cos2 * cos2)
+            }
+            MicrofacetType::Ggx => 1.0 / (PI * au * av * ((m.x / au).powi(2) + (m.y / av).powi(2) + cos2).powi(2)),
+        };
+        if r * m.z > 1e-20 {
+            r
+        } else {
+            0.0
+        }
+    }
+
+    /// Smith's masking function G1(v, m).
+    pub fn smith_g1(&self, v: Vec3, m: Vec3) -> f32 {
+        if v.dot(m) * v.z <= 0.0 {
+            return 0.0;
+        }
+        let (au, av) = self.alphas();
+        let xy_alpha_2 = (au * v.x).powi(2) + (av * v.y).powi(2);
+        if xy_alpha_2 == 0.0 {
+            return 1.0;
+        }
+        let tan_theta_alpha_2 = xy_alpha_2 / (v.z * v.z);
+        match self.kind {
+            MicrofacetType::Beckmann => {
+                let a = 1.0 / (tan_theta_alpha_2 as f64).sqrt();
+                (1.0 / (1.0 + beckmann_lambda(a))) as f32
+            }
+            MicrofacetType::Ggx => 2.0 / (1.0 + (1.0 + tan_theta_alpha_2).sqrt()),
+        }
+    }
+
+    /// Separable shadowing-masking G1(wi, m) · G1(wo, m).
+    #[inline]
+    pub fn g(&self, wi: Vec3, wo: Vec3, m: Vec3) -> f32 {
+        self.smith_g1(wi, m) * self.smith_g1(wo, m)
+    }
+
+    /// Density of [`Microfacet::sample`]: the visible normal distribution
+    /// D_wi(m) = G1(wi, m) |dot(wi, m)| D(m) / cos θ_wi (wi.z > 0).
+    pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
+        let d = self.eval(m);
+        if d == 0.0 {
+            return 0.0;
+        }
+        d * self.smith_g1(wi, m) * wi.dot(m).abs() / wi.z
+    }
+
+    /// Samples a visible normal for `wi` (upper hemisphere) and returns it
+    /// with its density (Heitz & d'Eon 2014: stretch, sample the slopes of
+    /// the α = 1 configuration, rotate and unstretch).
+    pub fn sample(&self, wi: Vec3, u: Vec2) -> (Vec3, f32) {
+        let st = self.stretch(wi);
+        let m = self.normal_from_slope(&st, self.sample_visible_11(st.cos_theta, u));
+        (m, self.pdf(wi, m))
+    }
+
+    /// Step 1 of visible-normal sampling: `wi` in the α = 1 configuration.
+    pub(crate) fn stretch(&self, wi: Vec3) -> Stretched {
+        let (au, av) = self.alphas();
+        let wi_p = Vec3::new(au * wi.x, av * wi.y, wi.z).normalize();
+        let sin_theta = safe_sqrt(1.0 - wi_p.z * wi_p.z);
+        let (sin_phi, cos_phi) = if sin_theta == 0.0 {
+            (0.0, 1.0)
+        } else {
+            ((wi_p.y / sin_theta).clamp(-1.0, 1.0), (wi_p.x / sin_theta).clamp(-1.0, 1.0))
+        };
+        Stretched { au, av, sin_phi, cos_phi, cos_theta: wi_p.z }
+    }
+
+    /// Step 3: rotate and unstretch a sampled α = 1 slope into a normal.
+    #[inline]
+    pub(crate) fn normal_from_slope(&self, st: &Stretched, slope: Vec2) -> Vec3 {
+        let sx = (st.cos_phi * slope.x - st.sin_phi * slope.y) * st.au;
+        let sy = (st.sin_phi * slope.x + st.cos_phi * slope.y) * st.av;
+        Vec3::new(-sx, -sy, 1.0).normalize()
+    }
+
+    /// Samples the slopes of visible normals for α = 1 and incidence cos θ_i
+    /// (in the plane φ = 0).
+    fn sample_visible_11(&self, cos_theta_i: f32, u: Vec2) -> Vec2 {
+        match self.kind {
+            MicrofacetType::Beckmann => Vec2::new(beckmann_slope_x(cos_theta_i, u.x), beckmann_slope_y(u.y)),
+            MicrofacetType::Ggx => {
+                // Heitz 2018: sample the projected hemisphere of the
+                // stretched configuration.
+                let p = crate::sampling::warp::sample_concentric_disk(u);
+                let s = 0.5 * (1.0 + cos_theta_i);
+                let h = safe_sqrt(1.0 - p.x * p.x);
+                let py = h + (p.y - h) * s;
+                let (x, y) = (p.x, py);
+                let z = safe_sqrt(1.0 - x * x - y * y);
+                let sin_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i);
+                let norm = 1.0 / (sin_theta_i * y + cos_theta_i * z);
+                Vec2::new((cos_theta_i * y - sin_theta_i * z) * norm, x * norm)
+            }
+        }
+    }
+}
+
+/// The stretched incident direction of visible-normal sampling.
+pub(crate) struct Stretched {
+    au: f32,
+    av: f32,
+    sin_phi: f32,
+    cos_phi: f32,
+    pub cos_theta: f32,
+}
+
+/// Beckmann visible slopes for α = 1, x component (in the incidence plane):
+/// numerical inversion of its CDF in the erf domain (Jakob's improved
+/// routine, as Mitsuba). The x and y slopes are independent.
+pub(crate) fn beckmann_slope_x(cos_theta_i: f32, ux: f32) -> f32 {
+    let ci = cos_theta_i as f64;
+    let tan_i = (1.0 - ci * ci).max(0.0).sqrt() / ci;
+    let cot_i = 1.0 / tan_i;
+    let maxval = erf(cot_i);
+    let ux = (ux as f64).clamp(1e-6, 1.0 - 1e-6);
+    let mut x = maxval - (maxval + 1.0) * erf((-ux.ln()).sqrt());
+    let tail = if tan_i == 0.0 { 0.0 } else { INV_SQRT_PI * tan_i * (-cot_i * cot_i).exp() };
+    let target = ux * (1.0 + maxval + tail);
+    for _ in 0..3 {
+        let slope = erfinv(x);
+        let value = 1.0 + x + INV_SQRT_PI * tan_i * (-slope * slope).exp() - target;
+        let derivative = 1.0 - slope * tan_i;
+        x -= value / derivative;
+    }
+    erfinv(x) as f32
+}
+
+/// Beckmann visible slopes for α = 1, y component (a standard normal / √2).
+pub(crate) fn beckmann_slope_y(uy: f32) -> f32 {
+    erfinv(2.0 * (uy as f64).clamp(1e-6, 1.0 - 1e-6) - 1.0) as f32
+}
+
+/// Mirror reflection of `v` about the microfacet normal `m`.
+#[inline]
+pub fn reflect_m(v: Vec3, m: Vec3) -> Vec3 {
+    2.0 * v.dot(m) * m - v
+}
+
+/// Refraction of `v` through the microfacet normal `m` given the signed
+/// transmitted cosine and η_t/i ratio from `fresnel_dielectric(dot(v, m), η)`.
+#[inline]
+pub fn refract_m(v: Vec3, m: Vec3, cos_t: f32, eta_ti: f32) -> Vec3 {
+    m * (v.dot(m) * eta_ti + cos_t) - v * eta_ti
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::chi2::{alpha, chi2_test};
+
+    fn kinds() -> [MicrofacetType; 2] {
+        [MicrofacetType::Beckmann, MicrofacetType::Ggx]
+    }
+
+    /// ∫ f dω over the upper hemisphere, uniform in (θ, φ) with many θ rows
+    /// so that narrow lobes are resolved.
+    fn integrate_hemisphere(f: impl Fn(Vec3) -> f64) -> f64 {
+        let (nt, np) = (3000, 256);
+        let (dt, dp) = (0.5 * std::f64::consts::PI / nt as f64, 2.0 * std::f64::consts::PI / np as f64);
+        let mut acc = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) * dt;
+            let (st, ct) = t.sin_cos();
+            for j in 0..np {
+                let p = (j as f64 + 0.5) * dp;
+                acc += f(Vec3::new((st * p.cos()) as f32, (st * p.sin()) as f32, ct as f32)) * st;
+            }
+        }
+        acc * dt * dp
+    }
+
+    #[test]
+    fn erf_and_erfinv_accuracy() {
+        // Reference values of erf.
+        for (x, e) in [
+            (0.1, 0.112_462_916_018_284_9),
+            (0.5, 0.520_499_877_813_046_5),
+            (1.0, 0.842_700_792_949_714_9),
+            (2.0, 0.995_322_265_018_952_7),
+        ] {
+            assert!((erf(x) - e).abs() < 2e-7, "erf({x}) = {} vs {e}", erf(x));
+            assert!((erf(-x) + e).abs() < 2e-7);
+        }
+        for i in 1..2000 {
+            let y = -1.0 + i as f64 / 1000.0;
+            let x = erfinv(y);
+            assert!((erf(x) - y).abs() < 3e-7, "erfinv({y}) = {x}");
+        }
+    }
+
+    /// Mitsuba's rational Beckmann G1 fit against the exact Smith term; the
+    /// maximum relative difference is printed (0.0033 measured) and bounded.
+    #[test]
+    fn beckmann_fit_vs_exact() {
+        let mut worst: (f64, f32) = (0.0, 0.0);
+        for i in 1..=40_000 {
+            let a = i as f32 * 1e-4;
+            let exact = 1.0 / (1.0 + beckmann_lambda(a as f64));
+            let rel = ((beckmann_g1_fit(a) as f64 - exact) / exact).abs();
+            if rel > worst.0 {
+                worst = (rel, a);
+            }
+        }
+        println!("max relative difference of Mitsuba's Beckmann G1 fit: {} at a = {}", worst.0, worst.1);
+        assert!(worst.0 < 0.005, "{worst:?}");
+    }
+
+    #[test]
+    fn d_is_normalised_over_projected_area() {
+        for kind in kinds() {
+            for (au, av) in [(0.05, 0.05), (0.3, 0.3), (0.8, 0.8), (0.1, 0.5)] {
+                let d = Microfacet { kind, alpha_u: au, alpha_v: av };
+                let total = integrate_hemisphere(|m| d.eval(m) as f64 * m.z as f64);
+                // GGX's long tail: the last θ rows carry O(α²) density; the
+                // grid's error stays far below 1e-3.
+                assert!((total - 1.0).abs() < 2e-3, "{kind:?} {au}/{av}: ∫ D cos = {total}");
+            }
+        }
+    }
+
+    #[test]
+    fn visible_normal_pdf_integrates_to_one() {
+        for kind in kinds() {
+            for (au, av) in [(0.05, 0.05), (0.3, 0.3), (0.8, 0.8), (0.1, 0.5)] {
+                let d = Microfacet { kind, alpha_u: au, alpha_v: av };
+                for wi in [Vec3::Z, Vec3::new(0.6, 0.3, 0.5).normalize(), Vec3::new(0.7, -0.7, 0.05).normalize()] {
+                    let total = integrate_hemisphere(|m| d.pdf(wi, m) as f64);
+                    assert!((total - 1.0).abs() < 3e-3, "{kind:?} {au}/{av} wi={wi}: ∫ D_wi = {total}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn visible_normal_sampling_matches_pdf() {
+        let cases: Vec<(MicrofacetType, f32, f32, Vec3)> = kinds()
+            .into_iter()
+            .flat_map(|k| {
+                [
+                    (k, 0.3, 0.3, Vec3::Z),
+                    (k, 0.8, 0.8, Vec3::new(0.6, 0.3, 0.5).normalize()),
+                    (k, 0.5, 0.5, Vec3::new(0.998, 0.0, 0.05).normalize()),
+                    (k, 0.1, 0.5, Vec3::new(0.5, 0.5, 0.6).normalize()),
+                ]
+            })
+            .collect();
+        let a = alpha(cases.len() + 1);
+        for (i, &(kind, au, av, wi)) in cases.iter().enumerate() {
+            let d = Microfacet { kind, alpha_u: au, alpha_v: av };
+            let p = chi2_test(
+                200_000,
+                100 + i as u64,
+                |_, u| {
+                    let (m, pdf) = d.sample(wi, u);
+                    assert!((pdf - d.pdf(wi, m)).abs() <= 1e-4 * pdf.max(1.0));
+                    Some(m)
+                },
+                |m| d.pdf(wi, m) as f64,
+            );
+            println!("VNDF {kind:?} {au}/{av} wi={wi}: p = {p:.4}");
+            assert!(p > a, "{kind:?} {au}/{av} wi={wi}: p = {p}");
+        }
+        // Power: the plain D cos θ density is not the visible-normal density.
+        let d = Microfacet::isotropic(MicrofacetType::Ggx, 0.5);
+        let wi = Vec3::new(0.9, 0.0, 0.3).normalize();
+        let p = chi2_test(200_000, 99, |_, u| Some(d.sample(wi, u).0), |m| (d.eval(m) * m.z) as f64);
+        println!("VNDF wrong pdf: p = {p:.3e}");
+        assert!(p < a, "wrong pdf accepted: p = {p}");
+    }
+}
+
+/// Test helpers shared by the microfacet BSDFs' tests.
+#[cfg(test)]
+pub(crate) mod checks {
+    use crate::bsdf::BsdfSample;
+    use crate::math::Spectrum;
+    use crate::testing::TestRng;
+    use glam::{Vec2, Vec3};
+
+    /// A direction with the given cosine, at azimuth φ.
+    pub fn dir(cos: f32, phi: f32) -> Vec3 {
+        let s = (1.0 - cos * cos).max(0.0).sqrt();
+        Vec3::new(s * phi.cos(), s * phi.sin(), cos)
+    }
+
+    /// ∫ f dω over the whole sphere, uniform in (θ, φ) with many θ rows so
+    /// that narrow lobes are resolved.
+    pub fn integrate_sphere_fine(nt: usize, np: usize, f: impl Fn(Vec3) -> f64) -> f64 {
+        let (dt, dp) = (std::f64::consts::PI / nt as f64, 2.0 * std::f64::consts::PI / np as f64);
+        let mut acc = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) * dt;
+            let (st, ct) = t.sin_cos();
+            let mut row = 0.0;
+            for j in 0..np {
+                let p = (j as f64 + 0.5) * dp;
+                row += f(Vec3::new((st * p.cos()) as f32, (st * p.sin()) as f32, ct as f32));
+            }
+            acc += row * st;
+        }
+        acc * dt * dp
+    }
+
+    /// Checks at many random (wo, u) that a sample's weight equals
+    /// eval · |cos| / pdf and its pdf equals pdf(); returns the count checked.
+    pub fn check_weights(
+        seed: u64,
+        wos: &[Vec3],
+        sample: impl Fn(Vec3, f32, Vec2) -> Option<BsdfSample>,
+        eval: impl Fn(Vec3, Vec3) -> Spectrum,
+        pdf: impl Fn(Vec3, Vec3) -> f32,
+    ) -> usize {
+        let mut rng = TestRng::new(seed);
+        let mut n = 0;
+        for &wo in wos {
+            for _ in 0..2000 {
+                let Some(s) = sample(wo, rng.next_f32(), rng.next_2d()) else { continue };
+                assert!(!s.delta && s.pdf > 0.0 && s.weight.is_finite(), "{s:?}");
+                let p = pdf(wo, s.wi);
+                assert!((s.pdf - p).abs() <= 2e-3 * p.max(1e-3), "wo={wo} wi={}: pdf {} vs {p}", s.wi, s.pdf);
+                let expect = eval(wo, s.wi) * s.wi.z.abs() / p;
+                let tol = 2e-3 * expect.max_element().max(1e-2);
+                assert!(
+                    (s.weight - expect).abs().max_element() <= tol,
+                    "wo={wo} wi={}: {} vs {expect}",
+                    s.wi,
+                    s.weight
+                );
+                n += 1;
+            }
+        }
+        n
+    }
+
+    /// Mean sample weight (first channel) and its standard error.
+    pub fn albedo(n: usize, seed: u64, wo: Vec3, sample: impl Fn(Vec3, f32, Vec2) -> Option<BsdfSample>) -> (f64, f64) {
+        let mut rng = TestRng::new(seed);
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            if let Some(s) = sample(wo, rng.next_f32(), rng.next_2d()) {
+                let w = s.weight.x as f64;
+                s1 += w;
+                s2 += w * w;
+            }
+        }
+        let mean = s1 / n as f64;
+        (mean, ((s2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
+    }
 }
