@@ -152,6 +152,13 @@ pub fn srgb_to_linear(v: f32) -> f32 {
 /// encoded, decoded to linear as Mitsuba does). Alpha is dropped; grey
 /// images are expanded to RGB.
 pub fn read_image(path: &Path) -> Result<RgbImage, String> {
+    read_image_with(path, false)
+}
+
+/// [`read_image`], optionally without the sRGB decoding of 8/16-bit
+/// formats (Mitsuba's `raw`: the stored values divided by 255 or 65535).
+/// Linear formats (EXR, HDR) are returned as stored either way.
+pub fn read_image_with(path: &Path, raw: bool) -> Result<RgbImage, String> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let (format, srgb) = match ext.as_str() {
         "exr" => return read_exr(path),
@@ -176,6 +183,7 @@ pub fn read_image(path: &Path) -> Result<RgbImage, String> {
     let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     reader.no_limits();
     let img = reader.decode().map_err(|e| fail(&e))?.to_rgb32f();
+    let srgb = srgb && !raw;
     let decode = |c: f32| if srgb { srgb_to_linear(c) } else { c };
     Ok(RgbImage { width: img.width(), height: img.height(), pixels: img.pixels().map(|p| p.0.map(decode)).collect() })
 }

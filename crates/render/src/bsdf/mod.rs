@@ -73,11 +73,41 @@ pub enum BsdfKind<'a> {
 pub struct Bsdf<'a> {
     pub kind: BsdfKind<'a>,
     pub opacity: f32,
+    /// Set by `normalmap` / `bumpmap`: the model is evaluated in the
+    /// perturbed shading frame, and Mitsuba's wrappers add two terms.
+    pub perturbation: Option<Perturbation>,
+}
+
+/// What Mitsuba 3.9.1's `normalmap` and `bumpmap` add to the nested BSDF:
+/// a direction on different sides of the unperturbed and the perturbed
+/// shading frames gets nothing, and values and sample weights are scaled by
+/// the shadow-terminator term of Estevez et al. 2019
+/// (`use_shadowing_function`, on by default).
+#[derive(Debug, Clone, Copy)]
+pub struct Perturbation {
+    /// The unperturbed shading normal in the perturbed frame's local coordinates.
+    pub n_orig: Vec3,
+    /// The terminator's α² = min(tan²θ(perturbed normal) / 8, 1); 0 turns it off.
+    pub alpha2: f32,
+}
+
+impl Perturbation {
+    /// The factor for a direction `wi` (local to the perturbed frame): zero
+    /// when it changes side between the two frames.
+    #[inline]
+    pub fn factor(&self, wi: Vec3) -> f32 {
+        let c = self.n_orig.dot(wi);
+        if !(c * wi.z > 0.0) {
+            return 0.0;
+        }
+        let tan2 = (1.0 - c * c).max(0.0) / (c * c);
+        2.0 / (1.0 + (1.0 + self.alpha2 * tan2).sqrt())
+    }
 }
 
 impl<'a> From<BsdfKind<'a>> for Bsdf<'a> {
     fn from(kind: BsdfKind<'a>) -> Bsdf<'a> {
-        Bsdf { kind, opacity: 1.0 }
+        Bsdf { kind, opacity: 1.0, perturbation: None }
     }
 }
 
@@ -110,7 +140,10 @@ impl Bsdf<'_> {
                 Spectrum::ZERO
             }
         };
-        f * self.opacity
+        match self.perturbation {
+            Some(p) => f * (self.opacity * p.factor(wi)),
+            None => f * self.opacity,
+        }
     }
 
     #[inline]
@@ -123,7 +156,10 @@ impl Bsdf<'_> {
             BsdfKind::RoughPlastic(b) => b.pdf(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => 0.0,
         };
-        p * self.opacity
+        match self.perturbation {
+            Some(q) if q.factor(wi) == 0.0 => 0.0,
+            _ => p * self.opacity,
+        }
     }
 
     /// Samples `wi` given `wo`; `u` picks a lobe, `u2` the direction.
@@ -156,6 +192,13 @@ impl Bsdf<'_> {
             BsdfKind::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 }),
         }?;
         s.pdf *= self.opacity;
+        if let Some(p) = self.perturbation {
+            let g = p.factor(s.wi);
+            if g == 0.0 {
+                return None;
+            }
+            s.weight *= g;
+        }
         Some(s)
     }
 }

@@ -14,11 +14,17 @@ pub struct SurfaceInteraction {
     pub t: f32,
     /// Geometric normal on the shape's front side (after `flip_normals`).
     pub n: Vec3,
-    /// Shading frame; `sh_frame.n` is the interpolated shading normal.
+    /// Shading frame; `sh_frame.n` is the interpolated shading normal and
+    /// `sh_frame.s` the direction of `dpdu` projected onto the tangent plane
+    /// (Mitsuba's `initialize_sh_frame`).
     pub sh_frame: Frame,
-    /// Mesh texture coordinates (barycentrics without a uv attribute); the
-    /// disk's local (x, y); zero on spheres.
+    /// Surface coordinates as Mitsuba defines them per shape: mesh texture
+    /// coordinates (barycentrics (b1, b2) without), the sphere's
+    /// (φ/2π, θ/π), the disk's (r, φ/2π), per-face uv on rectangle and cube.
     pub uv: Vec2,
+    /// World-space derivatives of the position with respect to u and v.
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
     /// Index of the hit shape in the scene.
     pub shape: u32,
     /// Direction back towards the ray origin, in world space (unit length).
@@ -26,6 +32,21 @@ pub struct SurfaceInteraction {
 }
 
 impl SurfaceInteraction {
+    /// The shading frame around `n_s` whose tangent `s` is `dpdu` made
+    /// orthogonal to `n_s` (Gram–Schmidt), as Mitsuba 3.9.1 builds it; an
+    /// arbitrary frame where `dpdu` is zero or parallel to the normal.
+    #[inline]
+    pub fn frame_from_dpdu(n_s: Vec3, dpdu: Vec3) -> Frame {
+        let s = dpdu - n_s * n_s.dot(dpdu);
+        let len2 = s.length_squared();
+        if len2 > 0.0 && len2.is_finite() {
+            let s = s / len2.sqrt();
+            Frame { s, t: n_s.cross(s), n: n_s }
+        } else {
+            Frame::from_normal(n_s)
+        }
+    }
+
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         self.sh_frame.to_local(v)

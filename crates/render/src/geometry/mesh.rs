@@ -74,29 +74,45 @@ impl TriangleMesh {
         }
     }
 
-    /// Mitsuba's `cube`: [-1, 1]³ with outward-facing flat faces.
+    /// Mitsuba's `cube`: [-1, 1]³ with outward-facing flat faces, with
+    /// Mitsuba 3.9.1's vertices, texture coordinates and triangles (each
+    /// face maps onto [0, 1]² in uv).
     pub fn cube() -> TriangleMesh {
-        let mut m = TriangleMesh::default();
-        for axis in 0..3 {
-            for sign in [-1.0f32, 1.0] {
-                let mut n = Vec3::ZERO;
-                n[axis] = sign;
-                // Two tangents spanning the face, ordered so that (u × v) = n.
-                let mut u = Vec3::ZERO;
-                u[(axis + 1) % 3] = 1.0;
-                let mut v = Vec3::ZERO;
-                v[(axis + 2) % 3] = sign;
-                let base = m.positions.len() as u32;
-                for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                    m.positions.push(n + u * a + v * b);
-                    m.normals.push(n);
-                    m.uvs.push(Vec2::new((a + 1.0) / 2.0, (b + 1.0) / 2.0));
-                }
-                m.indices.push([base, base + 1, base + 2]);
-                m.indices.push([base + 2, base + 3, base]);
-            }
+        const P: [[f32; 3]; 24] = [
+            [1., -1., -1.],
+            [1., -1., 1.],
+            [-1., -1., 1.],
+            [-1., -1., -1.],
+            [1., 1., -1.],
+            [-1., 1., -1.],
+            [-1., 1., 1.],
+            [1., 1., 1.],
+            [1., -1., -1.],
+            [1., 1., -1.],
+            [1., 1., 1.],
+            [1., -1., 1.],
+            [1., -1., 1.],
+            [1., 1., 1.],
+            [-1., 1., 1.],
+            [-1., -1., 1.],
+            [-1., -1., 1.],
+            [-1., 1., 1.],
+            [-1., 1., -1.],
+            [-1., -1., -1.],
+            [1., 1., -1.],
+            [1., -1., -1.],
+            [-1., -1., -1.],
+            [-1., 1., -1.],
+        ];
+        const N: [[f32; 3]; 6] =
+            [[0., -1., 0.], [0., 1., 0.], [1., 0., 0.], [0., 0., 1.], [-1., 0., 0.], [0., 0., -1.]];
+        const UV: [[f32; 2]; 4] = [[0., 1.], [1., 1.], [1., 0.], [0., 0.]];
+        TriangleMesh {
+            positions: P.iter().map(|&p| Vec3::from_array(p)).collect(),
+            normals: (0..24).map(|i| Vec3::from_array(N[i / 4])).collect(),
+            uvs: (0..24).map(|i| Vec2::from_array(UV[i % 4])).collect(),
+            indices: (0..6u32).flat_map(|f| [[4 * f, 4 * f + 1, 4 * f + 2], [4 * f + 3, 4 * f, 4 * f + 2]]).collect(),
         }
-        m
     }
 }
 

@@ -7,12 +7,13 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Bsdf, BsdfKind, Conductor, Dielectric, Diffuse, Microfacet, MicrofacetType, Plastic, RoughConductor,
+    Bsdf, BsdfKind, Conductor, Dielectric, Diffuse, Microfacet, MicrofacetType, Perturbation, Plastic, RoughConductor,
     RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
 };
 use crate::geometry::SurfaceInteraction;
 use crate::math::Frame;
 use crate::texture::Texture;
+use glam::Vec3;
 
 /// Parameters shared by `roughconductor` and `roughdielectric`: a
 /// distribution with (possibly textured) roughness along s and t.
@@ -100,6 +101,20 @@ pub enum Material {
     },
 }
 
+/// Replaces `si.sh_frame` by the perturbed frame `rel` (given relative to
+/// it) and returns the terms Mitsuba's normal/bump-map wrappers add; `None`
+/// (frame unchanged) for a degenerate frame.
+fn perturb(si: &mut SurfaceInteraction, rel: Frame) -> Option<Perturbation> {
+    if !(rel.n.is_finite() && rel.s.is_finite() && rel.t.is_finite()) {
+        return None;
+    }
+    let f = si.sh_frame;
+    si.sh_frame = Frame { s: f.to_world(rel.s), t: f.to_world(rel.t), n: f.to_world(rel.n) };
+    let c2 = rel.n.z * rel.n.z;
+    let tan2 = (1.0 - c2).max(0.0) / c2;
+    Some(Perturbation { n_orig: Vec3::new(rel.s.z, rel.t.z, rel.n.z), alpha2: (0.125 * tan2).min(1.0) })
+}
+
 impl Material {
     /// The BSDF at a hit. Wrappers may replace `si.sh_frame` (a flipped
     /// frame on the back of `twosided`, a perturbed one for normal and
@@ -107,6 +122,7 @@ impl Material {
     pub fn bsdf<'a>(&'a self, si: &mut SurfaceInteraction) -> Bsdf<'a> {
         let mut m = self;
         let mut opacity = 1.0f32;
+        let mut perturbation = None;
         loop {
             let kind = match m {
                 Material::TwoSided(front, back) => {
@@ -127,12 +143,15 @@ impl Material {
                     continue;
                 }
                 Material::NormalMap { normals, inner } => {
-                    si.sh_frame = normalmap::perturbed_frame(si, normals.eval(si));
+                    let rel = normalmap::relative_frame(si, normals.eval(si));
+                    perturbation = perturb(si, rel).or(perturbation);
                     m = inner;
                     continue;
                 }
                 Material::BumpMap { height, scale, inner } => {
-                    si.sh_frame = bumpmap::perturbed_frame(si, height, *scale);
+                    if let Some(rel) = bumpmap::relative_frame(si, height, *scale) {
+                        perturbation = perturb(si, rel).or(perturbation);
+                    }
                     m = inner;
                     continue;
                 }
@@ -206,7 +225,7 @@ impl Material {
                 }),
                 Material::Null => BsdfKind::Null,
             };
-            return Bsdf { kind, opacity };
+            return Bsdf { kind, opacity, perturbation };
         }
     }
 

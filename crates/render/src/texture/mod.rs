@@ -1,38 +1,84 @@
 //! Textures: spatially varying parameters, evaluated at a surface point.
 //!
 //! Every BSDF parameter Mitsuba lets a texture drive is a [`Texture`]; a
-//! plain `<rgb>` or `<float>` becomes [`Texture::Constant`].
+//! plain `<rgb>` or `<float>` becomes [`Texture::Constant`], Mitsuba's
+//! `bitmap` a [`Texture::Bitmap`] and `checkerboard` a
+//! [`Texture::Checkerboard`].
+
+pub mod bitmap;
+pub mod checkerboard;
+
+pub use bitmap::{Bitmap, FilterType, WrapMode};
+pub use checkerboard::Checkerboard;
 
 use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
+use glam::Vec2;
+use std::sync::Arc;
 
 #[derive(Debug, Clone)]
 pub enum Texture {
     Constant(Spectrum),
+    Bitmap(Arc<Bitmap>),
+    Checkerboard(Arc<Checkerboard>),
+}
+
+/// Rec. 709 luminance of linear RGB, with Mitsuba's coefficients.
+#[inline]
+pub fn luminance(c: Spectrum) -> f32 {
+    c.x * 0.212671 + c.y * 0.715160 + c.z * 0.072169
 }
 
 impl Texture {
     /// The colour at a surface point (linear RGB).
     #[inline]
-    pub fn eval(&self, _si: &SurfaceInteraction) -> Spectrum {
+    pub fn eval(&self, si: &SurfaceInteraction) -> Spectrum {
         match self {
             Texture::Constant(c) => *c,
+            Texture::Bitmap(b) => b.eval(si.uv),
+            Texture::Checkerboard(c) => c.eval(si),
         }
     }
 
     /// A scalar at a surface point (Mitsuba's `eval_1`): the mean of the
-    /// channels for colour data.
+    /// channels for a constant colour, the luminance of a colour bitmap, and
+    /// for the checkerboard Mitsuba 3.9.1's `eval_1`, whose squares are
+    /// swapped with respect to `eval` (see [`Checkerboard::eval_1`]).
     #[inline]
     pub fn eval_1(&self, si: &SurfaceInteraction) -> f32 {
-        let c = self.eval(si);
-        (c.x + c.y + c.z) / 3.0
+        match self {
+            Texture::Constant(c) => (c.x + c.y + c.z) / 3.0,
+            Texture::Bitmap(b) => b.eval_1(si.uv),
+            Texture::Checkerboard(c) => c.eval_1(si),
+        }
     }
 
-    /// Mean value over the texture's domain, averaged over channels (Mitsuba's
-    /// `Texture::mean`, used to set sampling weights).
+    /// The scalar value and its gradient with respect to (u, v) (Mitsuba's
+    /// `eval_1` and `eval_1_grad`, as `bumpmap` uses them). Constants have a
+    /// zero gradient; Mitsuba implements the gradient only for bitmaps, so a
+    /// checkerboard reports zero (its derivative vanishes almost everywhere).
+    #[inline]
+    pub fn eval_1_grad(&self, si: &SurfaceInteraction) -> (f32, Vec2) {
+        match self {
+            Texture::Bitmap(b) => b.eval_1_grad(si.uv),
+            _ => (self.eval_1(si), Vec2::ZERO),
+        }
+    }
+
+    /// Whether Mitsuba implements `eval_1_grad` for this texture (bump maps
+    /// need it).
+    pub fn has_gradient(&self) -> bool {
+        !matches!(self, Texture::Checkerboard(_))
+    }
+
+    /// Mean value over the texture's domain (Mitsuba's `Texture::mean`, used
+    /// to set sampling weights): the channel mean of a constant colour, the
+    /// mean luminance of a bitmap, the mean of a checkerboard's two colours.
     pub fn mean(&self) -> f32 {
         match self {
             Texture::Constant(c) => (c.x + c.y + c.z) / 3.0,
+            Texture::Bitmap(b) => b.mean(),
+            Texture::Checkerboard(c) => 0.5 * (c.color0.mean() + c.color1.mean()),
         }
     }
 
@@ -40,6 +86,7 @@ impl Texture {
     pub fn constant(&self) -> Option<Spectrum> {
         match self {
             Texture::Constant(c) => Some(*c),
+            _ => None,
         }
     }
 }

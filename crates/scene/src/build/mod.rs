@@ -201,7 +201,8 @@ impl Builder {
                 if (axes[0] - axes[1]).abs() > 1e-6 * axes[0] || (axes[0] - axes[2]).abs() > 1e-6 * axes[0] {
                     return Err(node.error("sphere: to_world must not scale non-uniformly (use a mesh for ellipsoids)"));
                 }
-                Shape::sphere(center.as_vec3(), axes[0] as f32, flip)
+                let rot = glam::DMat3::from_mat4(m) * (1.0 / axes[0]);
+                Shape::sphere_rotated(center.as_vec3(), axes[0] as f32, rot.as_mat3(), flip)
             }
             "disk" => Shape::disk(to_world.as_mat4(), flip),
             _ => return Err(unsupported(node, SHAPES)),

@@ -1,0 +1,177 @@
+//! Textures in scenes: the builder's `bitmap` and `checkerboard`, their
+//! parameters and errors, and the uv conventions they are evaluated with.
+
+use glam::{Vec2, Vec3};
+use penumbra_render::geometry::SurfaceInteraction;
+use penumbra_render::material::Material;
+use penumbra_render::math::Frame;
+use penumbra_render::texture::Texture;
+use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::mitsuba::parse_str;
+use std::path::{Path, PathBuf};
+
+/// A scene file path in a fresh temporary directory (files it names are
+/// resolved relative to it).
+fn temp_scene(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("penumbra-textures-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join("scene.xml")
+}
+
+/// A 4×2 8-bit sRGB PNG; row 0 (top) holds the bytes 0, 64, 128, 255 in red.
+fn write_png(dir: &Path) {
+    let mut px = Vec::new();
+    for y in 0..2u8 {
+        for x in [0u8, 64, 128, 255] {
+            px.extend_from_slice(&[x, 100 * y, 30]);
+        }
+    }
+    image::save_buffer(dir.join("tex.png"), &px, 4, 2, image::ColorType::Rgb8).unwrap();
+}
+
+/// Builds a scene with one rectangle whose diffuse reflectance is `texture`.
+fn job(scene: &Path, texture: &str) -> Result<penumbra_render::render::RenderJob, penumbra_scene::LoadError> {
+    let xml = format!(
+        r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+<shape type="rectangle">
+  <bsdf type="diffuse">
+    {texture}
+  </bsdf>
+</shape>
+</scene>"#
+    );
+    build(&parse_str(&xml, scene, &[])?, &Overrides::default())
+}
+
+fn reflectance(j: &penumbra_render::render::RenderJob) -> Texture {
+    match &j.scene.materials[j.scene.shape_info[0].material as usize] {
+        Material::Diffuse { reflectance } => reflectance.clone(),
+        m => panic!("unexpected material {m:?}"),
+    }
+}
+
+fn si(u: f32, v: f32) -> SurfaceInteraction {
+    SurfaceInteraction {
+        p: Vec3::ZERO,
+        t: 1.0,
+        n: Vec3::Z,
+        sh_frame: Frame::from_normal(Vec3::Z),
+        uv: Vec2::new(u, v),
+        dpdu: Vec3::X,
+        dpdv: Vec3::Y,
+        shape: 0,
+        wo: Vec3::Z,
+    }
+}
+
+fn srgb(b: u8) -> f32 {
+    penumbra_scene::image_io::srgb_to_linear(b as f32 / 255.0)
+}
+
+#[test]
+fn png_bitmap_is_decoded_from_srgb_unless_raw() {
+    let scene = temp_scene("png");
+    write_png(scene.parent().unwrap());
+    let tex = |extra: &str| {
+        reflectance(
+            &job(
+                &scene,
+                &format!(
+                    r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.png"/>
+                       <string name="filter_type" value="nearest"/>{extra}</texture>"#
+                ),
+            )
+            .unwrap(),
+        )
+    };
+    // Texel (1, 0) is at uv (0.375, 0.25): v = 0 is the top row of the file.
+    let t = tex("");
+    let c = t.eval(&si(0.375, 0.25));
+    assert!((c - Vec3::new(srgb(64), srgb(0), srgb(30))).abs().max_element() < 1e-6, "{c}");
+    let c = t.eval(&si(0.875, 0.75));
+    assert!((c - Vec3::new(srgb(255), srgb(100), srgb(30))).abs().max_element() < 1e-6, "{c}");
+    let t = tex(r#"<boolean name="raw" value="true"/>"#);
+    let c = t.eval(&si(0.375, 0.25));
+    assert!((c - Vec3::new(64.0, 0.0, 30.0) / 255.0).abs().max_element() < 1e-6, "{c}");
+    // Bilinear (the default) interpolates the decoded texels; the mean is the mean luminance.
+    let t = reflectance(
+        &job(
+            &scene,
+            r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.png"/></texture>"#,
+        )
+        .unwrap(),
+    );
+    let c = t.eval(&si(0.25, 0.25));
+    assert!((c.x - 0.5 * (srgb(0) + srgb(64))).abs() < 1e-6, "{c}");
+    assert!(t.mean() > 0.0 && t.mean() < 1.0);
+    std::fs::remove_dir_all(scene.parent().unwrap()).ok();
+}
+
+#[test]
+fn checkerboard_with_nested_texture_and_to_uv() {
+    let scene = temp_scene("checker");
+    write_png(scene.parent().unwrap());
+    let j = job(
+        &scene,
+        r#"<texture type="checkerboard" name="reflectance">
+             <rgb name="color0" value="0.9, 0.1, 0.1"/>
+             <texture type="bitmap" name="color1"><string name="filename" value="tex.png"/>
+               <string name="filter_type" value="nearest"/></texture>
+             <transform name="to_uv"><scale x="2" y="2"/></transform>
+           </texture>"#,
+    )
+    .unwrap();
+    let t = reflectance(&j);
+    assert!((t.eval(&si(0.1, 0.1)) - Vec3::new(0.9, 0.1, 0.1)).length() < 1e-6);
+    let c = t.eval(&si(0.3, 0.1));
+    assert!((c - Vec3::new(srgb(64), srgb(0), srgb(30))).abs().max_element() < 1e-6, "{c}");
+    // Defaults: 0.4 and 0.2.
+    let t = reflectance(&job(&scene, r#"<texture type="checkerboard" name="reflectance"/>"#).unwrap());
+    assert!((t.eval(&si(0.1, 0.1)) - Vec3::splat(0.4)).length() < 1e-6);
+    assert!((t.eval(&si(0.6, 0.1)) - Vec3::splat(0.2)).length() < 1e-6);
+    std::fs::remove_dir_all(scene.parent().unwrap()).ok();
+}
+
+#[test]
+fn texture_errors_name_file_and_line() {
+    let scene = temp_scene("errors");
+    write_png(scene.parent().unwrap());
+    let err = |texture: &str| job(&scene, texture).map(|_| ()).unwrap_err().to_string();
+    let file = scene.display().to_string();
+
+    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="missing.png"/></texture>"#);
+    assert!(e.contains("missing.png") && e.contains(&format!("{file}:5")), "{e}");
+
+    let e = err(r#"<texture type="marble" name="reflectance"/>"#);
+    assert!(e.contains("marble") && e.contains("bitmap") && e.contains("checkerboard"), "{e}");
+    assert!(e.contains(&format!("{file}:5")), "{e}");
+
+    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.png"/>
+<string name="wrap_mode" value="wrap"/></texture>"#);
+    assert!(e.contains("wrap_mode") && e.contains("'wrap'") && e.contains(&format!("{file}:6")), "{e}");
+
+    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.png"/>
+<string name="filter_type" value="cubic"/></texture>"#);
+    assert!(e.contains("filter_type") && e.contains(&format!("{file}:6")), "{e}");
+
+    // Parameters Mitsuba only knows on bitmap are flagged on checkerboard.
+    let e = err(r#"<texture type="checkerboard" name="reflectance">
+<boolean name="raw" value="true"/></texture>"#);
+    assert!(e.contains("'raw'") && e.contains(&format!("{file}:6")), "{e}");
+
+    std::fs::write(scene.with_file_name("tex.tga"), b"not an image").unwrap();
+    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.tga"/></texture>"#);
+    assert!(e.contains("tex.tga") && e.contains("unsupported"), "{e}");
+
+    // Non-finite texels are rejected with the file named.
+    let hdr = scene.with_file_name("nan.exr");
+    penumbra_scene::image_io::write_image(
+        &hdr,
+        &penumbra_scene::image_io::RgbImage { width: 2, height: 2, pixels: vec![[0.5, f32::NAN, 0.5]; 4] },
+    )
+    .unwrap();
+    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="nan.exr"/></texture>"#);
+    assert!(e.contains("nan.exr") && e.contains("not finite"), "{e}");
+    std::fs::remove_dir_all(scene.parent().unwrap()).ok();
+}
