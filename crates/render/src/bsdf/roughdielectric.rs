@@ -21,13 +21,13 @@ pub struct RoughDielectric {
 }
 
 /// `v` with the sign of `s` (+ for s = 0), as Dr.Jit's `mulsign`.
+/// Written as a multiplication: with rustc 1.95, `if s < 0.0 { -v } else { v }`
+/// here was miscompiled in release builds (the caller's `wo` came back
+/// negated; caught by `weights_are_eval_cos_over_pdf`).
 #[inline]
 fn mulsign(v: Vec3, s: f32) -> Vec3 {
-    if s < 0.0 {
-        -v
-    } else {
-        v
-    }
+    let k = if s < 0.0 { -1.0 } else { 1.0 };
+    Vec3::new(v.x * k, v.y * k, v.z * k)
 }
 
 impl RoughDielectric {
