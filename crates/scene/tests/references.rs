@@ -75,3 +75,13 @@ fn many_lights_match_mitsuba() {
 fn direct_integrator_matches_mitsuba() {
     compare("direct_integrator", 256);
 }
+
+#[test]
+fn rough_spheres_match_mitsuba() {
+    compare("rough_spheres", 256);
+}
+
+#[test]
+fn textured_matches_mitsuba() {
+    compare("textured", 256);
+}
