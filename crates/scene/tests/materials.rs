@@ -135,6 +135,14 @@ fn errors_name_the_line_and_what_to_do() {
             r#"<bsdf type="plastic"><float name="roughness" value="0.5"/></bsdf>"#,
             &["mat.xml:4", "roughness", "not supported"],
         ),
+        (
+            r#"<bsdf type="normalmap"><boolean name="flip_invalid_normals" value="false"/><texture type="bitmap" name="normalmap"><string name="filename" value="../../tests/scenes/textures/bumps.png"/></texture><bsdf type="diffuse"/></bsdf>"#,
+            &["mat.xml:4", "flip_invalid_normals", "not supported"],
+        ),
+        (
+            r#"<bsdf type="bumpmap"><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>"#,
+            &["mat.xml:4", "no gradient"],
+        ),
         (r#"<bsdf type="hair"/>"#, &["mat.xml:4", "hair", "roughconductor", "mask"]),
         (
             r#"<bsdf type="twosided"><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>"#,

@@ -126,6 +126,20 @@ fn nested(node: &Node, tex: &mut Textures) -> Result<Box<Material>> {
     }
 }
 
+/// `flip_invalid_normals` and `use_shadowing_function` of the normal- and
+/// bump-map wrappers: only Mitsuba's defaults (true) are implemented.
+fn wrapper_defaults(node: &Node) -> Result<()> {
+    for name in ["flip_invalid_normals", "use_shadowing_function"] {
+        if !node.bool(name, true)? {
+            return Err(LoadError::at(
+                node.loc_of(name),
+                format!("{}: '{name}' = false is not supported (only Mitsuba's default, true)", node.describe()),
+            ));
+        }
+    }
+    Ok(())
+}
+
 pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material> {
     let one = Spectrum::ONE;
     let m = match node.plugin.as_str() {
@@ -215,7 +229,7 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
                 .find(|c| c.name.as_deref() == Some("normalmap"))
                 .ok_or_else(|| node.error("normalmap needs a texture named 'normalmap'"))?;
             let normals = tex.build(&child.node)?;
-            node.accept(&["flip_invalid_normals", "use_shadowing_function"]);
+            wrapper_defaults(node)?;
             Material::NormalMap { normals, inner: nested(node, tex)? }
         }
         "bumpmap" => {
@@ -224,7 +238,13 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
                 return Err(node.error("bumpmap needs exactly one nested texture (the height field)"));
             };
             let height = tex.build(&t.node)?;
-            node.accept(&["flip_invalid_normals", "use_shadowing_function"]);
+            if !height.has_gradient() {
+                return Err(LoadError::at(
+                    &t.loc,
+                    "bumpmap: this texture has no gradient (Mitsuba rejects it too); use a bitmap height map",
+                ));
+            }
+            wrapper_defaults(node)?;
             Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? }
         }
         "null" => Material::Null,
