@@ -64,6 +64,9 @@ SPP = {
     "direct_integrator": 16384,
     "rough_spheres": 65536,
     "textured": 16384,
+    "format_features": 16384,
+    "sensors_samplers": 16384,
+    "orthographic": 16384,
 }
 DEFAULT_SPP = 8192
 # Largest single mi.render call (spp); keeps LLVM wavefronts at a few M lanes.
