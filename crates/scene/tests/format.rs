@@ -302,3 +302,27 @@ fn parameters_substitute_in_every_attribute() {
     assert_eq!(get("v3"), Value::Vector(glam::DVec3::new(1.0, 2.0, 3.0)));
     assert_eq!(get("c"), Value::Rgb([2.0, 0.5, 0.25]));
 }
+
+#[test]
+fn top_level_declarations_used_through_ref() {
+    // Mitsuba's docs scenes declare the area emitter and the sampler at the
+    // top level and reference them (integrator_depth_*.xml, sampler_*.xml).
+    let xml = "<scene version=\"3.0.0\">
+        <sampler type=\"independent\" id=\"smp\"><integer name=\"sample_count\" value=\"7\"/></sampler>
+        <sensor type=\"perspective\"><ref id=\"smp\"/><film type=\"hdrfilm\"><integer name=\"width\" value=\"4\"/><integer name=\"height\" value=\"4\"/></film></sensor>
+        <shape type=\"rectangle\"><ref id=\"lamp\"/></shape>
+        <emitter type=\"area\" id=\"lamp\"><rgb name=\"radiance\" value=\"2\"/></emitter>
+    </scene>";
+    let job = build(&parse(xml), &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(job.sampler.spp, 7);
+    assert_eq!(job.scene.lights.len(), 1);
+    // Unreferenced, they are still errors.
+    let xml = "<scene version=\"3.0.0\">
+        <sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>
+        <emitter type=\"area\" id=\"lamp\"><rgb name=\"radiance\" value=\"2\"/></emitter>
+    </scene>";
+    let e = build(&parse(xml), &Overrides::default()).unwrap_err().to_string();
+    assert!(e.contains("nested inside a shape"), "{e}");
+    let xml = "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor><sampler type=\"independent\"/></scene>";
+    assert!(build(&parse(xml), &Overrides::default()).is_err());
+}

@@ -66,6 +66,11 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     for child in &root.children {
         let node = &child.node;
         match node.kind {
+            // A declaration that a `<ref>` uses elsewhere (Mitsuba allows
+            // an area emitter or a sampler at the top level, referenced from
+            // a shape or the sensor): built where it is used.
+            Kind::Emitter | Kind::Sampler | Kind::Film | Kind::Rfilter
+                if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || node.plugin == "area") => {}
             Kind::Shape => b.shape(node)?,
             Kind::Emitter => {
                 let light = b.top_level_emitter(node)?;
@@ -101,7 +106,17 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             }
         }
     }
-    root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf, Kind::Texture])?;
+    root.check_all_used(&[
+        Kind::Shape,
+        Kind::Emitter,
+        Kind::Sensor,
+        Kind::Integrator,
+        Kind::Bsdf,
+        Kind::Texture,
+        Kind::Sampler,
+        Kind::Film,
+        Kind::Rfilter,
+    ])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
     let (integrator, selection) = match (&ov.integrator, &integrator) {
