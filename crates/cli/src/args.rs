@@ -14,6 +14,9 @@ pub struct Cli {
 pub enum Command {
     /// Render a Mitsuba 3 XML scene to an image (.exr, .png, .pfm or .hdr).
     Render(RenderArgs),
+    /// Describe a scene without rendering: plugins by kind, triangles,
+    /// emitters, resolution, samples, integrator and approximated features.
+    Info(InfoArgs),
     /// Time the bundled scenes: samples/s and rays/s (and Mitsuba 3, if installed).
     Bench(BenchArgs),
     /// Compare an image with a reference: per-channel means, MSE and relMSE
@@ -48,6 +51,15 @@ pub struct RenderArgs {
     /// Never show the progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The scene file (Mitsuba 3 XML).
+    pub scene: PathBuf,
+    /// Define a scene parameter, as Mitsuba's -D: fills $name.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub define: Vec<(String, String)>,
 }
 
 #[derive(Debug, Args)]

@@ -1,9 +1,10 @@
-//! The `penumbra` command: `render` a scene, `bench` the bundled scenes, or
-//! `diff` an image against a reference.
+//! The `penumbra` command: `render` a scene, describe it (`info`), `bench`
+//! the bundled scenes, or `diff` an image against a reference.
 
 mod args;
 mod bench;
 mod imgtool;
+mod info;
 mod progress;
 
 use anyhow::{anyhow, Context, Result};
@@ -20,6 +21,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => render(&a),
+        Command::Info(a) => info::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::Diff(a) => imgtool::run(&a),
     };

@@ -5,12 +5,40 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 /// A position in a scene file.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct FileLoc {
     pub file: Arc<PathBuf>,
     pub line: u32,
     pub col: u32,
+    /// The directories a relative file name given at this position is
+    /// looked up in, in order (Mitsuba's file resolver after `<path>`
+    /// elements); `None` means the directory of `file` alone.
+    pub search: Option<Arc<Vec<PathBuf>>>,
 }
+
+impl FileLoc {
+    /// A position without search directories.
+    pub fn new(file: Arc<PathBuf>, line: u32, col: u32) -> Self {
+        FileLoc { file, line, col, search: None }
+    }
+
+    /// The directories searched for a relative file name given here.
+    pub fn search_dirs(&self) -> Vec<PathBuf> {
+        match &self.search {
+            Some(dirs) => dirs.as_ref().clone(),
+            None => vec![self.file.parent().unwrap_or(std::path::Path::new("")).to_path_buf()],
+        }
+    }
+}
+
+/// Two positions are equal when file, line and column are (search
+/// directories are context, not position).
+impl PartialEq for FileLoc {
+    fn eq(&self, other: &Self) -> bool {
+        self.file == other.file && self.line == other.line && self.col == other.col
+    }
+}
+impl Eq for FileLoc {}
 
 impl fmt::Display for FileLoc {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -35,10 +63,7 @@ impl LoadError {
     }
     /// An error about a whole file (line unknown or irrelevant).
     pub fn in_file(file: &std::path::Path, message: impl Into<String>) -> Self {
-        LoadError {
-            loc: Some(FileLoc { file: Arc::new(file.to_path_buf()), line: 0, col: 0 }),
-            message: message.into(),
-        }
+        LoadError { loc: Some(FileLoc::new(Arc::new(file.to_path_buf()), 0, 0)), message: message.into() }
     }
 }
 

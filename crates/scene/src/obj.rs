@@ -52,8 +52,7 @@ pub fn parse_obj(text: &str, path: &Path, flip_tex_coords: bool) -> Result<Trian
     let (mut missing_uv, mut missing_normal) = (false, false);
 
     for (line_no, line) in text.lines().enumerate() {
-        let err =
-            |message: String| LoadError::at(&FileLoc { file: file.clone(), line: line_no as u32 + 1, col: 1 }, message);
+        let err = |message: String| LoadError::at(&FileLoc::new(file.clone(), line_no as u32 + 1, 1), message);
         let mut words = line.split_ascii_whitespace();
         let Some(keyword) = words.next() else {
             continue;

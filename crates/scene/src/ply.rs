@@ -103,7 +103,7 @@ fn parse_header(bytes: &[u8], file: &Arc<std::path::PathBuf>) -> Result<Header> 
     let mut line_no = 0u32;
     loop {
         line_no += 1;
-        let err = |message: String| LoadError::at(&FileLoc { file: file.clone(), line: line_no, col: 1 }, message);
+        let err = |message: String| LoadError::at(&FileLoc::new(file.clone(), line_no, 1), message);
         let Some(len) = bytes[offset..].iter().position(|&b| b == b'\n') else {
             return Err(err("unexpected end of file in the PLY header (no end_header)".into()));
         };

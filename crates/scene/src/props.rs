@@ -5,6 +5,7 @@
 
 use crate::desc::{Child, Kind, Node, Property, Value};
 use crate::error::{LoadError, Result};
+use crate::spectrum::{self, ColorUse};
 use glam::{DMat4, DVec3};
 use std::rc::Rc;
 
@@ -83,24 +84,22 @@ impl Node {
         Ok(self.get_string(name)?.map(|s| s.0).unwrap_or_else(|| default.to_string()))
     }
 
-    /// A colour: `<rgb>`, a constant `<spectrum>` or a `<float>` (grey).
+    /// A colour: `<rgb>`, a `<float>` (grey) or a `<spectrum>` (constant,
+    /// sampled or read from a file), converted to linear sRGB as Mitsuba's
+    /// RGB variants do for this parameter: emitter colours as emission,
+    /// the parameters Mitsuba reads unbounded (`eta`, `k`, ...) unclamped,
+    /// all others as reflectances (see [`crate::spectrum`]).
     pub fn get_rgb(&self, name: &str) -> Result<Option<[f64; 3]>> {
+        let usage = ColorUse::of(self.kind, name);
         match self.find(name) {
             None => Ok(None),
             Some(p) => match &p.value {
                 Value::Rgb(v) => Ok(Some(*v)),
-                Value::Float(v) | Value::SpectrumConstant(v) => Ok(Some([*v; 3])),
+                Value::Float(v) => Ok(Some([*v; 3])),
                 Value::Integer(v) => Ok(Some([*v as f64; 3])),
-                Value::SpectrumSampled(_) => Err(LoadError::at(
-                    &p.loc,
-                    format!(
-                        "parameter '{}' of {}: wavelength-sampled spectra are not supported yet; \
-                         give an <rgb> value instead",
-                        p.name,
-                        self.describe()
-                    ),
-                )),
-                _ => Err(self.type_error(p, "an rgb colour or a float")),
+                Value::SpectrumConstant(v) => Ok(Some(spectrum::constant_to_srgb(*v, usage))),
+                Value::SpectrumSampled(pairs) => Ok(Some(spectrum::sampled_to_srgb(pairs, usage))),
+                _ => Err(self.type_error(p, "an rgb colour, a spectrum or a float")),
             },
         }
     }

@@ -183,7 +183,7 @@ fn number_errors_name_file_line_and_parameter() {
 #[test]
 fn spectrum_errors() {
     let e = err(&scene("<bsdf type=\"x\">\n<spectrum name=\"eta\" filename=\"Au.spd\"/></bsdf>"));
-    assert_err(&e, FILE, 3, &["eta", "not supported yet"]);
+    assert_err(&e, FILE, 3, &["eta", "Au.spd", "not found"]);
     let e = err(&scene("<bsdf type=\"x\"><spectrum name=\"eta\" value=\"500:1\"/></bsdf>"));
     assert_err(&e, FILE, 2, &["eta", "two"]);
     let e = err(&scene("<bsdf type=\"x\"><spectrum name=\"eta\" value=\"500:1, 400:2\"/></bsdf>"));
@@ -239,9 +239,9 @@ fn structural_errors() {
     // <scene> only as the root.
     let e = err(&scene("<shape type=\"s\"><scene version=\"3.0.0\"/></shape>"));
     assert_err(&e, FILE, 2, &["root"]);
-    // <path> is not supported yet.
+    // <path> must name an existing folder (more in tests/format.rs).
     let e = err(&scene("<path value=\"meshes\"/>"));
-    assert_err(&e, FILE, 2, &["<path>", "not supported yet"]);
+    assert_err(&e, FILE, 2, &["<path>", "meshes", "not found"]);
     // Comments and text are ignored.
     parse(&scene("<!-- c --> text <shape type=\"s\"><!-- <float/> --></shape>")).unwrap();
 }

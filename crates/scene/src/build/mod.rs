@@ -66,6 +66,11 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     for child in &root.children {
         let node = &child.node;
         match node.kind {
+            // A declaration that a `<ref>` uses elsewhere (Mitsuba allows
+            // an area emitter or a sampler at the top level, referenced from
+            // a shape or the sensor): built where it is used.
+            Kind::Emitter | Kind::Sampler | Kind::Film | Kind::Rfilter
+                if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || node.plugin == "area") => {}
             Kind::Shape => b.shape(node)?,
             Kind::Emitter => {
                 let light = b.top_level_emitter(node)?;
@@ -101,7 +106,17 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             }
         }
     }
-    root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf, Kind::Texture])?;
+    root.check_all_used(&[
+        Kind::Shape,
+        Kind::Emitter,
+        Kind::Sensor,
+        Kind::Integrator,
+        Kind::Bsdf,
+        Kind::Texture,
+        Kind::Sampler,
+        Kind::Film,
+        Kind::Rfilter,
+    ])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
     let (integrator, selection) = match (&ov.integrator, &integrator) {
@@ -172,10 +187,7 @@ impl Builder {
                 let (file, loc) = node
                     .get_string("filename")?
                     .ok_or_else(|| node.error(format!("{} needs a 'filename'", node.describe())))?;
-                let path = resolve(&loc.file, &file);
-                if !path.exists() {
-                    return Err(LoadError::at(&loc, format!("mesh file '{}' not found", path.display())));
-                }
+                let path = resolve(&loc, &file, "mesh file")?;
                 // Mitsuba flips v for OBJ by default, not for PLY.
                 let flip_uv = node.bool("flip_tex_coords", node.plugin == "obj")?;
                 let mut m = if node.plugin == "obj" {
@@ -307,10 +319,7 @@ impl Builder {
                 let (file, loc) = node
                     .get_string("filename")?
                     .ok_or_else(|| node.error("envmap needs a 'filename' (.exr, .hdr, .png or .jpg)"))?;
-                let path = resolve(&loc.file, &file);
-                if !path.exists() {
-                    return Err(LoadError::at(&loc, format!("environment map '{}' not found", path.display())));
-                }
+                let path = resolve(&loc, &file, "environment map")?;
                 let img = image_io::read_image(&path).map_err(|e| LoadError::at(&loc, e))?;
                 let scale = node.float("scale", 1.0)?;
                 let to_world = node.transform("to_world")?;
@@ -332,14 +341,26 @@ impl Builder {
     }
 }
 
-/// Resolves a file name relative to the directory of the scene file that names it.
-fn resolve(scene_file: &Path, name: &str) -> PathBuf {
+/// Finds the file `name` given at `loc`, as Mitsuba's file resolver does:
+/// an absolute name is taken as is; a relative one is looked up in the
+/// search directories of `loc` in order (the scene's `<path>` directories,
+/// latest first, then the scene file's directory and the working
+/// directory; see `mitsuba::xml`). `what` names the file in the error,
+/// which lists every directory searched.
+pub(crate) fn resolve(loc: &FileLoc, name: &str, what: &str) -> Result<PathBuf> {
     let p = Path::new(name);
     if p.is_absolute() {
-        p.to_path_buf()
-    } else {
-        scene_file.parent().unwrap_or(Path::new(".")).join(p)
+        if p.exists() {
+            return Ok(p.to_path_buf());
+        }
+        return Err(LoadError::at(loc, format!("{what} '{name}' not found")));
     }
+    let dirs = loc.search_dirs();
+    if let Some(found) = dirs.iter().map(|d| d.join(p)).find(|c| c.exists()) {
+        return Ok(found);
+    }
+    let searched: Vec<String> = dirs.iter().map(|d| format!("'{}'", d.display())).collect();
+    Err(LoadError::at(loc, format!("{what} '{name}' not found (searched {})", searched.join(", "))))
 }
 
 const INTEGRATORS: &[&str] = &["path", "direct", "bruteforce"];
@@ -443,7 +464,7 @@ const SHARED_INTEGRATOR_PARAMS: &[&str] = &["max_depth", "rr_depth", "hide_emitt
 /// each value as Mitsuba's XML would (boolean, integer, float, else string)
 /// and filling unset shared parameters from the scene's integrator.
 pub fn integrator_from_spec(spec: &str, scene_integrator: Option<&Node>) -> Result<Node> {
-    let loc = FileLoc { file: std::sync::Arc::new(PathBuf::from("--integrator")), line: 0, col: 0 };
+    let loc = FileLoc::new(std::sync::Arc::new(PathBuf::from("--integrator")), 0, 0);
     let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
     let mut props = Vec::new();
     for kv in rest.split(',').map(str::trim).filter(|s| !s.is_empty()) {
@@ -553,7 +574,8 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
             return Err(LoadError::at(node.loc_of(p), format!("{p} is not supported yet")));
         }
     }
-    node.accept(&["shutter_open", "shutter_close"]);
+    // focus_distance is read by every projective camera but only changes thin lenses.
+    node.accept(&["shutter_open", "shutter_close", "focus_distance"]);
 
     // Film.
     let film =

@@ -99,10 +99,7 @@ fn build_bitmap(node: &Node) -> Result<Texture> {
     let (file, loc) = node
         .get_string("filename")?
         .ok_or_else(|| node.error("bitmap needs a 'filename' (.exr, .hdr, .png or .jpg)"))?;
-    let path = super::resolve(&loc.file, &file);
-    if !path.exists() {
-        return Err(LoadError::at(&loc, format!("bitmap texture '{}' not found", path.display())));
-    }
+    let path = super::resolve(&loc, &file, "bitmap texture")?;
     let filter = match node.string("filter_type", "bilinear")?.as_str() {
         "bilinear" => FilterType::Bilinear,
         "nearest" => FilterType::Nearest,

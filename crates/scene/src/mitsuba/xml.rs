@@ -26,10 +26,23 @@ pub fn parse_file(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc
 
 /// Parses scene text as if it were the contents of `path`, which names the
 /// file in messages and is the base for relative `<include>`s.
+///
+/// File names in the scene are looked up as Mitsuba's file resolver does
+/// when it loads a scene: in the directories of the main file's `<path>`
+/// elements (latest first; they apply to every file name of the scene,
+/// before or after them, since Mitsuba resolves names only when it builds
+/// the objects), then the main file's directory, then the working
+/// directory. Mitsuba does not search an included file's directory for
+/// the names inside it; Penumbra does, after all of the above, so that
+/// every scene Mitsuba loads finds the same files here.
 pub fn parse_str(text: &str, path: &Path, defines: &[(String, String)]) -> Result<SceneDesc> {
     let mut parser = Parser::new(defines);
     parser.include_stack.push(canonical(path));
+    let cwd = std::env::current_dir().unwrap_or_default();
+    parser.resolver.push(cwd.join(path.parent().unwrap_or(Path::new(""))));
+    parser.resolver.push(cwd);
     let version = parser.parse_root(text, Arc::new(path.to_path_buf()))?;
+    parser.attach_search_dirs(path);
     let root = parser.resolve()?;
     Ok(SceneDesc { root, version })
 }
@@ -40,6 +53,23 @@ fn read_text(path: &Path) -> std::result::Result<String, String> {
         std::io::ErrorKind::InvalidData => "file is not valid UTF-8 text".to_string(),
         _ => format!("cannot read file: {e}"),
     })
+}
+
+/// Removes repeated directories, keeping the first of each.
+fn dedup(dirs: Vec<PathBuf>) -> Vec<PathBuf> {
+    let mut out: Vec<PathBuf> = Vec::with_capacity(dirs.len());
+    for d in dirs {
+        if !out.contains(&d) {
+            out.push(d);
+        }
+    }
+    out
+}
+
+/// " (searched 'a', 'b')" for messages about files not found.
+fn searched(dirs: &[PathBuf]) -> String {
+    let list: Vec<String> = dedup(dirs.to_vec()).iter().map(|d| format!("'{}'", d.display())).collect();
+    format!(" (searched {})", list.join(", "))
 }
 
 fn canonical(path: &Path) -> PathBuf {
@@ -88,6 +118,14 @@ struct Parser {
     ids: HashMap<String, usize>,
     /// Canonical paths of the files being read, outermost first.
     include_stack: Vec<PathBuf>,
+    /// Mitsuba's file resolver while the document is read: the directories
+    /// searched for relative names, first match wins. `<path>` prepends to
+    /// it; an `<include>` reads its file with a copy (plus the including
+    /// file's directory) and restores it afterwards.
+    resolver: Vec<PathBuf>,
+    /// For each included file, the extra directories searched after the
+    /// main file's (its resolver when it was read, and its own directory).
+    include_dirs: HashMap<PathBuf, Vec<PathBuf>>,
 }
 
 /// The document an element belongs to, for positions.
@@ -99,7 +137,7 @@ struct Src<'a, 'input> {
 impl Src<'_, '_> {
     fn loc(&self, node: roxmltree::Node) -> FileLoc {
         let pos = self.doc.text_pos_at(node.range().start);
-        FileLoc { file: self.file.clone(), line: pos.row, col: pos.col }
+        FileLoc::new(self.file.clone(), pos.row, pos.col)
     }
 }
 
@@ -186,7 +224,7 @@ fn xml_document<'input>(text: &'input str, file: &Path) -> Result<roxmltree::Doc
         // roxmltree appends " at row:col" itself; the location goes in front.
         let message = e.to_string().replace(&format!(" at {pos}"), "");
         LoadError {
-            loc: Some(FileLoc { file: Arc::new(file.to_path_buf()), line: pos.row, col: pos.col }),
+            loc: Some(FileLoc::new(Arc::new(file.to_path_buf()), pos.row, pos.col)),
             message: format!("malformed XML: {message}"),
         }
     })
@@ -202,7 +240,14 @@ impl Parser {
             params.push(Param { key, value: value.clone() });
         }
         params.sort_by_key(|p| std::cmp::Reverse(p.key.len()));
-        Parser { params, nodes: Vec::new(), ids: HashMap::new(), include_stack: Vec::new() }
+        Parser {
+            params,
+            nodes: Vec::new(),
+            ids: HashMap::new(),
+            include_stack: Vec::new(),
+            resolver: Vec::new(),
+            include_dirs: HashMap::new(),
+        }
     }
 
     /// Replaces `$name` occurrences by parameter values; `\$` escapes a
@@ -318,7 +363,7 @@ impl Parser {
                         e.describe()
                     )));
                 }
-                let prop = property(&e, |x| self.elem(src, x))?;
+                let prop = property(&e, |x| self.elem(src, x), &self.resolver)?;
                 self.add_prop(parent, prop)
             }
             "ref" => {
@@ -356,10 +401,7 @@ impl Parser {
                 self.ids.insert(alias.to_string(), target);
                 Ok(())
             }
-            "path" => Err(e.err(
-                "<path> (extra search directories) is not supported yet; give file names \
-                 relative to the scene file instead",
-            )),
+            "path" => self.search_path(&e, in_scene),
             "translate" | "rotate" | "scale" | "matrix" | "lookat" => {
                 Err(e.err(format!("<{}> can only appear inside a <transform>", e.tag)))
             }
@@ -438,13 +480,18 @@ impl Parser {
     fn include(&mut self, e: &Elem, parent: usize) -> Result<()> {
         e.check(&["filename"], &["name"])?;
         let filename = Path::new(e.req("filename"));
+        // As Mitsuba: the including file's directory first, then the resolver.
+        let mut resolver = self.resolver.clone();
+        resolver.insert(0, e.loc.file.parent().unwrap_or(Path::new("")).to_path_buf());
         let path = if filename.is_absolute() {
             filename.to_path_buf()
         } else {
-            e.loc.file.parent().unwrap_or(Path::new("")).join(filename)
+            let candidates = resolver.iter().map(|d| d.join(filename));
+            candidates.clone().find(|c| c.is_file()).unwrap_or_else(|| resolver[0].join(filename))
         };
         if !path.is_file() {
-            return Err(e.err(format!("included file \"{}\" not found", path.display())));
+            let searched = if filename.is_absolute() { String::new() } else { searched(&resolver) };
+            return Err(e.err(format!("included file \"{}\" not found{searched}", path.display())));
         }
         let key = canonical(&path);
         if self.include_stack.contains(&key) {
@@ -453,7 +500,11 @@ impl Parser {
         }
         let text = read_text(&path).map_err(|m| LoadError::in_file(&path, m))?;
         self.include_stack.push(key);
-        let result = self.parse_included(&text, Arc::new(path), parent, e);
+        let outer = std::mem::replace(&mut self.resolver, resolver);
+        let result = self.parse_included(&text, Arc::new(path.clone()), parent, e);
+        let mut extra = std::mem::replace(&mut self.resolver, outer);
+        extra.push(path.parent().unwrap_or(Path::new("")).to_path_buf());
+        self.include_dirs.entry(path).or_insert(extra);
         self.include_stack.pop();
         result.map_err(|mut err| {
             err.message.push_str(&format!("\n  (in a file included at {})", e.loc));
@@ -494,6 +545,58 @@ impl Parser {
         self.elements(&src, root.xml, idx, false)?;
         let name = include.get("name").map(str::to_string);
         self.add_child(parent, RawChild { name, target: Target::Node(idx), loc: include.loc.clone() })
+    }
+
+    /// `<path value="dir"/>`: a directory searched for relative file names
+    /// (Mitsuba's `TagType::Resource`): relative to the file that states
+    /// it, else through the directories already searched; prepended, so
+    /// the latest `<path>` is searched first.
+    fn search_path(&mut self, e: &Elem, in_scene: bool) -> Result<()> {
+        e.check(&["value"], &[])?;
+        if !in_scene {
+            return Err(e.err("<path> can only appear directly inside <scene>"));
+        }
+        let value = Path::new(e.req("value"));
+        let mut dir = e.loc.file.parent().unwrap_or(Path::new("")).join(value);
+        if !dir.exists() {
+            if let Some(found) = self.resolver.iter().map(|d| d.join(value)).find(|d| d.exists()) {
+                dir = found;
+            }
+        }
+        if !dir.is_dir() {
+            let searched = if value.is_absolute() { String::new() } else { searched(&self.resolver) };
+            return Err(e.err(format!(
+                "<path>: folder \"{}\" not found (relative to {}){searched}",
+                value.display(),
+                e.loc.file.parent().map(|p| p.display().to_string()).unwrap_or_default()
+            )));
+        }
+        self.resolver.insert(0, dir);
+        Ok(())
+    }
+
+    /// Gives every property the directories its file names are searched
+    /// in: the main file's final resolver, and for properties of included
+    /// files the extra directories of that file (see [`parse_str`]).
+    fn attach_search_dirs(&mut self, main: &Path) {
+        let main_dirs = dedup(self.resolver.clone());
+        let main_arc = Arc::new(main_dirs.clone());
+        let mut per_file: HashMap<PathBuf, Arc<Vec<PathBuf>>> = HashMap::new();
+        per_file.insert(main.to_path_buf(), main_arc.clone());
+        for node in &mut self.nodes {
+            for prop in &mut node.props {
+                let file = prop.loc.file.as_path();
+                let dirs = per_file
+                    .entry(file.to_path_buf())
+                    .or_insert_with(|| {
+                        let mut dirs = main_dirs.clone();
+                        dirs.extend(self.include_dirs.get(file).cloned().unwrap_or_default());
+                        Arc::new(dedup(dirs))
+                    })
+                    .clone();
+                prop.loc.search = Some(dirs);
+            }
+        }
     }
 
     /// Second pass: resolves references and builds the shared node tree.
@@ -554,8 +657,13 @@ impl Parser {
     }
 }
 
-/// Checks a root element's `version`; scenes older than 2.0 use Mitsuba
-/// 0.6's syntax (camelCase names and other plugin parameters).
+/// Checks a root element's `version`. Versions 2.x and 3.x share one
+/// syntax. Older files (Mitsuba 0.x/1.x) are not read: Mitsuba 3 upgrades
+/// them on load (`upgrade_from_v1` in `src/core/parser.cpp`) by renaming
+/// camelCase parameters to snake_case, diffuse's `diffuseReflectance` to
+/// `reflectance`, and folding `uoffset`/`voffset`/`uscale`/`vscale` into a
+/// `to_uv` transform, but their plugins differ beyond that; the error says
+/// what to change.
 fn check_version(root: &Elem) -> Result<String> {
     let text = root.req("version");
     let Some(v) = parse_version(text) else {
@@ -563,9 +671,12 @@ fn check_version(root: &Elem) -> Result<String> {
     };
     if v[0] < 2 {
         return Err(root.err(format!(
-            "scene version {text} uses the Mitsuba 0.6 format, whose syntax differs from \
-             Mitsuba 3 (camelCase parameter names, other plugin parameters); convert the \
-             scene to Mitsuba 3 and set version=\"3.0.0\""
+            "scene version {text} uses the Mitsuba 0.x/1.x format, whose syntax differs from \
+             Mitsuba 3: parameter names were camelCase (now snake_case, e.g. maxDepth -> max_depth, \
+             sampleCount -> sample_count, toWorld -> to_world), diffuse's diffuseReflectance is now \
+             reflectance, texture uoffset/voffset/uscale/vscale became a to_uv transform, and several \
+             plugins and parameters changed; convert the scene to Mitsuba 3 syntax and set \
+             version=\"3.0.0\" (versions 2.x and 3.x are read)"
         )));
     }
     Ok(text.to_string())
@@ -576,6 +687,7 @@ fn check_version(root: &Elem) -> Result<String> {
 fn property<'a, 'input>(
     e: &Elem<'a, 'input>,
     elem: impl Fn(roxmltree::Node<'a, 'input>) -> Result<Elem<'a, 'input>>,
+    resolver: &[PathBuf],
 ) -> Result<Property> {
     let value = match e.tag {
         "transform" => {
@@ -637,7 +749,7 @@ fn property<'a, 'input>(
                     };
                     Value::Rgb(v)
                 }
-                "spectrum" => spectrum(e)?,
+                "spectrum" => spectrum(e, resolver)?,
                 "point" | "vector" => {
                     e.check(&["name"], &["value", "x", "y", "z"])?;
                     let v = xyz(e, 0.0, true)?;
@@ -654,7 +766,10 @@ fn property<'a, 'input>(
     Ok(Property { name: e.req("name").to_string(), value, loc: e.loc.clone(), used: Cell::new(false) })
 }
 
-fn spectrum(e: &Elem) -> Result<Value> {
+/// `<spectrum>`: a constant (`value="0.5"`), wavelength:value pairs
+/// (`value="400:0.1, 700:0.5"`), or an `.spd` file (`filename`), read now
+/// as Mitsuba does, through the directories searched so far.
+fn spectrum(e: &Elem, resolver: &[PathBuf]) -> Result<Value> {
     e.check(&["name"], &["value", "filename"])?;
     let value = e.get("value").unwrap_or_default();
     let filename = e.get("filename").unwrap_or_default();
@@ -664,7 +779,18 @@ fn spectrum(e: &Elem) -> Result<Value> {
         );
     }
     if !filename.is_empty() {
-        return Err(e.err(format!("{}: spectra read from a file are not supported yet", e.describe())));
+        let name = Path::new(filename);
+        let path = if name.is_absolute() {
+            name.to_path_buf()
+        } else {
+            let found = resolver.iter().map(|d| d.join(name)).find(|p| p.is_file());
+            found.ok_or_else(|| {
+                e.err(format!("spectrum file \"{filename}\" of {} not found{}", e.describe(), searched(resolver)))
+            })?
+        };
+        let pairs = crate::spectrum::read_spd(&path)
+            .map_err(|m| e.err(format!("{}: spectrum file \"{}\": {m}", e.describe(), path.display())))?;
+        return Ok(Value::SpectrumSampled(pairs));
     }
     let tokens = tokenize(value);
     if let [single] = tokens[..] {
@@ -684,12 +810,7 @@ fn spectrum(e: &Elem) -> Result<Value> {
         let (wl, v) = token.split_once(':').ok_or_else(bad)?;
         pairs.push((parse_float(wl).ok_or_else(bad)?, parse_float(v).ok_or_else(bad)?));
     }
-    if pairs.len() < 2 {
-        return Err(e.err(format!("{} needs at least two wavelength:value pairs", e.describe())));
-    }
-    if pairs.windows(2).any(|w| w[1].0 <= w[0].0) {
-        return Err(e.err(format!("the wavelengths of {} must be given in increasing order", e.describe())));
-    }
+    crate::spectrum::check_sampled(&pairs).map_err(|m| e.err(format!("{}: {m}", e.describe())))?;
     Ok(Value::SpectrumSampled(pairs))
 }
 

@@ -1,0 +1,188 @@
+//! `penumbra info SCENE.xml`: what a scene uses and how Penumbra will
+//! render it, without rendering.
+
+use crate::args::InfoArgs;
+use anyhow::{anyhow, Result};
+use penumbra_render::geometry::Shape;
+use penumbra_render::light::Light;
+use penumbra_scene::desc::{Kind, Node, SceneDesc, Value};
+use penumbra_scene::Overrides;
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+pub fn run(a: &InfoArgs) -> Result<()> {
+    let desc = penumbra_scene::mitsuba::parse_file(&a.scene, &a.define).map_err(|e| anyhow!(e))?;
+    let mut out = String::new();
+    writeln!(out, "scene: {} (format version {})", a.scene.display(), desc.version)?;
+    describe_plugins(&desc, &mut out)?;
+    if let Some(integrator) = desc.root.children_of(Kind::Integrator).next() {
+        writeln!(out, "integrator: {}", with_params(&integrator.node))?;
+    } else {
+        writeln!(out, "integrator: path (Mitsuba's default)")?;
+    }
+    let notes = approximations(&desc);
+    let built = penumbra_scene::build::build(&desc, &Overrides::default());
+    if let Ok(job) = &built {
+        let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
+        for shape in &job.scene.shapes {
+            match shape {
+                Shape::Mesh(m) => {
+                    meshes += 1;
+                    triangles += m.mesh.indices.len();
+                }
+                Shape::Sphere { .. } => *analytic.entry("sphere").or_default() += 1,
+                _ => *analytic.entry("other").or_default() += 1,
+            }
+        }
+        let mut geometry = format!("{triangles} triangles in {meshes} meshes");
+        for (kind, n) in &analytic {
+            write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
+        }
+        writeln!(out, "geometry: {geometry}")?;
+        let mut lights = BTreeMap::<&str, usize>::new();
+        for l in &job.scene.lights {
+            let kind = match l {
+                Light::Area(_) => "area",
+                Light::Constant(_) => "constant",
+                Light::Point(_) => "point",
+                Light::Spot(_) => "spot",
+                Light::Directional(_) => "directional",
+                Light::EnvMap(_) => "envmap",
+                #[allow(unreachable_patterns)]
+                _ => "other",
+            };
+            *lights.entry(kind).or_default() += 1;
+        }
+        let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;
+        let (w, h) = job.full_size;
+        let crop = if (job.width, job.height) != (w, h) {
+            format!(", crop {}x{} at ({}, {})", job.width, job.height, job.crop_offset.0, job.crop_offset.1)
+        } else {
+            String::new()
+        };
+        writeln!(
+            out,
+            "image: {w}x{h}{crop}, {} samples per pixel ({:?} sampler, seed {})",
+            job.sampler.spp, job.sampler.kind, job.sampler.seed
+        )?;
+    }
+    if notes.is_empty() {
+        writeln!(out, "approximations: none")?;
+    } else {
+        writeln!(out, "approximations:")?;
+        for n in &notes {
+            writeln!(out, "  - {n}")?;
+        }
+    }
+    print!("{out}");
+    match built {
+        Ok(_) => {
+            println!("status: ready to render");
+            Ok(())
+        }
+        Err(e) => Err(anyhow!("the scene cannot be rendered by Penumbra: {e}")),
+    }
+}
+
+/// Every object of the scene, counted by kind and plugin (shared objects once).
+fn describe_plugins(desc: &SceneDesc, out: &mut String) -> Result<()> {
+    let mut counts: BTreeMap<(usize, &'static str), BTreeMap<String, usize>> = BTreeMap::new();
+    let mut seen = std::collections::HashSet::new();
+    let mut stack: Vec<&Node> = vec![&desc.root];
+    while let Some(node) = stack.pop() {
+        if !seen.insert(node as *const Node) {
+            continue;
+        }
+        if node.kind != Kind::Scene {
+            let order = KIND_ORDER.iter().position(|k| *k == node.kind).unwrap_or(KIND_ORDER.len());
+            *counts.entry((order, node.kind.tag())).or_default().entry(node.plugin.clone()).or_default() += 1;
+        }
+        stack.extend(node.children.iter().rev().map(|c| c.node.as_ref()));
+    }
+    writeln!(out, "plugins:")?;
+    for ((_, kind), plugins) in &counts {
+        let list: Vec<String> =
+            plugins.iter().map(|(p, n)| if *n == 1 { p.clone() } else { format!("{p} x{n}") }).collect();
+        writeln!(out, "  {kind:<10} {}", list.join(", "))?;
+    }
+    Ok(())
+}
+
+const KIND_ORDER: &[Kind] = &[
+    Kind::Integrator,
+    Kind::Sensor,
+    Kind::Film,
+    Kind::Rfilter,
+    Kind::Sampler,
+    Kind::Shape,
+    Kind::Bsdf,
+    Kind::Texture,
+    Kind::Emitter,
+    Kind::Medium,
+    Kind::Phase,
+    Kind::Volume,
+];
+
+/// `path (max_depth=6)`.
+fn with_params(node: &Node) -> String {
+    let params: Vec<String> = node.props.iter().map(|p| format!("{}={}", p.name, short(&p.value))).collect();
+    if params.is_empty() {
+        node.plugin.clone()
+    } else {
+        format!("{} ({})", node.plugin, params.join(", "))
+    }
+}
+
+fn short(v: &Value) -> String {
+    match v {
+        Value::Float(f) => format!("{f}"),
+        Value::Integer(i) => format!("{i}"),
+        Value::Boolean(b) => format!("{b}"),
+        Value::String(s) => s.clone(),
+        other => other.type_name().to_string(),
+    }
+}
+
+/// Features Penumbra renders differently from Mitsuba's spectral variants
+/// or serves by another method, found in the scene description.
+fn approximations(desc: &SceneDesc) -> Vec<String> {
+    let (mut sampled, mut constant, mut visible) = (0, 0, 0);
+    let mut seen = std::collections::HashSet::new();
+    let mut stack: Vec<&Node> = vec![&desc.root];
+    while let Some(node) = stack.pop() {
+        if !seen.insert(node as *const Node) {
+            continue;
+        }
+        for p in &node.props {
+            match &p.value {
+                Value::SpectrumSampled(_) => sampled += 1,
+                Value::SpectrumConstant(_) => constant += 1,
+                Value::Boolean(false) if p.name == "sample_visible" && node.kind == Kind::Bsdf => visible += 1,
+                _ => {}
+            }
+        }
+        stack.extend(node.children.iter().map(|c| c.node.as_ref()));
+    }
+    let mut notes = Vec::new();
+    if sampled > 0 {
+        notes.push(format!(
+            "{sampled} wavelength-sampled spectra converted to linear sRGB when loading, exactly as \
+             Mitsuba's *_rgb variants do (reflectances under D65, emission against CIE 1931); \
+             Mitsuba's spectral variants would differ slightly"
+        ));
+    }
+    if constant > 0 {
+        notes.push(format!(
+            "{constant} constant spectra converted to RGB as Mitsuba's *_rgb variants do \
+             (emitters: times xyz_to_srgb(1, 1, 1))"
+        ));
+    }
+    if visible > 0 {
+        notes.push(format!(
+            "{visible} BSDFs with sample_visible=false are sampled with visible normals \
+             (same expected image, different noise)"
+        ));
+    }
+    notes
+}

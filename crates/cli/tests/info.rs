@@ -1,0 +1,61 @@
+//! `penumbra info`: a scene described without rendering.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn info(scene: &Path, extra: &[&str]) -> (bool, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra")).arg("info").arg(scene).args(extra).output().unwrap();
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn describes_plugins_counts_and_approximations() {
+    let scene = root().join("tests/scenes/format/spectral_quad.xml");
+    let (ok, out, err) = info(&scene, &["-D", "res=20"]);
+    assert!(ok, "{err}");
+    for needle in [
+        "format version 3.0.0",
+        "integrator path",
+        "rfilter    gaussian",
+        "shape      obj, rectangle",
+        "bsdf       diffuse",
+        "emitter    area",
+        "integrator: path (max_depth=4)",
+        "geometry: 4 triangles in 2 meshes",
+        "emitters: 1 (1 area)",
+        "image: 20x20, 16 samples per pixel",
+        "2 wavelength-sampled spectra converted to linear sRGB",
+        "status: ready to render",
+    ] {
+        assert!(out.contains(needle), "'{needle}' not in:\n{out}");
+    }
+    // Nothing is rendered: no image appears.
+    assert!(!err.contains("rendered"), "{err}");
+}
+
+#[test]
+fn lists_what_it_can_and_fails_on_unsupported_plugins() {
+    let dir = std::env::temp_dir().join(format!("penumbra-info-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.xml");
+    std::fs::write(
+        &scene,
+        "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n\
+         <shape type=\"sphere\"><bsdf type=\"nosuchbsdf\"/></shape>\n</scene>",
+    )
+    .unwrap();
+    let (ok, out, err) = info(&scene, &[]);
+    assert!(!ok);
+    assert!(out.contains("bsdf       nosuchbsdf") && out.contains("shape      sphere"), "{out}");
+    assert!(err.contains("scene.xml:3") && err.contains("nosuchbsdf"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
