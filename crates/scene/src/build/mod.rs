@@ -661,7 +661,23 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
                     }
                     SamplerKind::Stratified
                 }
-                _ => return Err(unsupported(&s, &["independent", "stratified"])),
+                "multijitter" => SamplerKind::Multijitter { jitter: s.bool("jitter", true)? },
+                "orthogonal" => {
+                    if s.int("strength", 2)? != 2 {
+                        return Err(LoadError::at(
+                            s.loc_of("strength"),
+                            "orthogonal: only strength 2 (Bose construction, the default) is supported",
+                        ));
+                    }
+                    SamplerKind::Orthogonal { jitter: s.bool("jitter", true)? }
+                }
+                "ldsampler" => SamplerKind::LowDiscrepancy,
+                _ => {
+                    return Err(unsupported(
+                        &s,
+                        &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"],
+                    ))
+                }
             };
             let spp = s.int("sample_count", 4)?;
             let seed = s.int("seed", 0)?;
@@ -675,12 +691,10 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if let Some(o) = ov.spp {
         spp = o;
     }
-    if kind == SamplerKind::Stratified {
-        // Mitsuba's stratified sampler rounds the count up to a perfect
-        // square (checked with 3.9.1: 2 -> 4, 10 -> 16, 20 -> 25).
-        let r = (spp as f64).sqrt().ceil() as u32;
-        spp = r.saturating_mul(r);
-    }
+    // Mitsuba's stratified samplers round the count up to what their
+    // construction needs (checked with 3.9.1, e.g. stratified 10 -> 16,
+    // multijitter 10 -> 12, orthogonal 16 -> 25, ldsampler 17 -> 64).
+    spp = kind.round_sample_count(spp);
     if let Some(o) = ov.seed {
         seed = o;
     }
