@@ -148,3 +148,30 @@ fn every_sampler_renders_the_same_image_in_expectation() {
         assert!((m - reference).abs() < 0.016, "{s}: {m} vs {reference}");
     }
 }
+
+/// `blendbsdf` (tested here with the other plugins of this change).
+#[test]
+fn blendbsdf_parses_weight_and_two_nested_bsdfs() {
+    use penumbra_render::material::Material;
+    let with = |bsdf: &str| {
+        let xml = format!(
+            r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+<shape type="sphere">{bsdf}</shape></scene>"#
+        );
+        job_of(&xml).map(|j| j.scene.materials[j.scene.shape_info[0].material as usize].clone())
+    };
+    let two = r#"<bsdf type="diffuse"/><bsdf type="conductor"/>"#;
+    match with(&format!(r#"<bsdf type="blendbsdf"><float name="weight" value="0.25"/>{two}</bsdf>"#)).unwrap() {
+        Material::Blend { weight, first, second } => {
+            assert_eq!(weight.constant(), Some(glam::Vec3::splat(0.25)));
+            assert!(matches!(*first, Material::Diffuse { .. }) && matches!(*second, Material::Conductor { .. }));
+        }
+        m => panic!("{m:?}"),
+    }
+    let tex = r#"<texture type="checkerboard" name="weight"/>"#;
+    assert!(matches!(with(&format!(r#"<bsdf type="blendbsdf">{tex}{two}</bsdf>"#)).unwrap(), Material::Blend { .. }));
+    let e = with(&format!(r#"<bsdf type="blendbsdf">{two}</bsdf>"#)).unwrap_err().to_string();
+    assert!(e.contains("weight") && e.contains("sensors.xml:2"), "{e}");
+    let e = with(r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>"#);
+    assert!(e.unwrap_err().to_string().contains("two nested"));
+}
