@@ -175,3 +175,14 @@ fn blendbsdf_parses_weight_and_two_nested_bsdfs() {
     let e = with(r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>"#);
     assert!(e.unwrap_err().to_string().contains("two nested"));
 }
+
+#[test]
+fn a_top_level_sampler_can_be_referenced_by_the_sensor() {
+    // As in Mitsuba's documentation scenes (sampler_*.xml).
+    let xml = r#"<scene version="3.0.0">
+<sampler type="ldsampler" id="my_sampler"><integer name="sample_count" value="16"/></sampler>
+<sensor type="perspective"><ref id="my_sampler"/><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+</scene>"#;
+    let j = job_of(xml).unwrap();
+    assert_eq!((j.sampler.kind, j.sampler.spp), (SamplerKind::LowDiscrepancy, 16));
+}

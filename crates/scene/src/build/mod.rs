@@ -90,6 +90,9 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             Kind::Texture => {
                 b.textures.build(node)?;
             }
+            // A sampler declared with an id for the sensor's <ref> (Mitsuba's
+            // documentation scenes do this); read where the sensor uses it.
+            Kind::Sampler if node.id.is_some() => {}
             _ => {
                 return Err(LoadError::at(
                     &child.loc,
@@ -101,7 +104,15 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             }
         }
     }
-    root.check_all_used(&[Kind::Shape, Kind::Emitter, Kind::Sensor, Kind::Integrator, Kind::Bsdf, Kind::Texture])?;
+    root.check_all_used(&[
+        Kind::Shape,
+        Kind::Emitter,
+        Kind::Sensor,
+        Kind::Integrator,
+        Kind::Bsdf,
+        Kind::Texture,
+        Kind::Sampler,
+    ])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
     let (integrator, selection) = match (&ov.integrator, &integrator) {
