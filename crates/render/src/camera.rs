@@ -1,17 +1,30 @@
-//! Cameras. Mitsuba `perspective`: a pinhole looking down its local +z, with
-//! +y up and image x growing towards local -x (Mitsuba's convention, which
-//! makes `lookat` images come out unmirrored).
+//! Cameras: Mitsuba's `perspective`, `thinlens` and `orthographic` sensors.
+//! All look down their local +z, with +y up and image x growing towards
+//! local -x (Mitsuba's convention, which makes `lookat` images come out
+//! unmirrored).
 //!
-//! | parameter | type      | default |
-//! |-----------|-----------|---------|
-//! | fov       | float     | (required, degrees, full angle) |
-//! | fov_axis  | string    | x (or y, diagonal, smaller, larger) |
-//! | to_world  | transform | identity |
-//! | near_clip | float     | 0.01    |
-//! | far_clip  | float     | 10000   |
+//! | parameter       | type      | default |
+//! |-----------------|-----------|---------|
+//! | fov             | float     | (perspective, thinlens; degrees, full angle) |
+//! | fov_axis        | string    | x (or y, diagonal, smaller, larger) |
+//! | to_world        | transform | identity (orthographic: its scale sets the view size) |
+//! | near_clip       | float     | 0.01    |
+//! | far_clip        | float     | 10000   |
+//! | aperture_radius | float     | (thinlens, required) |
+//! | focus_distance  | float     | far_clip (thinlens) |
+//!
+//! Ray generation follows Mitsuba 3.9.1 (`src/sensors/*.cpp`): the perspective
+//! and thin-lens rays start on the near plane (at distance `near_clip` along
+//! the view axis) and end on the far plane; the thin lens samples its
+//! aperture with the concentric disk map and aims at the point of the focal
+//! plane that the pinhole ray through the same film position hits; the
+//! orthographic camera maps the film to [-1, 1] x [-1/aspect, 1/aspect] on
+//! the near plane (z = `near_clip`) in camera space, then through `to_world`.
 
 use crate::geometry::Ray;
 use crate::math::Mat4;
+use crate::sampling::warp::sample_concentric_disk;
+use crate::sampling::SampleStream;
 use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,16 +36,56 @@ pub enum FovAxis {
     Larger,
 }
 
+/// How film positions turn into rays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    /// Mitsuba `perspective`.
+    Pinhole,
+    /// Mitsuba `thinlens`.
+    ThinLens { aperture_radius: f32, focus_distance: f32 },
+    /// Mitsuba `orthographic` (`tan_half` is unused).
+    Orthographic { inv_aspect: f32 },
+}
+
 #[derive(Debug, Clone)]
-pub struct PerspectiveCamera {
+pub struct Camera {
     pub world_from_camera: Mat4,
     /// tan of the half field of view along x and y.
     pub tan_half: Vec2,
     pub near_clip: f32,
     pub far_clip: f32,
+    pub projection: Projection,
 }
 
-impl PerspectiveCamera {
+/// The name the pinhole camera had before the other projections existed.
+pub type PerspectiveCamera = Camera;
+
+/// tan of the half field of view along x for `fov_deg` along `axis`.
+fn tan_half_x(fov_deg: f32, axis: FovAxis, aspect: f32) -> f32 {
+    let t = (0.5 * fov_deg.to_radians()).tan();
+    match axis {
+        FovAxis::X => t,
+        FovAxis::Y => t * aspect,
+        FovAxis::Diagonal => t * aspect / (1.0 + aspect * aspect).sqrt(),
+        FovAxis::Smaller => {
+            if aspect >= 1.0 {
+                t * aspect
+            } else {
+                t
+            }
+        }
+        FovAxis::Larger => {
+            if aspect >= 1.0 {
+                t
+            } else {
+                t * aspect
+            }
+        }
+    }
+}
+
+impl Camera {
+    /// Mitsuba `perspective`.
     pub fn new(
         world_from_camera: Mat4,
         fov_deg: f32,
@@ -43,45 +96,103 @@ impl PerspectiveCamera {
         far: f32,
     ) -> Self {
         let aspect = width as f32 / height as f32;
-        let t = (0.5 * fov_deg.to_radians()).tan();
-        // Express the given fov as tan_half along x.
-        let tan_x = match axis {
-            FovAxis::X => t,
-            FovAxis::Y => t * aspect,
-            FovAxis::Diagonal => t * aspect / (1.0 + aspect * aspect).sqrt(),
-            FovAxis::Smaller => {
-                if aspect >= 1.0 {
-                    t * aspect
-                } else {
-                    t
-                }
-            }
-            FovAxis::Larger => {
-                if aspect >= 1.0 {
-                    t
-                } else {
-                    t * aspect
-                }
-            }
-        };
-        PerspectiveCamera {
+        let tan_x = tan_half_x(fov_deg, axis, aspect);
+        Camera {
             world_from_camera,
             tan_half: Vec2::new(tan_x, tan_x / aspect),
             near_clip: near,
             far_clip: far,
+            projection: Projection::Pinhole,
         }
     }
 
-    /// Ray through film position `s` in [0,1]² (x right, y down).
+    /// Mitsuba `thinlens`: a perspective camera with a lens of radius
+    /// `aperture_radius` focused at distance `focus_distance` (along the
+    /// view axis). `world_from_camera` must not scale (Mitsuba refuses it).
+    #[allow(clippy::too_many_arguments)]
+    pub fn thin_lens(
+        world_from_camera: Mat4,
+        fov_deg: f32,
+        axis: FovAxis,
+        width: u32,
+        height: u32,
+        near: f32,
+        far: f32,
+        aperture_radius: f32,
+        focus_distance: f32,
+    ) -> Self {
+        let mut c = Camera::new(world_from_camera, fov_deg, axis, width, height, near, far);
+        c.projection = Projection::ThinLens { aperture_radius, focus_distance };
+        c
+    }
+
+    /// Mitsuba `orthographic`: the film spans [-1, 1] x [-1/aspect, 1/aspect]
+    /// in camera space, scaled by `world_from_camera`.
+    pub fn orthographic(world_from_camera: Mat4, width: u32, height: u32, near: f32, far: f32) -> Self {
+        let aspect = width as f32 / height as f32;
+        Camera {
+            world_from_camera,
+            tan_half: Vec2::ZERO,
+            near_clip: near,
+            far_clip: far,
+            projection: Projection::Orthographic { inv_aspect: 1.0 / aspect },
+        }
+    }
+
+    /// Whether rays need an aperture sample (two more dimensions).
+    #[inline]
+    pub fn needs_aperture_sample(&self) -> bool {
+        matches!(self.projection, Projection::ThinLens { .. })
+    }
+
+    /// Ray through film position `s` in [0,1]² (x right, y down), drawing
+    /// the aperture sample from `rng` after the film position (as Mitsuba).
+    #[inline]
+    pub fn sample_ray(&self, s: Vec2, rng: &mut SampleStream) -> Ray {
+        let aperture = if self.needs_aperture_sample() { rng.next_2d() } else { Vec2::splat(0.5) };
+        self.generate_ray_with_aperture(s, aperture)
+    }
+
+    /// Ray through film position `s` with the lens at its centre.
     #[inline]
     pub fn generate_ray(&self, s: Vec2) -> Ray {
-        let local =
-            Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0).normalize();
-        let o = self.world_from_camera.transform_point3(Vec3::ZERO);
-        let d = self.world_from_camera.transform_vector3(local).normalize();
-        // The clip planes are perpendicular to the view axis.
-        let inv_z = 1.0 / local.z;
-        Ray::new(o + d * (self.near_clip * inv_z), d, (self.far_clip - self.near_clip) * inv_z)
+        self.generate_ray_with_aperture(s, Vec2::splat(0.5))
+    }
+
+    /// Ray through film position `s` in [0,1]² and aperture sample `a` in [0,1]².
+    #[inline]
+    pub fn generate_ray_with_aperture(&self, s: Vec2, a: Vec2) -> Ray {
+        match self.projection {
+            Projection::Pinhole => {
+                let local = Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0)
+                    .normalize();
+                let o = self.world_from_camera.transform_point3(Vec3::ZERO);
+                let d = self.world_from_camera.transform_vector3(local).normalize();
+                // The clip planes are perpendicular to the view axis.
+                let inv_z = 1.0 / local.z;
+                Ray::new(o + d * (self.near_clip * inv_z), d, (self.far_clip - self.near_clip) * inv_z)
+            }
+            Projection::ThinLens { aperture_radius, focus_distance } => {
+                let lens = aperture_radius * sample_concentric_disk(a);
+                let aperture_p = Vec3::new(lens.x, lens.y, 0.0);
+                let focus_p = Vec3::new(
+                    (1.0 - 2.0 * s.x) * self.tan_half.x * focus_distance,
+                    (1.0 - 2.0 * s.y) * self.tan_half.y * focus_distance,
+                    focus_distance,
+                );
+                let local = (focus_p - aperture_p).normalize();
+                let o = self.world_from_camera.transform_point3(aperture_p);
+                let d = self.world_from_camera.transform_vector3(local);
+                let inv_z = 1.0 / local.z;
+                Ray::new(o + d * (self.near_clip * inv_z), d, (self.far_clip - self.near_clip) * inv_z)
+            }
+            Projection::Orthographic { inv_aspect } => {
+                let near_p = Vec3::new(1.0 - 2.0 * s.x, (1.0 - 2.0 * s.y) * inv_aspect, self.near_clip);
+                let o = self.world_from_camera.transform_point3(near_p);
+                let d = self.world_from_camera.transform_vector3(Vec3::Z).normalize();
+                Ray::new(o, d, self.far_clip - self.near_clip)
+            }
+        }
     }
 }
 
@@ -109,5 +220,76 @@ mod tests {
         assert!(top.d.y > 0.0);
         // Half-angle along y is derived from x and the aspect ratio.
         assert!((top.d.y / top.d.z - (30f32.to_radians().tan() / 2.0)).abs() < 1e-5);
+    }
+
+    /// Rays printed by Mitsuba 3.9.1 (scalar_rgb, `T = mi.ScalarTransform4f`):
+    /// ```python
+    /// s = mi.load_dict({'type': 'thinlens', 'fov': 40, 'aperture_radius': 0.2, 'focus_distance': 5.0,
+    ///     'near_clip': 0.1, 'far_clip': 100, 'to_world': T().look_at(origin=[1,2,3], target=[0,0,0], up=[0,1,0]),
+    ///     'film': {'type': 'hdrfilm', 'width': 40, 'height': 20}})
+    /// r, _ = s.sample_ray(0.0, 0.0, mi.Point2f(*pos), mi.Point2f(*aperture))
+    /// ```
+    /// for each (pos, aperture) in POS, and the same for the other sensors below.
+    fn check(c: &Camera, cases: &[([f32; 4], [f32; 3], [f32; 3], f32)]) {
+        for (i, &(sa, o, d, maxt)) in cases.iter().enumerate() {
+            let r = c.generate_ray_with_aperture(Vec2::new(sa[0], sa[1]), Vec2::new(sa[2], sa[3]));
+            let (o, d) = (Vec3::from(o), Vec3::from(d));
+            assert!((r.o - o).abs().max_element() < 2e-5 * (1.0 + o.abs().max_element()), "case {i}: o {} vs {o}", r.o);
+            assert!((r.d - d).abs().max_element() < 2e-6, "case {i}: d {} vs {d}", r.d);
+            assert!((r.t_max - maxt).abs() < 2e-5 * maxt, "case {i}: maxt {} vs {maxt}", r.t_max);
+        }
+    }
+
+    const POS: [[f32; 4]; 3] = [[0.5, 0.5, 0.5, 0.5], [0.1, 0.8, 0.3, 0.9], [0.9, 0.25, 0.75, 0.1]];
+
+    #[test]
+    fn thin_lens_rays_match_mitsuba() {
+        let to_world = crate::math::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let c = Camera::thin_lens(to_world, 40.0, FovAxis::X, 40, 20, 0.1, 100.0, 0.2, 5.0);
+        check(
+            &c,
+            &[
+                (POS[0], [0.97327387, 1.94654775, 2.91982174], [-0.26726127, -0.53452247, -0.80178368], 99.9),
+                (POS[1], [0.97993511, 2.05975223, 2.84213161], [-0.50432885, -0.61828667, -0.60280508], 105.31364),
+                (POS[2], [0.95261168, 1.83736563, 2.99949694], [0.00297587, -0.41208455, -0.91114068], 105.15668),
+            ],
+        );
+        // Default focus distance (far_clip), fov along y, no rotation.
+        let to_world = Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0));
+        let c = Camera::thin_lens(to_world, 30.0, FovAxis::Y, 40, 20, 0.01, 1e4, 0.05, 1e4);
+        check(
+            &c,
+            &[
+                (POS[0], [0.0, 0.0, -1.99], [0.0, 0.0, 1.0], 9999.99),
+                (POS[1], [-0.01102014, 0.03534745, -1.99], [0.38980216, -0.1461786, 0.90922278], 10998.393),
+                (POS[2], [0.01456867, -0.03393707, -1.99], [-0.39108112, 0.12221558, 0.91220552], 10962.432),
+            ],
+        );
+    }
+
+    #[test]
+    fn orthographic_rays_match_mitsuba() {
+        // to_world = look_at(...) @ scale([2, 3, 4]); near 0.5, far 50.
+        let to_world = crate::math::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y)
+            * Mat4::from_scale(Vec3::new(2.0, 3.0, 4.0));
+        let c = Camera::orthographic(to_world, 40, 20, 0.5, 50.0);
+        let d = [-0.26726127, -0.53452253, -0.8017838];
+        check(
+            &c,
+            &[
+                (POS[0], [0.46547723, 0.93095529, 1.39643264], d, 49.5),
+                (POS[1], [-0.9002881, 0.17031646, 2.35878038], d, 49.5),
+                (POS[2], [1.85659719, 1.56482089, 0.510149], d, 49.5),
+            ],
+        );
+        let c = Camera::orthographic(Mat4::IDENTITY, 40, 20, 0.01, 1e4);
+        check(
+            &c,
+            &[
+                (POS[0], [0.0, 0.0, 0.01], [0.0, 0.0, 1.0], 9999.99),
+                (POS[1], [0.8, -0.3, 0.01], [0.0, 0.0, 1.0], 9999.99),
+                (POS[2], [-0.8, 0.25, 0.01], [0.0, 0.0, 1.0], 9999.99),
+            ],
+        );
     }
 }

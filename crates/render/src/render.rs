@@ -2,7 +2,7 @@
 //! belongs to one tile and accumulates its samples in index order, so the
 //! film is bitwise identical for any thread count or scheduling.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::film::{Film, Filter};
 use crate::integrator::{Integrator, RayStats};
 use crate::sampling::Sampler;
@@ -17,7 +17,7 @@ const TILE: u32 = 16;
 #[derive(Debug, Clone)]
 pub struct RenderJob {
     pub scene: Scene,
-    pub camera: PerspectiveCamera,
+    pub camera: Camera,
     pub integrator: Integrator,
     pub sampler: Sampler,
     pub filter: Filter,
@@ -103,7 +103,7 @@ impl RenderJob {
                     let mut rng = self.sampler.stream((px + self.crop_offset.0, py + self.crop_offset.1), s);
                     let (offset, weight) = self.filter.sample_2d(rng.next_2d());
                     let pos = (origin + Vec2::new(px as f32, py as f32) + offset) * inv;
-                    let ray = self.camera.generate_ray(pos);
+                    let ray = self.camera.sample_ray(pos, &mut rng);
                     let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays);
                     stats.samples += 1;
                     if l.is_finite() && weight.is_finite() {

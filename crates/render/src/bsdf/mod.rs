@@ -64,6 +64,8 @@ pub enum BsdfKind<'a> {
     RoughPlastic(RoughPlastic<'a>),
     /// Mitsuba `null`: light passes straight through.
     Null,
+    /// Mitsuba `blendbsdf`: two nested materials, resolved on demand.
+    Blend(crate::material::blend::Blend<'a>),
 }
 
 /// The BSDF at a hit: a model and Mitsuba `mask`'s opacity (1 when unmasked).
@@ -125,6 +127,7 @@ impl Bsdf<'_> {
                 BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                     false
                 }
+                BsdfKind::Blend(b) => b.has_smooth(),
             }
     }
 
@@ -136,6 +139,7 @@ impl Bsdf<'_> {
             BsdfKind::RoughDielectric(b) => b.eval(wo, wi),
             BsdfKind::Plastic(b) => b.eval(wo, wi),
             BsdfKind::RoughPlastic(b) => b.eval(wo, wi),
+            BsdfKind::Blend(b) => b.eval(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                 Spectrum::ZERO
             }
@@ -154,6 +158,7 @@ impl Bsdf<'_> {
             BsdfKind::RoughDielectric(b) => b.pdf(wo, wi),
             BsdfKind::Plastic(b) => b.pdf(wo, wi),
             BsdfKind::RoughPlastic(b) => b.pdf(wo, wi),
+            BsdfKind::Blend(b) => b.pdf(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => 0.0,
         };
         match self.perturbation {
@@ -189,6 +194,7 @@ impl Bsdf<'_> {
             BsdfKind::RoughDielectric(b) => b.sample(wo, u, u2),
             BsdfKind::Plastic(b) => b.sample(wo, u, u2),
             BsdfKind::RoughPlastic(b) => b.sample(wo, u, u2),
+            BsdfKind::Blend(b) => b.sample(wo, u, u2),
             BsdfKind::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 }),
         }?;
         s.pdf *= self.opacity;

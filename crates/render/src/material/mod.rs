@@ -3,6 +3,7 @@
 //! the textures, resolves the wrappers (`twosided`, `mask`, `normalmap`,
 //! `bumpmap`) and returns a plain [`Bsdf`] (pbrt-v4's Material → BSDF split).
 
+pub mod blend;
 pub mod bumpmap;
 pub mod normalmap;
 
@@ -98,6 +99,12 @@ pub enum Material {
         height: Texture,
         scale: f32,
         inner: Box<Material>,
+    },
+    /// Mitsuba `blendbsdf`: (1 − weight) · first + weight · second.
+    Blend {
+        weight: Texture,
+        first: Box<Material>,
+        second: Box<Material>,
     },
 }
 
@@ -224,6 +231,9 @@ impl Material {
                     tables,
                 }),
                 Material::Null => BsdfKind::Null,
+                Material::Blend { weight, first, second } => {
+                    BsdfKind::Blend(blend::Blend { weight: weight.eval_1(si).clamp(0.0, 1.0), first, second, si: *si })
+                }
             };
             return Bsdf { kind, opacity, perturbation };
         }

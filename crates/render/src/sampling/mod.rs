@@ -9,6 +9,7 @@ pub mod distrib2d;
 pub mod mis;
 pub mod rng;
 pub mod sampler;
+pub mod sequences;
 pub mod warp;
 
 pub use distrib1d::Distribution1D;

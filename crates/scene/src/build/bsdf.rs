@@ -27,6 +27,7 @@ pub(crate) const BSDFS: &[&str] = &[
     "normalmap",
     "bumpmap",
     "null",
+    "blendbsdf",
 ];
 
 /// An IOR given as a number or one of Mitsuba's named materials.
@@ -248,6 +249,23 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
             Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? }
         }
         "null" => Material::Null,
+        "blendbsdf" => {
+            let has_weight =
+                node.has("weight") || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some("weight"));
+            if !has_weight {
+                return Err(node.error("blendbsdf needs a 'weight' (a float or a texture)"));
+            }
+            let weight = tex.float(node, "weight", 0.5)?;
+            let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
+            let [a, b] = inner.as_slice() else {
+                return Err(node.error("blendbsdf needs exactly two nested BSDFs"));
+            };
+            Material::Blend {
+                weight,
+                first: Box::new(build_material(&a.node, tex)?),
+                second: Box::new(build_material(&b.node, tex)?),
+            }
+        }
         _ => return Err(unsupported(node, BSDFS)),
     };
     node.check_all_used(&[Kind::Bsdf, Kind::Texture])?;

@@ -14,7 +14,7 @@ use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
 use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
-use penumbra_render::camera::{FovAxis, PerspectiveCamera};
+use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind};
 use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
 use penumbra_render::integrator::{
@@ -514,7 +514,7 @@ struct FilmRect {
     crop_size: (u32, u32),
 }
 
-type SensorParts = (PerspectiveCamera, Filter, FilmRect, Sampler);
+type SensorParts = (Camera, Filter, FilmRect, Sampler);
 
 /// Field of view in degrees along `fov_axis`: `fov`, or Mitsuba's
 /// `focal_length` ("50mm" by default), a 35 mm-equivalent focal length that
@@ -544,11 +544,15 @@ fn field_of_view(node: &Node) -> Result<(f64, Option<FovAxis>)> {
     }
 }
 
-fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
-    if node.plugin != "perspective" {
-        return Err(unsupported(node, &["perspective"]));
-    }
-    let to_world = node.transform("to_world")?;
+/// The sensor's projection parameters, read as Mitsuba 3.9.1's
+/// `perspective`, `thinlens` and `orthographic` read them.
+enum SensorModel {
+    Perspective { fov: f64, axis: FovAxis },
+    ThinLens { fov: f64, axis: FovAxis, aperture_radius: f64, focus_distance: f64 },
+    Orthographic,
+}
+
+fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
     let (fov, forced_axis) = field_of_view(node)?;
     let axis = match node.string("fov_axis", "x")?.as_str() {
         _ if forced_axis.is_some() => forced_axis.unwrap_or(FovAxis::X),
@@ -564,18 +568,68 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
             ))
         }
     };
+    Ok((fov, axis))
+}
+
+/// Whether a camera-to-world matrix scales (Mitsuba's `has_scale`: some
+/// column of the linear part is not of unit length).
+fn has_scale(m: &glam::DMat4) -> bool {
+    [m.x_axis, m.y_axis, m.z_axis].iter().any(|c| (c.truncate().length_squared() - 1.0).abs() > 1e-3)
+}
+
+fn sensor_model(node: &Node, to_world: &glam::DMat4, far: f64) -> Result<SensorModel> {
+    match node.plugin.as_str() {
+        "perspective" => {
+            let (fov, axis) = fov_and_axis(node)?;
+            Ok(SensorModel::Perspective { fov, axis })
+        }
+        "thinlens" => {
+            let (fov, axis) = fov_and_axis(node)?;
+            let aperture_radius = node
+                .get_float("aperture_radius")?
+                .ok_or_else(|| node.error("thinlens: 'aperture_radius' is required"))?;
+            if !(aperture_radius >= 0.0) {
+                return Err(LoadError::at(node.loc_of("aperture_radius"), "aperture_radius must not be negative"));
+            }
+            // Mitsuba replaces a zero radius by machine epsilon (with a warning).
+            let aperture_radius = if aperture_radius == 0.0 { f32::EPSILON as f64 } else { aperture_radius };
+            let focus_distance = node.float("focus_distance", far)?;
+            if !(focus_distance > 0.0) {
+                return Err(LoadError::at(node.loc_of("focus_distance"), "focus_distance must be positive"));
+            }
+            if has_scale(to_world) {
+                return Err(node.error(
+                    "thinlens: scale factors in the camera-to-world transformation are not allowed (as in Mitsuba)",
+                ));
+            }
+            Ok(SensorModel::ThinLens { fov, axis, aperture_radius, focus_distance })
+        }
+        "orthographic" => Ok(SensorModel::Orthographic),
+        _ => Err(unsupported(node, &["perspective", "thinlens", "orthographic"])),
+    }
+}
+
+fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
+    if !matches!(node.plugin.as_str(), "perspective" | "thinlens" | "orthographic") {
+        return Err(unsupported(node, &["perspective", "thinlens", "orthographic"]));
+    }
+    let to_world = node.transform("to_world")?;
     let near = node.float("near_clip", 0.01)?;
     let far = node.float("far_clip", 10000.0)?;
     if !(near > 0.0 && far > near) {
         return Err(node.error("near_clip must be positive and smaller than far_clip"));
     }
-    for p in ["principal_point_offset_x", "principal_point_offset_y"] {
-        if node.float(p, 0.0)? != 0.0 {
-            return Err(LoadError::at(node.loc_of(p), format!("{p} is not supported yet")));
+    let model = sensor_model(node, &to_world, far)?;
+    if !matches!(model, SensorModel::Orthographic) {
+        for p in ["principal_point_offset_x", "principal_point_offset_y"] {
+            if node.float(p, 0.0)? != 0.0 {
+                return Err(LoadError::at(node.loc_of(p), format!("{p} is not supported yet")));
+            }
         }
     }
-    // focus_distance is read by every projective camera but only changes thin lenses.
-    node.accept(&["shutter_open", "shutter_close", "focus_distance"]);
+    node.accept(&["shutter_open", "shutter_close"]);
+    // Every projective camera of Mitsuba reads it; only thinlens uses it.
+    node.accept(&["focus_distance"]);
 
     // Film.
     let film =
@@ -628,7 +682,23 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
                     }
                     SamplerKind::Stratified
                 }
-                _ => return Err(unsupported(&s, &["independent", "stratified"])),
+                "multijitter" => SamplerKind::Multijitter { jitter: s.bool("jitter", true)? },
+                "orthogonal" => {
+                    if s.int("strength", 2)? != 2 {
+                        return Err(LoadError::at(
+                            s.loc_of("strength"),
+                            "orthogonal: only strength 2 (Bose construction, the default) is supported",
+                        ));
+                    }
+                    SamplerKind::Orthogonal { jitter: s.bool("jitter", true)? }
+                }
+                "ldsampler" => SamplerKind::LowDiscrepancy,
+                _ => {
+                    return Err(unsupported(
+                        &s,
+                        &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"],
+                    ))
+                }
             };
             let spp = s.int("sample_count", 4)?;
             let seed = s.int("seed", 0)?;
@@ -642,24 +712,29 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if let Some(o) = ov.spp {
         spp = o;
     }
-    if kind == SamplerKind::Stratified {
-        // Mitsuba's stratified sampler rounds the count up to a perfect
-        // square (checked with 3.9.1: 2 -> 4, 10 -> 16, 20 -> 25).
-        let r = (spp as f64).sqrt().ceil() as u32;
-        spp = r.saturating_mul(r);
-    }
+    // Mitsuba's stratified samplers round the count up to what their
+    // construction needs (checked with 3.9.1, e.g. stratified 10 -> 16,
+    // multijitter 10 -> 12, orthogonal 16 -> 25, ldsampler 17 -> 64).
+    spp = kind.round_sample_count(spp);
     if let Some(o) = ov.seed {
         seed = o;
     }
     node.check_all_used(&[Kind::Film, Kind::Sampler])?;
-    let camera = PerspectiveCamera::new(
-        to_world.as_mat4(),
-        fov as f32,
-        axis,
-        width as u32,
-        height as u32,
-        near as f32,
-        far as f32,
-    );
+    let (m, w, h) = (to_world.as_mat4(), width as u32, height as u32);
+    let camera = match model {
+        SensorModel::Perspective { fov, axis } => Camera::new(m, fov as f32, axis, w, h, near as f32, far as f32),
+        SensorModel::ThinLens { fov, axis, aperture_radius, focus_distance } => Camera::thin_lens(
+            m,
+            fov as f32,
+            axis,
+            w,
+            h,
+            near as f32,
+            far as f32,
+            aperture_radius as f32,
+            focus_distance as f32,
+        ),
+        SensorModel::Orthographic => Camera::orthographic(m, w, h, near as f32, far as f32),
+    };
     Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))
 }

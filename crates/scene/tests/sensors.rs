@@ -1,0 +1,188 @@
+//! Sensors (`perspective`, `thinlens`, `orthographic`) and samplers
+//! (`multijitter`, `orthogonal`, `ldsampler`) in scene files: parameters and
+//! errors as Mitsuba 3.9.1 reads them, and the projections checked by rendering.
+
+use penumbra_render::camera::Projection;
+use penumbra_render::film::Film;
+use penumbra_render::render::RenderJob;
+use penumbra_render::sampling::SamplerKind;
+use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::mitsuba::parse_str;
+use std::path::Path;
+
+fn job_of(xml: &str) -> Result<RenderJob, penumbra_scene::LoadError> {
+    build(&parse_str(xml, Path::new("sensors.xml"), &[])?, &Overrides::default())
+}
+
+/// A sensor of type `sensor` with `params`, a 16x16 box-filtered film and
+/// `sampler`, looking down -z from z = 4 at an emitting 2x2 square (the
+/// rectangle [-1, 1]², radiance 1) at z = 0; emitters only (max_depth 1).
+fn scene(sensor: &str, params: &str, sampler: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="1"/></integrator>
+<sensor type="{sensor}">
+  {params}
+  {sampler}
+  <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
+</sensor>
+<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+</scene>"#
+    )
+}
+
+const LOOK: &str = r#"<transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>"#;
+
+fn render(job: &RenderJob, spp: u32) -> Vec<[f32; 3]> {
+    let mut film = Film::new(job.width, job.height);
+    job.render_into(&mut film, 0..spp, &|_| {});
+    film.develop()
+}
+
+#[test]
+fn orthographic_scale_sets_the_view() {
+    // scale 2 then lookat: the 16x16 film spans [-2, 2]² at the square, so
+    // the square covers exactly the central 8x8 pixels.
+    let ortho = format!(
+        r#"<transform name="to_world"><scale x="2" y="2"/><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>"#
+    );
+    let job = job_of(&scene("orthographic", &ortho, "")).unwrap();
+    assert!(matches!(job.camera.projection, Projection::Orthographic { .. }));
+    let img = render(&job, 4);
+    for y in 0..16 {
+        for x in 0..16 {
+            let inside = (4..12).contains(&x) && (4..12).contains(&y);
+            assert_eq!(img[y * 16 + x][0], if inside { 1.0 } else { 0.0 }, "pixel ({x}, {y})");
+        }
+    }
+    // Orthographic cameras take no field of view.
+    let e = job_of(&scene("orthographic", &format!("{ortho}<float name=\"fov\" value=\"30\"/>"), ""));
+    assert!(e.unwrap_err().to_string().contains("fov"));
+}
+
+#[test]
+fn thin_lens_in_focus_matches_the_pinhole_and_blurs_out_of_focus() {
+    let fov = r#"<float name="fov" value="40"/>"#;
+    let pin = render(&job_of(&scene("perspective", &format!("{fov}{LOOK}"), "")).unwrap(), 64);
+    let lens = |focus: f32| {
+        let p = format!(
+            r#"{fov}{LOOK}<float name="aperture_radius" value="0.3"/><float name="focus_distance" value="{focus}"/>"#
+        );
+        let job = job_of(&scene("thinlens", &p, "")).unwrap();
+        assert_eq!(job.camera.projection, Projection::ThinLens { aperture_radius: 0.3, focus_distance: focus });
+        render(&job, 64)
+    };
+    // Focused on the square: every lens ray through a film point meets the
+    // pinhole ray on the square, so pixels agree (same film samples).
+    let sharp = lens(4.0);
+    let max_diff = pin.iter().zip(&sharp).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f32::max);
+    assert!(max_diff < 1e-6, "in focus: max difference {max_diff}");
+    // Focused far behind it: the edges blur (partial pixels appear and the
+    // sharp image's full pixels at the border lose some light), energy kept.
+    let blurred = lens(40.0);
+    let partial = |img: &[[f32; 3]]| img.iter().filter(|p| p[0] > 0.02 && p[0] < 0.98).count();
+    assert!(partial(&blurred) > partial(&pin) + 16, "{} vs {}", partial(&blurred), partial(&pin));
+    let sum = |img: &[[f32; 3]]| img.iter().map(|p| p[0] as f64).sum::<f64>();
+    assert!((sum(&blurred) - sum(&pin)).abs() < 0.05 * sum(&pin), "{} vs {}", sum(&blurred), sum(&pin));
+}
+
+#[test]
+fn thin_lens_parameters_follow_mitsuba() {
+    let fov = r#"<float name="fov" value="40"/>"#;
+    // focus_distance defaults to far_clip.
+    let p = format!(r#"{fov}<float name="aperture_radius" value="0.1"/><float name="far_clip" value="50"/>"#);
+    let job = job_of(&scene("thinlens", &p, "")).unwrap();
+    assert_eq!(job.camera.projection, Projection::ThinLens { aperture_radius: 0.1, focus_distance: 50.0 });
+    // aperture_radius is required; scaling transforms are refused (as Mitsuba).
+    assert!(job_of(&scene("thinlens", fov, "")).unwrap_err().to_string().contains("aperture_radius"));
+    let scaled = format!(
+        r#"{fov}<float name="aperture_radius" value="0.1"/><transform name="to_world"><scale value="2"/></transform>"#
+    );
+    assert!(job_of(&scene("thinlens", &scaled, "")).unwrap_err().to_string().contains("scale"));
+    // perspective accepts (and ignores) focus_distance, as every Mitsuba projective camera.
+    assert!(job_of(&scene("perspective", &format!("{fov}<float name=\"focus_distance\" value=\"3\"/>"), "")).is_ok());
+    let e = job_of(&scene("fisheye", fov, "")).unwrap_err().to_string();
+    assert!(e.contains("sensors.xml:3") && e.contains("thinlens") && e.contains("orthographic"), "{e}");
+}
+
+#[test]
+fn samplers_parse_with_mitsubas_parameters_and_counts() {
+    let fov = r#"<float name="fov" value="40"/>"#;
+    let with = |s: &str| job_of(&scene("perspective", fov, s));
+    let j = with(r#"<sampler type="multijitter"><integer name="sample_count" value="10"/><boolean name="jitter" value="false"/><integer name="seed" value="3"/></sampler>"#).unwrap();
+    assert_eq!((j.sampler.kind, j.sampler.spp, j.sampler.seed), (SamplerKind::Multijitter { jitter: false }, 12, 3));
+    let j = with(r#"<sampler type="orthogonal"><integer name="sample_count" value="16"/></sampler>"#).unwrap();
+    assert_eq!((j.sampler.kind, j.sampler.spp), (SamplerKind::Orthogonal { jitter: true }, 25));
+    let j = with(r#"<sampler type="ldsampler"><integer name="sample_count" value="17"/></sampler>"#).unwrap();
+    assert_eq!((j.sampler.kind, j.sampler.spp), (SamplerKind::LowDiscrepancy, 64));
+    // Only the Bose construction (strength 2); ldsampler has no jitter.
+    let e = with(r#"<sampler type="orthogonal"><integer name="strength" value="3"/></sampler>"#).unwrap_err();
+    assert!(e.to_string().contains("strength"), "{e}");
+    let e = with(r#"<sampler type="ldsampler"><boolean name="jitter" value="false"/></sampler>"#).unwrap_err();
+    assert!(e.to_string().contains("jitter"), "{e}");
+    let e = with(r#"<sampler type="halton"/>"#).unwrap_err().to_string();
+    assert!(e.contains("ldsampler") && e.contains("multijitter"), "{e}");
+}
+
+#[test]
+fn every_sampler_renders_the_same_image_in_expectation() {
+    // The blurred thin-lens view (4 dimensions per sample) of the square:
+    // each sampler's image mean agrees with a many-sample independent render.
+    let p = format!(
+        r#"<float name="fov" value="40"/>{LOOK}<float name="aperture_radius" value="0.5"/><float name="focus_distance" value="20"/>"#
+    );
+    let mean = |img: &[[f32; 3]]| img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64;
+    let reference = mean(&render(&job_of(&scene("thinlens", &p, "")).unwrap(), 1024));
+    for s in ["multijitter", "orthogonal", "ldsampler", "stratified", "independent"] {
+        let xml = scene(
+            "thinlens",
+            &p,
+            &format!(r#"<sampler type="{s}"><integer name="sample_count" value="16"/></sampler>"#),
+        );
+        let job = job_of(&xml).unwrap();
+        let m = mean(&render(&job, job.sampler.spp));
+        eprintln!("{s}: image mean {m:.5}, reference {reference:.5}");
+        // Samples are 0 or 1: the image mean of 16 spp x 256 pixels has a
+        // standard error of at most sqrt(1/4 / 4096) = 0.0078 (far less
+        // here, most pixels being constant); measured deviations are below 0.004.
+        assert!((m - reference).abs() < 0.016, "{s}: {m} vs {reference}");
+    }
+}
+
+/// `blendbsdf` (tested here with the other plugins of this change).
+#[test]
+fn blendbsdf_parses_weight_and_two_nested_bsdfs() {
+    use penumbra_render::material::Material;
+    let with = |bsdf: &str| {
+        let xml = format!(
+            r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+<shape type="sphere">{bsdf}</shape></scene>"#
+        );
+        job_of(&xml).map(|j| j.scene.materials[j.scene.shape_info[0].material as usize].clone())
+    };
+    let two = r#"<bsdf type="diffuse"/><bsdf type="conductor"/>"#;
+    match with(&format!(r#"<bsdf type="blendbsdf"><float name="weight" value="0.25"/>{two}</bsdf>"#)).unwrap() {
+        Material::Blend { weight, first, second } => {
+            assert_eq!(weight.constant(), Some(glam::Vec3::splat(0.25)));
+            assert!(matches!(*first, Material::Diffuse { .. }) && matches!(*second, Material::Conductor { .. }));
+        }
+        m => panic!("{m:?}"),
+    }
+    let tex = r#"<texture type="checkerboard" name="weight"/>"#;
+    assert!(matches!(with(&format!(r#"<bsdf type="blendbsdf">{tex}{two}</bsdf>"#)).unwrap(), Material::Blend { .. }));
+    let e = with(&format!(r#"<bsdf type="blendbsdf">{two}</bsdf>"#)).unwrap_err().to_string();
+    assert!(e.contains("weight") && e.contains("sensors.xml:2"), "{e}");
+    let e = with(r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>"#);
+    assert!(e.unwrap_err().to_string().contains("two nested"));
+}
+
+#[test]
+fn a_top_level_sampler_can_be_referenced_by_the_sensor() {
+    // As in Mitsuba's documentation scenes (sampler_*.xml).
+    let xml = r#"<scene version="3.0.0">
+<sampler type="ldsampler" id="my_sampler"><integer name="sample_count" value="16"/></sampler>
+<sensor type="perspective"><ref id="my_sampler"/><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+</scene>"#;
+    let j = job_of(xml).unwrap();
+    assert_eq!((j.sampler.kind, j.sampler.spp), (SamplerKind::LowDiscrepancy, 16));
+}
