@@ -85,3 +85,13 @@ fn rough_spheres_match_mitsuba() {
 fn textured_matches_mitsuba() {
     compare("textured", 256);
 }
+
+#[test]
+fn thinlens_and_multijitter_match_mitsuba() {
+    compare("sensors_samplers", 256);
+}
+
+#[test]
+fn orthographic_and_ldsampler_match_mitsuba() {
+    compare("orthographic", 256);
+}
