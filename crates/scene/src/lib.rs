@@ -9,6 +9,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 pub mod props;
+pub mod serialized;
 
 pub use build::Overrides;
 pub use error::{FileLoc, LoadError, Result};

@@ -2,7 +2,7 @@
 //! the geometric questions (bounds of its primitives, the interaction at a
 //! hit, area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Ray, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Cylinder, Ray, SurfaceInteraction, TriangleMesh};
 use crate::math::{safe_sqrt, Frame, Mat3, Mat4, PI};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -61,6 +61,8 @@ pub enum Shape {
         n: Vec3,
         area: f32,
     },
+    /// Mitsuba `cylinder`: an open tube (see [`Cylinder`]).
+    Cylinder(Cylinder),
 }
 
 impl Shape {
@@ -103,6 +105,7 @@ impl Shape {
                     .collect();
                 Aabb::from_points(&pts)
             }
+            Shape::Cylinder(c) => c.bounds(),
         }
     }
 
@@ -111,6 +114,7 @@ impl Shape {
             Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
             Shape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
             Shape::Disk { area, .. } => *area,
+            Shape::Cylinder(c) => c.area(),
         }
     }
 
@@ -129,6 +133,7 @@ impl Shape {
                 let p = o + t * d;
                 (p.x * p.x + p.y * p.y <= 1.0).then_some((t, Vec2::new(p.x, p.y)))
             }
+            Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
             Shape::Mesh(_) => None,
         }
     }
@@ -211,6 +216,10 @@ impl Shape {
                 let dpdv = world_from_object.transform_vector3(Vec3::new(-s, c, 0.0)) * (2.0 * PI * r);
                 (p, *n, *n, Vec2::new(r, v), dpdu, dpdv)
             }
+            Shape::Cylinder(c) => {
+                let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);
+                (p, n, n, tex, dpdu, dpdv)
+            }
         };
         SurfaceInteraction {
             p,
@@ -246,6 +255,7 @@ impl Shape {
                 let q = warp::sample_concentric_disk(u);
                 (world_from_object.transform_point3(Vec3::new(q.x, q.y, 0.0)), *n, 1.0 / area)
             }
+            Shape::Cylinder(c) => c.sample_area(u),
         }
     }
 

@@ -40,7 +40,8 @@ pub struct Overrides {
     pub integrator: Option<String>,
 }
 
-const SHAPES: &[&str] = &["rectangle", "cube", "sphere", "disk", "obj", "ply"];
+const SHAPES: &[&str] =
+    &["rectangle", "cube", "sphere", "disk", "cylinder", "obj", "ply", "serialized", "shapegroup", "instance"];
 const EMITTERS: &[&str] = &["area (inside a shape)", "constant", "envmap", "point", "spot", "directional"];
 
 fn unsupported(node: &Node, supported: &[&str]) -> LoadError {
@@ -191,6 +192,7 @@ impl Builder {
                 m.validate().map_err(|e| LoadError::at(&loc, format!("mesh '{}': {e}", path.display())))?;
                 Shape::Mesh(Mesh::new(m, face_normals))
             }
+            "serialized" => serialized_shape(node, &to_world, flip)?,
             "sphere" => {
                 let c = node.get_point("center")?.unwrap_or(DVec3::ZERO);
                 let r = node.float("radius", 1.0)?;
@@ -205,6 +207,14 @@ impl Builder {
                 Shape::sphere_rotated(center.as_vec3(), axes[0] as f32, rot.as_mat3(), flip)
             }
             "disk" => Shape::disk(to_world.as_mat4(), flip),
+            "cylinder" => {
+                let p0 = node.get_point("p0")?.unwrap_or(DVec3::ZERO);
+                let p1 = node.get_point("p1")?.unwrap_or(DVec3::Z);
+                let r = node.float("radius", 1.0)?;
+                let c =
+                    penumbra_render::geometry::Cylinder::new(to_world, p0, p1, r, flip).map_err(|e| node.error(e))?;
+                Shape::Cylinder(c)
+            }
             _ => return Err(unsupported(node, SHAPES)),
         };
         if shape.prim_count() == 0 {
@@ -330,6 +340,34 @@ impl Builder {
         node.check_all_used(&[])?;
         Ok(light)
     }
+}
+
+/// Mitsuba's `serialized` shape: one mesh (`shape_index`) of a `.serialized` file.
+fn serialized_shape(node: &Node, to_world: &DMat4, flip: bool) -> Result<Shape> {
+    let (file, loc) =
+        node.get_string("filename")?.ok_or_else(|| node.error("serialized needs a 'filename'".to_string()))?;
+    let path = resolve(&loc.file, &file);
+    if !path.exists() {
+        return Err(LoadError::at(&loc, format!("mesh file '{}' not found", path.display())));
+    }
+    let index = node.int("shape_index", 0)?;
+    if index < 0 {
+        return Err(LoadError::at(node.loc_of("shape_index"), "shape_index must be nonnegative"));
+    }
+    let s = crate::serialized::load_serialized(&path, index as usize)
+        .map_err(|e| LoadError::at(&loc, format!("'{}': {}", path.display(), e.message)))?;
+    // Mitsuba 3.9.1 ignores the file's face-normals flag (0x0010); so do we.
+    let face_normals = node.bool("face_normals", false)?;
+    let mut m = s.mesh;
+    m.transform(&to_world.as_mat4());
+    if !face_normals && m.normals.is_empty() {
+        // As Mitsuba: smooth normals from the (world-space) faces.
+        m.recompute_vertex_normals();
+    }
+    if flip {
+        m.flip();
+    }
+    Ok(Shape::Mesh(Mesh::new(m, face_normals)))
 }
 
 /// Resolves a file name relative to the directory of the scene file that names it.
