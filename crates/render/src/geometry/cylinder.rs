@@ -321,21 +321,6 @@ mod tests {
         assert!(hits > 200 && inside_hits > 50, "{hits} hits, {inside_hits} from inside");
     }
 
-    /// Density of area sampling seen from `p_ref` along `w`: both crossings count.
-    fn density(s: &Shape, p_ref: Vec3, w: Vec3) -> f64 {
-        let mut ray = Ray::new(p_ref, w, f32::INFINITY);
-        let mut total = 0.0;
-        let mut t0 = 0.0;
-        while let Some((t, uv)) = s.intersect_analytic(&ray) {
-            let si = s.interaction(0, 0, &ray, t, uv);
-            total += s.pdf_direction(p_ref, si.p, si.n) as f64;
-            t0 += t;
-            ray = Ray::new(p_ref + w * (t0 + 1e-4), w, f32::INFINITY);
-            t0 += 1e-4;
-        }
-        total
-    }
-
     /// Density of area sampling seen from `p_ref` along `w`, summed over the
     /// crossings of the ray with the tube; also returns how many there are.
     fn crossings(s: &Shape, p_ref: Vec3, w: Vec3) -> (f64, usize) {
