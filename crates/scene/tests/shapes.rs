@@ -156,3 +156,45 @@ fn cylinder_parameters_are_read() {
     .to_string();
     assert!(e.contains("scene.xml:") && e.contains("cylinder"), "{e}");
 }
+
+mod common;
+
+/// Instanced geometry renders as the same geometry written out: the same
+/// random numbers follow the same paths, so the images agree to rounding
+/// (a path may branch differently where rounding moves a hit across an edge).
+#[test]
+fn instances_render_like_flattened_geometry() {
+    let dir = common::root().join("tests/scenes/shapes");
+    let a = common::render_with_variance(&dir.join("instanced.xml"), 16, 2, None, 5);
+    let b = common::render_with_variance(&dir.join("flattened.xml"), 16, 2, None, 5);
+    let n = a.mean.len();
+    let close =
+        a.mean.iter().zip(&b.mean).filter(|(x, y)| (0..3).all(|c| (x[c] - y[c]).abs() < 1e-3 * (1.0 + y[c]))).count();
+    assert!(close as f64 >= 0.97 * n as f64, "{close} of {n} pixels agree");
+    for c in 0..3 {
+        let ma = a.mean.iter().map(|p| p[c]).sum::<f64>() / n as f64;
+        let mb = b.mean.iter().map(|p| p[c]).sum::<f64>() / n as f64;
+        assert!((ma - mb).abs() < 1e-2 * mb, "channel {c}: {ma} vs {mb}");
+    }
+    // And the instances are really there: the image differs from an empty floor.
+    assert!(a.mean.iter().any(|p| p[0] > 1.5 * p[2]), "no red box visible");
+}
+
+#[test]
+fn instancing_errors_name_the_problem() {
+    let dir = temp_dir();
+    let group = |inner: &str| format!(r#"<shape type="shapegroup" id="g">{inner}</shape>"#);
+    let cases = [
+        (
+            group(r#"<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#),
+            "emitters inside a shapegroup",
+        ),
+        (group(r#"<shape type="sphere"/>"#) + r#"<shape type="instance"/>"#, "needs one shapegroup"),
+        (group(""), "holds no shapes"),
+        (group(r#"<shape type="instance"><ref id="x"/></shape>"#), "x"),
+    ];
+    for (xml, want) in cases {
+        let e = load(&xml, &dir).err().expect("must fail").to_string();
+        assert!(e.contains(want) && e.contains("scene.xml:"), "{e}");
+    }
+}
