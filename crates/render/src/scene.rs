@@ -91,7 +91,7 @@ impl Scene {
         let hit = self.accel.intersect(ray, &self.shapes)?;
         let prim = self.accel.prims[hit.prim as usize];
         let shape = prim.shape();
-        Some(self.shapes[shape as usize].interaction(shape, prim.index() as usize, ray, hit.t, hit.uv))
+        Some(self.shapes[shape as usize].interaction(shape, hit.index as usize, ray, hit.t, hit.uv))
     }
 
     /// Whether the segment from `si` along `wi` is blocked before `dist`.

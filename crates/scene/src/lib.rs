@@ -9,6 +9,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 pub mod props;
+pub mod serialized;
 pub mod spectrum;
 
 pub use build::Overrides;

@@ -18,8 +18,12 @@ pub enum Prim {
         shape: u32,
         index: u32,
     },
-    /// A sphere or disk, intersected through its shape.
+    /// A sphere, disk or cylinder, intersected through its shape.
     Analytic {
+        shape: u32,
+    },
+    /// An instance of a shape group (a BVH of its own, in object space).
+    Instance {
         shape: u32,
     },
 }
@@ -28,7 +32,7 @@ impl Prim {
     #[inline]
     pub fn shape(&self) -> u32 {
         match *self {
-            Prim::Triangle { shape, .. } | Prim::Analytic { shape } => shape,
+            Prim::Triangle { shape, .. } | Prim::Analytic { shape } | Prim::Instance { shape } => shape,
         }
     }
     /// Index of the primitive within its shape (triangle index; 0 otherwise).
@@ -36,7 +40,7 @@ impl Prim {
     pub fn index(&self) -> u32 {
         match *self {
             Prim::Triangle { index, .. } => index,
-            Prim::Analytic { .. } => 0,
+            Prim::Analytic { .. } | Prim::Instance { .. } => 0,
         }
     }
 }
@@ -77,6 +81,9 @@ pub struct Hit {
     pub prim: u32,
     /// Triangle barycentrics (b1, b2) or the analytic shape's local coordinates.
     pub uv: Vec2,
+    /// The primitive within its shape: the triangle index (0 for analytic
+    /// shapes), or for an instance the index into its group's BVH primitives.
+    pub index: u32,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -119,6 +126,17 @@ impl Accel {
                         });
                     }
                 }
+                Shape::GroupMember => {}
+                Shape::Instance(i) => {
+                    let b = i.bounds();
+                    if b.min.x <= b.max.x {
+                        items.push(BuildPrim {
+                            bounds: b,
+                            centroid: b.center(),
+                            prim: Prim::Instance { shape: si as u32 },
+                        });
+                    }
+                }
                 _ => {
                     let b = shape.prim_bounds(0);
                     items.push(BuildPrim {
@@ -142,9 +160,9 @@ impl Accel {
     pub fn intersect(&self, ray: &Ray, shapes: &[Shape]) -> Option<Hit> {
         let mut ray = *ray;
         let mut best: Option<Hit> = None;
-        self.traverse(&mut ray, shapes, |ray, prim, t, uv| {
+        self.traverse(&mut ray, shapes, false, |ray, prim, t, uv, index| {
             ray.t_max = t;
-            best = Some(Hit { t, prim, uv });
+            best = Some(Hit { t, prim, uv, index });
             false
         });
         best
@@ -155,7 +173,7 @@ impl Accel {
     pub fn occluded(&self, ray: &Ray, shapes: &[Shape]) -> bool {
         let mut ray = *ray;
         let mut hit = false;
-        self.traverse(&mut ray, shapes, |_, _, _, _| {
+        self.traverse(&mut ray, shapes, true, |_, _, _, _, _| {
             hit = true;
             true
         });
@@ -164,15 +182,21 @@ impl Accel {
 
     /// Walks the tree; `on_hit` returns true to stop (any-hit queries).
     #[inline(always)]
-    fn traverse(&self, ray: &mut Ray, shapes: &[Shape], on_hit: impl FnMut(&mut Ray, u32, f32, Vec2) -> bool) {
+    fn traverse(
+        &self,
+        ray: &mut Ray,
+        shapes: &[Shape],
+        any_hit: bool,
+        on_hit: impl FnMut(&mut Ray, u32, f32, Vec2, u32) -> bool,
+    ) {
         if self.nodes.is_empty() {
             return;
         }
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse_k::<0>(ray, &shear, shapes, on_hit),
-            1 => self.traverse_k::<1>(ray, &shear, shapes, on_hit),
-            _ => self.traverse_k::<2>(ray, &shear, shapes, on_hit),
+            0 => self.traverse_k::<0>(ray, &shear, shapes, any_hit, on_hit),
+            1 => self.traverse_k::<1>(ray, &shear, shapes, any_hit, on_hit),
+            _ => self.traverse_k::<2>(ray, &shear, shapes, any_hit, on_hit),
         }
     }
 
@@ -182,7 +206,8 @@ impl Accel {
         ray: &mut Ray,
         shear: &RayShear,
         shapes: &[Shape],
-        mut on_hit: impl FnMut(&mut Ray, u32, f32, Vec2) -> bool,
+        any_hit: bool,
+        mut on_hit: impl FnMut(&mut Ray, u32, f32, Vec2, u32) -> bool,
     ) {
         let inv_d = Vec3A::from(ray.d.recip());
         let o = Vec3A::from(ray.o);
@@ -199,13 +224,23 @@ impl Accel {
                     let first = node.offset as usize;
                     for (k, prim) in self.prims[first..first + node.count as usize].iter().enumerate() {
                         let found = match prim {
-                            Prim::Triangle { v, .. } => {
-                                intersect_triangle_k::<KZ>(ray, shear, v).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
+                            Prim::Triangle { v, index, .. } => intersect_triangle_k::<KZ>(ray, shear, v)
+                                .map(|(t, b1, b2)| (t, Vec2::new(b1, b2), *index)),
+                            Prim::Analytic { shape } => {
+                                shapes[*shape as usize].intersect_analytic(ray).map(|(t, uv)| (t, uv, 0))
                             }
-                            Prim::Analytic { shape } => shapes[*shape as usize].intersect_analytic(ray),
+                            Prim::Instance { shape } => {
+                                let Shape::Instance(inst) = &shapes[*shape as usize] else { unreachable!() };
+                                if any_hit {
+                                    // Any hit will do: report t_max itself (never read).
+                                    inst.occluded(ray).then_some((ray.t_max, Vec2::ZERO, 0))
+                                } else {
+                                    inst.intersect(ray)
+                                }
+                            }
                         };
-                        if let Some((t, uv)) = found {
-                            if on_hit(ray, (first + k) as u32, t, uv) {
+                        if let Some((t, uv, index)) = found {
+                            if on_hit(ray, (first + k) as u32, t, uv, index) {
                                 return;
                             }
                         }
@@ -409,7 +444,9 @@ mod tests {
             for p in &accel.prims {
                 let t = match p {
                     Prim::Triangle { v, .. } => intersect_triangle(&ray, &shear, v).map(|h| h.0),
-                    Prim::Analytic { shape } => shapes[*shape as usize].intersect_analytic(&ray).map(|h| h.0),
+                    Prim::Analytic { shape } | Prim::Instance { shape } => {
+                        shapes[*shape as usize].intersect_analytic(&ray).map(|h| h.0)
+                    }
                 };
                 if let Some(t) = t {
                     brute = brute.min(t);

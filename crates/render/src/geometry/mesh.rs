@@ -37,6 +37,27 @@ impl TriangleMesh {
         }
     }
 
+    /// Replaces the vertex normals by Mitsuba's: each face's normal weighted
+    /// by its angle at the vertex (Thürmer and Wüthrich 1998), as
+    /// `Mesh::recompute_vertex_normals` in Mitsuba 3.9.1. Vertices that no
+    /// valid face touches get (1, 0, 0), as there.
+    pub fn recompute_vertex_normals(&mut self) {
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for t in &self.indices {
+            let v = t.map(|i| self.positions[i as usize]);
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            if n.length_squared() > 0.0 {
+                let n = n.normalize();
+                for j in 0..3 {
+                    let a = (v[(j + 1) % 3] - v[j]).normalize();
+                    let b = (v[(j + 2) % 3] - v[j]).normalize();
+                    acc[t[j] as usize] += n * unit_angle(a, b);
+                }
+            }
+        }
+        self.normals = acc.into_iter().map(|n| if n.length() != 0.0 { n.normalize() } else { Vec3::X }).collect();
+    }
+
     /// Checks that every index is in range and that attribute arrays match.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.positions.len();
@@ -55,6 +76,15 @@ impl TriangleMesh {
             return Err("a vertex position is not finite".into());
         }
         Ok(())
+    }
+}
+
+/// The angle between unit vectors, accurate for small and large angles.
+fn unit_angle(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        std::f32::consts::PI - 2.0 * ((a + b).length() / 2.0).min(1.0).asin()
+    } else {
+        2.0 * ((a - b).length() / 2.0).min(1.0).asin()
     }
 }
 
@@ -130,6 +160,21 @@ mod tests {
             let centre = (a + b + c) / 3.0;
             assert!(n.dot(centre) > 0.0, "face normal must point away from the centre");
         }
+    }
+
+    #[test]
+    fn recomputed_normals_weight_faces_by_angle() {
+        // A vertex shared by a face in z = 0 (angle 90°) and one in x = 0 (angle 45°).
+        let mut m = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 1.0, 1.0), Vec3::splat(5.0)],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ..Default::default()
+        };
+        m.recompute_vertex_normals();
+        let w = (Vec3::Z * 0.5 + Vec3::X * 0.25).normalize();
+        assert!((m.normals[0] - w).length() < 1e-6, "{}", m.normals[0]);
+        assert_eq!(m.normals[1], Vec3::Z);
+        assert_eq!(m.normals[4], Vec3::X, "unreferenced vertex");
     }
 
     #[test]

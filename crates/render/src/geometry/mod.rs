@@ -1,6 +1,8 @@
 //! Geometric primitives: rays, boxes, triangles, spheres, disks and meshes.
 
 pub mod bounds;
+pub mod cylinder;
+pub mod instance;
 pub mod interaction;
 pub mod mesh;
 pub mod ray;
@@ -8,6 +10,8 @@ pub mod shape;
 pub mod triangle;
 
 pub use bounds::Aabb;
+pub use cylinder::Cylinder;
+pub use instance::{Instance, ShapeGroup};
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};

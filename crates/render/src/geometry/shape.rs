@@ -2,7 +2,7 @@
 //! the geometric questions (bounds of its primitives, the interaction at a
 //! hit, area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Ray, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Cylinder, Instance, Ray, SurfaceInteraction, TriangleMesh};
 use crate::math::{safe_sqrt, Frame, Mat3, Mat4, PI};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -61,6 +61,14 @@ pub enum Shape {
         n: Vec3,
         area: f32,
     },
+    /// Mitsuba `cylinder`: an open tube (see [`Cylinder`]).
+    Cylinder(Cylinder),
+    /// Mitsuba `instance`: a `shapegroup` placed by a transform (see [`Instance`]).
+    Instance(Instance),
+    /// A member of a `shapegroup`: it holds a scene-wide shape id (for its
+    /// material) but no geometry of its own; the group's instances are
+    /// what rays hit. Never in the scene's BVH.
+    GroupMember,
 }
 
 impl Shape {
@@ -86,6 +94,7 @@ impl Shape {
     pub fn prim_count(&self) -> usize {
         match self {
             Shape::Mesh(m) => m.mesh.indices.len(),
+            Shape::GroupMember => 0,
             _ => 1,
         }
     }
@@ -103,6 +112,9 @@ impl Shape {
                     .collect();
                 Aabb::from_points(&pts)
             }
+            Shape::Cylinder(c) => c.bounds(),
+            Shape::Instance(i) => i.bounds(),
+            Shape::GroupMember => Aabb::EMPTY,
         }
     }
 
@@ -111,6 +123,9 @@ impl Shape {
             Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
             Shape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
             Shape::Disk { area, .. } => *area,
+            Shape::Cylinder(c) => c.area(),
+            // Never emitters (Mitsuba forbids emitters in shape groups).
+            Shape::Instance(_) | Shape::GroupMember => 0.0,
         }
     }
 
@@ -129,13 +144,17 @@ impl Shape {
                 let p = o + t * d;
                 (p.x * p.x + p.y * p.y <= 1.0).then_some((t, Vec2::new(p.x, p.y)))
             }
-            Shape::Mesh(_) => None,
+            Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
+            Shape::Instance(i) => i.intersect(ray).map(|(t, uv, _)| (t, uv)),
+            Shape::Mesh(_) | Shape::GroupMember => None,
         }
     }
 
     /// Completes a hit on primitive `prim` at distance `t`; `uv` holds the
     /// triangle barycentrics (b1, b2), or the disk's local (x, y). Fills in
     /// Mitsuba's uv, dp/du, dp/dv and a shading frame aligned with dp/du.
+    /// For an instance, `prim` indexes its group's BVH primitives, and
+    /// `shape` in the result is the hit member's scene-wide id.
     pub fn interaction(&self, shape_id: u32, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
         let wo = -ray.d.normalize();
         let (p, n, sh_n, tex, dpdu, dpdv) = match self {
@@ -211,6 +230,12 @@ impl Shape {
                 let dpdv = world_from_object.transform_vector3(Vec3::new(-s, c, 0.0)) * (2.0 * PI * r);
                 (p, *n, *n, Vec2::new(r, v), dpdu, dpdv)
             }
+            Shape::Cylinder(c) => {
+                let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);
+                (p, n, n, tex, dpdu, dpdv)
+            }
+            Shape::Instance(i) => return i.interaction(prim, ray, t, uv),
+            Shape::GroupMember => unreachable!("group members are hit through their instances"),
         };
         SurfaceInteraction {
             p,
@@ -246,6 +271,8 @@ impl Shape {
                 let q = warp::sample_concentric_disk(u);
                 (world_from_object.transform_point3(Vec3::new(q.x, q.y, 0.0)), *n, 1.0 / area)
             }
+            Shape::Cylinder(c) => c.sample_area(u),
+            Shape::Instance(_) | Shape::GroupMember => unreachable!("instances are never emitters"),
         }
     }
 

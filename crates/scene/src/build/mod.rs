@@ -16,7 +16,7 @@ use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
 use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind};
-use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
+use penumbra_render::geometry::{Instance, Mesh, Shape, ShapeGroup, TriangleMesh};
 use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
 };
@@ -30,6 +30,7 @@ use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
+use std::sync::Arc;
 
 /// Settings from the command line that override the scene file.
 #[derive(Debug, Clone, Default)]
@@ -40,7 +41,8 @@ pub struct Overrides {
     pub integrator: Option<String>,
 }
 
-const SHAPES: &[&str] = &["rectangle", "cube", "sphere", "disk", "obj", "ply"];
+const SHAPES: &[&str] =
+    &["rectangle", "cube", "sphere", "disk", "cylinder", "obj", "ply", "serialized", "shapegroup", "instance"];
 const EMITTERS: &[&str] = &["area (inside a shape)", "constant", "envmap", "point", "spot", "directional"];
 
 fn unsupported(node: &Node, supported: &[&str]) -> LoadError {
@@ -156,6 +158,8 @@ struct Builder {
     bsdf_index: HashMap<*const Node, u32>,
     default_bsdf: Option<u32>,
     default_emitter_bsdf: Option<u32>,
+    /// Shape groups already built, by node identity (instanced through `<ref>`).
+    groups: HashMap<*const Node, Arc<ShapeGroup>>,
 }
 
 impl Builder {
@@ -172,6 +176,84 @@ impl Builder {
     }
 
     fn shape(&mut self, node: &Rc<Node>) -> Result<()> {
+        let (shape, info) = match node.plugin.as_str() {
+            "shapegroup" => {
+                self.shape_group(node)?;
+                return Ok(());
+            }
+            "instance" => self.instance(node)?,
+            _ => self.plain_shape(node)?,
+        };
+        self.shapes.push(shape);
+        self.infos.push(info);
+        Ok(())
+    }
+
+    /// Mitsuba's `shapegroup`: its shapes are built once (scene-wide ids
+    /// hold their materials) into a group that instances place.
+    fn shape_group(&mut self, node: &Rc<Node>) -> Result<Arc<ShapeGroup>> {
+        let key = Rc::as_ptr(node);
+        if let Some(g) = self.groups.get(&key) {
+            return Ok(g.clone());
+        }
+        let (mut shapes, mut ids) = (Vec::new(), Vec::new());
+        for child in &node.children {
+            let c = &child.node;
+            if c.kind != Kind::Shape {
+                continue; // reported by check_all_used below
+            }
+            if c.plugin == "shapegroup" || c.plugin == "instance" {
+                return Err(LoadError::at(
+                    &child.loc,
+                    format!("a {} inside a shapegroup is not supported (nested instancing)", c.plugin),
+                ));
+            }
+            if c.single_child(Kind::Emitter)?.is_some() {
+                return Err(LoadError::at(
+                    &child.loc,
+                    "emitters inside a shapegroup are not allowed (Mitsuba 3 forbids them too)",
+                ));
+            }
+            let (shape, info) = self.plain_shape(c)?;
+            ids.push(self.shapes.len() as u32);
+            self.shapes.push(Shape::GroupMember);
+            self.infos.push(info);
+            shapes.push(shape);
+        }
+        node.check_all_used(&[Kind::Shape])?;
+        if shapes.is_empty() {
+            return Err(node.error("the shapegroup holds no shapes"));
+        }
+        let group = Arc::new(ShapeGroup::new(shapes, ids));
+        self.groups.insert(key, group.clone());
+        Ok(group)
+    }
+
+    /// Mitsuba's `instance`: a shapegroup (by reference) placed by `to_world`.
+    fn instance(&mut self, node: &Rc<Node>) -> Result<(Shape, ShapeInfo)> {
+        let to_world = node.transform("to_world")?;
+        if node.single_child(Kind::Emitter)?.is_some() || node.single_child(Kind::Bsdf)?.is_some() {
+            return Err(node.error("an instance takes no emitter or bsdf; its shapegroup's shapes carry their own"));
+        }
+        let group_node = node
+            .single_child(Kind::Shape)?
+            .filter(|g| g.plugin == "shapegroup")
+            .ok_or_else(|| node.error("an instance needs one shapegroup, e.g. <ref id=\"my_group\"/>"))?;
+        let group = self.shape_group(&group_node)?;
+        if to_world.as_mat4().determinant() == 0.0 {
+            return Err(LoadError::at(node.loc_of("to_world"), "the instance's to_world is singular"));
+        }
+        node.check_all_used(&[Kind::Shape])?;
+        // The material is never read: hits report the member's shape id.
+        let material = *self.default_bsdf.get_or_insert_with(|| {
+            self.materials.push(Material::Diffuse { reflectance: Spectrum::splat(0.5).into() });
+            (self.materials.len() - 1) as u32
+        });
+        Ok((Shape::Instance(Instance::new(group, to_world.as_mat4())), ShapeInfo { material, light: None }))
+    }
+
+    /// Every other shape: geometry, BSDF and an optional area emitter.
+    fn plain_shape(&mut self, node: &Rc<Node>) -> Result<(Shape, ShapeInfo)> {
         let to_world = node.transform("to_world")?;
         let flip = node.bool("flip_normals", false)?;
         let shape = match node.plugin.as_str() {
@@ -203,6 +285,7 @@ impl Builder {
                 m.validate().map_err(|e| LoadError::at(&loc, format!("mesh '{}': {e}", path.display())))?;
                 Shape::Mesh(Mesh::new(m, face_normals))
             }
+            "serialized" => serialized_shape(node, &to_world, flip)?,
             "sphere" => {
                 let c = node.get_point("center")?.unwrap_or(DVec3::ZERO);
                 let r = node.float("radius", 1.0)?;
@@ -217,6 +300,14 @@ impl Builder {
                 Shape::sphere_rotated(center.as_vec3(), axes[0] as f32, rot.as_mat3(), flip)
             }
             "disk" => Shape::disk(to_world.as_mat4(), flip),
+            "cylinder" => {
+                let p0 = node.get_point("p0")?.unwrap_or(DVec3::ZERO);
+                let p1 = node.get_point("p1")?.unwrap_or(DVec3::Z);
+                let r = node.float("radius", 1.0)?;
+                let c =
+                    penumbra_render::geometry::Cylinder::new(to_world, p0, p1, r, flip).map_err(|e| node.error(e))?;
+                Shape::Cylinder(c)
+            }
             _ => return Err(unsupported(node, SHAPES)),
         };
         if shape.prim_count() == 0 {
@@ -258,9 +349,7 @@ impl Builder {
             None => None,
         };
         node.check_all_used(&[Kind::Bsdf, Kind::Emitter])?;
-        self.shapes.push(shape);
-        self.infos.push(ShapeInfo { material: bsdf, light });
-        Ok(())
+        Ok((shape, ShapeInfo { material: bsdf, light }))
     }
 
     /// Emitters declared at the top level (not attached to a shape).
@@ -339,6 +428,31 @@ impl Builder {
         node.check_all_used(&[])?;
         Ok(light)
     }
+}
+
+/// Mitsuba's `serialized` shape: one mesh (`shape_index`) of a `.serialized` file.
+fn serialized_shape(node: &Node, to_world: &DMat4, flip: bool) -> Result<Shape> {
+    let (file, loc) =
+        node.get_string("filename")?.ok_or_else(|| node.error("serialized needs a 'filename'".to_string()))?;
+    let path = resolve(&loc, &file, "mesh file")?;
+    let index = node.int("shape_index", 0)?;
+    if index < 0 {
+        return Err(LoadError::at(node.loc_of("shape_index"), "shape_index must be nonnegative"));
+    }
+    let s = crate::serialized::load_serialized(&path, index as usize)
+        .map_err(|e| LoadError::at(&loc, format!("'{}': {}", path.display(), e.message)))?;
+    // Mitsuba 3.9.1 ignores the file's face-normals flag (0x0010); so do we.
+    let face_normals = node.bool("face_normals", false)?;
+    let mut m = s.mesh;
+    m.transform(&to_world.as_mat4());
+    if !face_normals && m.normals.is_empty() {
+        // As Mitsuba: smooth normals from the (world-space) faces.
+        m.recompute_vertex_normals();
+    }
+    if flip {
+        m.flip();
+    }
+    Ok(Shape::Mesh(Mesh::new(m, face_normals)))
 }
 
 /// Finds the file `name` given at `loc`, as Mitsuba's file resolver does:

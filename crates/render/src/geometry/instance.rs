@@ -1,0 +1,188 @@
+//! Mitsuba's `shapegroup` and `instance`: geometry stored once in its own
+//! BVH (object space) and placed any number of times by a transform. The
+//! scene's BVH holds each instance as one primitive; rays entering it are
+//! carried into object space (the ray parameter t is unchanged by an affine
+//! map, so hits compare across levels) and the hit is carried back.
+
+use super::{Aabb, Ray, Shape, SurfaceInteraction};
+use crate::accel::Accel;
+use glam::{Mat3, Mat4, Vec2, Vec3};
+use std::sync::Arc;
+
+/// Shapes stored once, with their own BVH. `ids[i]` is the scene-wide
+/// shape id of member `i` (where its material is found; see [`Shape::GroupMember`]).
+#[derive(Debug)]
+pub struct ShapeGroup {
+    pub shapes: Vec<Shape>,
+    pub ids: Vec<u32>,
+    pub accel: Accel,
+}
+
+impl ShapeGroup {
+    pub fn new(shapes: Vec<Shape>, ids: Vec<u32>) -> ShapeGroup {
+        assert_eq!(shapes.len(), ids.len());
+        let accel = Accel::build(&shapes);
+        ShapeGroup { shapes, ids, accel }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Instance {
+    pub group: Arc<ShapeGroup>,
+    world_from_object: Mat4,
+    object_from_world: Mat4,
+    /// Inverse transpose of the linear part, for normals.
+    normal_m: Mat3,
+    bounds: Aabb,
+}
+
+impl Instance {
+    pub fn new(group: Arc<ShapeGroup>, world_from_object: Mat4) -> Instance {
+        let object_from_world = world_from_object.inverse();
+        let normal_m = Mat3::from_mat4(object_from_world).transpose();
+        let b = group.accel.bounds;
+        let bounds = if b.min.x > b.max.x {
+            Aabb::EMPTY
+        } else {
+            let corners: Vec<Vec3> = (0..8)
+                .map(|i| {
+                    let c = Vec3::new(
+                        if i & 1 == 0 { b.min.x } else { b.max.x },
+                        if i & 2 == 0 { b.min.y } else { b.max.y },
+                        if i & 4 == 0 { b.min.z } else { b.max.z },
+                    );
+                    world_from_object.transform_point3(c)
+                })
+                .collect();
+            let w = Aabb::from_points(&corners);
+            // Pad by a few ulps against rounding in the transform.
+            let pad = Vec3::splat(1e-6 * (w.min.abs().max(w.max.abs()).max_element() + 1.0));
+            Aabb { min: w.min - pad, max: w.max + pad }
+        };
+        Instance { group, world_from_object, object_from_world, normal_m, bounds }
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    #[inline]
+    fn object_ray(&self, ray: &Ray) -> Ray {
+        Ray::new(
+            self.object_from_world.transform_point3(ray.o),
+            self.object_from_world.transform_vector3(ray.d),
+            ray.t_max,
+        )
+    }
+
+    /// Closest hit: (t, the member's hit coordinates, index into the group's BVH primitives).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<(f32, Vec2, u32)> {
+        let r = self.object_ray(ray);
+        self.group.accel.intersect(&r, &self.group.shapes).map(|h| (h.t, h.uv, h.prim))
+    }
+
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.group.accel.occluded(&self.object_ray(ray), &self.group.shapes)
+    }
+
+    /// The interaction at a hit on group primitive `prim`, in world space;
+    /// `si.shape` is the member's scene-wide id.
+    pub fn interaction(&self, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
+        let r = self.object_ray(ray);
+        let p = self.group.accel.prims[prim];
+        let member = p.shape() as usize;
+        let mut si = self.group.shapes[member].interaction(0, p.index() as usize, &r, t, uv);
+        let m = &self.world_from_object;
+        si.p = m.transform_point3(si.p);
+        si.n = (self.normal_m * si.n).normalize();
+        si.dpdu = m.transform_vector3(si.dpdu);
+        si.dpdv = m.transform_vector3(si.dpdv);
+        let sh_n = (self.normal_m * si.sh_frame.n).normalize();
+        si.sh_frame = SurfaceInteraction::frame_from_dpdu(sh_n, si.dpdu);
+        si.wo = -ray.d.normalize();
+        si.shape = self.group.ids[member];
+        si
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Mesh, TriangleMesh};
+    use crate::sampling::rng::{hash_words, to_unit_f32};
+
+    fn rnd(i: u64, k: u64) -> f32 {
+        to_unit_f32(hash_words(&[i, 55, k]))
+    }
+
+    /// Instanced geometry answers every query like the same geometry transformed into place.
+    #[test]
+    fn instances_agree_with_flattened_geometry() {
+        let mut cube = TriangleMesh::cube();
+        cube.transform(&Mat4::from_scale(Vec3::new(0.5, 0.3, 0.4)));
+        let members =
+            vec![Shape::Mesh(Mesh::new(cube.clone(), false)), Shape::sphere(Vec3::new(1.0, 0.0, 0.0), 0.4, false)];
+        let group = Arc::new(ShapeGroup::new(members, vec![7, 8]));
+        let placements = [
+            Mat4::from_translation(Vec3::new(0.0, 0.0, 0.0)),
+            Mat4::from_translation(Vec3::new(-2.0, 1.0, 0.5))
+                * Mat4::from_rotation_y(0.8)
+                * Mat4::from_scale(Vec3::splat(1.5)),
+            Mat4::from_translation(Vec3::new(1.5, -1.5, -1.0)) * Mat4::from_rotation_x(-0.5),
+        ];
+        let instanced: Vec<Shape> =
+            placements.iter().map(|m| Shape::Instance(Instance::new(group.clone(), *m))).collect();
+        let mut flat = Vec::new();
+        let mut flat_ids = Vec::new();
+        for m in &placements {
+            let mut c = cube.clone();
+            c.transform(m);
+            flat.push(Shape::Mesh(Mesh::new(c, false)));
+            flat_ids.push(7);
+            // The sphere's uv follows its rotated frame, as inside the instance.
+            let scale = m.transform_vector3(Vec3::X).length();
+            let rot = Mat3::from_mat4(*m) * (1.0 / scale);
+            flat.push(Shape::sphere_rotated(m.transform_point3(Vec3::X), 0.4 * scale, rot, false));
+            flat_ids.push(8);
+        }
+        let (a_top, a_flat) = (Accel::build(&instanced), Accel::build(&flat));
+        a_top.validate().unwrap();
+        let mut hits = 0;
+        for i in 0..3000u64 {
+            let o = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 8.0 - 4.0;
+            // Aimed at points around the placements, so most rays hit.
+            let target = Vec3::new(rnd(i, 3), rnd(i, 4), rnd(i, 5)) * 4.0 - 2.0;
+            let d = (target - o).normalize();
+            let ray = Ray::new(o, d, if i % 3 == 0 { 3.0 } else { f32::INFINITY });
+            let (h1, h2) = (a_top.intersect(&ray, &instanced), a_flat.intersect(&ray, &flat));
+            assert_eq!(a_top.occluded(&ray, &instanced), h2.is_some(), "ray {i}");
+            match (h1, h2) {
+                (None, None) => {}
+                (Some(h1), Some(h2)) => {
+                    hits += 1;
+                    assert!((h1.t - h2.t).abs() < 1e-4 * h2.t.max(1.0), "ray {i}: {} vs {}", h1.t, h2.t);
+                    let p1 = a_top.prims[h1.prim as usize];
+                    let Shape::Instance(inst) = &instanced[p1.shape() as usize] else { panic!() };
+                    let si1 = inst.interaction(h1.index as usize, &ray, h1.t, h1.uv);
+                    let p2 = a_flat.prims[h2.prim as usize];
+                    let si2 = flat[p2.shape() as usize].interaction(0, h2.index as usize, &ray, h2.t, h2.uv);
+                    assert_eq!(si1.shape, flat_ids[p2.shape() as usize]);
+                    assert!((si1.p - si2.p).length() < 1e-4, "ray {i}: p {} vs {}", si1.p, si2.p);
+                    assert!((si1.n - si2.n).length() < 1e-4, "ray {i}: n {} vs {}", si1.n, si2.n);
+                    assert!((si1.sh_frame.n - si2.sh_frame.n).length() < 1e-4);
+                    assert!((si1.uv - si2.uv).length() < 1e-4, "ray {i}: uv {} vs {}", si1.uv, si2.uv);
+                    assert!((si1.dpdu - si2.dpdu).length() < 1e-4 * si2.dpdu.length().max(1.0));
+                    assert!((si1.sh_frame.s - si2.sh_frame.s).length() < 1e-3, "ray {i}");
+                }
+                (a, b) => {
+                    // Only rays grazing an edge may disagree.
+                    let t = a.map(|h| h.t).or(b.map(|h| h.t)).unwrap();
+                    panic!("ray {i}: {a:?} vs {b:?} at t {t}");
+                }
+            }
+        }
+        assert!(hits > 500, "{hits} hits");
+    }
+}

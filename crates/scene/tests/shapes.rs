@@ -1,0 +1,200 @@
+//! Shapes read from scene files: `serialized` meshes, `cylinder`, and
+//! `shapegroup` / `instance`, checked against values printed by Mitsuba 3.9.1.
+
+use glam::{Vec2, Vec3};
+use penumbra_render::geometry::{Aabb, Shape, TriangleMesh};
+use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::mitsuba::parse_str;
+use penumbra_scene::serialized::{load_serialized, write_serialized, WriteOptions};
+use std::path::{Path, PathBuf};
+
+fn temp_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("penumbra-shapes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn scene_xml(shapes: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="40"/>
+  <transform name="to_world"><lookat origin="0, 0, 6" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+</sensor>
+{shapes}
+</scene>"#
+    )
+}
+
+fn load(shapes: &str, dir: &Path) -> Result<penumbra_render::render::RenderJob, penumbra_scene::LoadError> {
+    let path = dir.join("scene.xml");
+    build(&parse_str(&scene_xml(shapes), &path, &[])?, &Overrides::default())
+}
+
+fn bounds(m: &TriangleMesh) -> Aabb {
+    Aabb::from_points(&m.positions)
+}
+
+/// Mitsuba's own matpreview.serialized (not in the repository; skipped when absent):
+///   s = mi.load_dict({'type': 'serialized', 'filename': F, 'shape_index': i})
+///   s.vertex_count(), s.face_count(), s.bbox()      (index 3 is out of range)
+#[test]
+fn matpreview_serialized_matches_mitsuba() {
+    let path = Path::new("/tmp/mdata/scenes/matpreview/matpreview.serialized");
+    if !path.exists() {
+        eprintln!("skipped: {} not present", path.display());
+        return;
+    }
+    let want: [(usize, usize, [f32; 3], [f32; 3]); 3] = [
+        (289, 512, [-1.0024269819259644, -1.0, 0.0], [1.1313550472259521, 0.622808575630188, 1.2964400053024292]),
+        (
+            2078,
+            3936,
+            [-0.9272717833518982, -0.927271842956543, -0.031111598014831543],
+            [0.9272717833518982, 0.927271842956543, 1.6868669986724854],
+        ),
+        (
+            29439,
+            57152,
+            [-1.2199430465698242, -1.2199430465698242, -1.1764949560165405],
+            [1.003021001815796, 1.2199430465698242, 1.0131640434265137],
+        ),
+    ];
+    for (i, (nv, nf, lo, hi)) in want.iter().enumerate() {
+        let s = load_serialized(path, i).unwrap();
+        assert_eq!((s.mesh.positions.len(), s.mesh.indices.len()), (*nv, *nf), "mesh {i}");
+        let b = bounds(&s.mesh);
+        assert!((b.min - Vec3::from_array(*lo)).abs().max_element() < 1e-6, "mesh {i}: {:?}", b);
+        assert!((b.max - Vec3::from_array(*hi)).abs().max_element() < 1e-6, "mesh {i}: {:?}", b);
+    }
+    let e = load_serialized(path, 3).unwrap_err().to_string();
+    assert!(e.contains("out of range") && e.contains("matpreview.serialized"), "{e}");
+}
+
+fn quad(z: f32, with_normals: bool) -> TriangleMesh {
+    TriangleMesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        ],
+        normals: if with_normals { vec![Vec3::new(0.0, 0.6, 0.8); 4] } else { Vec::new() },
+        uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+        indices: vec![[0, 1, 2], [2, 3, 0]],
+    }
+}
+
+#[test]
+fn serialized_shape_reads_index_transform_and_normals() {
+    let dir = temp_dir();
+    let (a, b) = (quad(0.0, true), quad(0.5, false));
+    std::fs::write(
+        dir.join("two.serialized"),
+        write_serialized(&[("a", &a), ("b", &b)], WriteOptions { version: 3, ..Default::default() }),
+    )
+    .unwrap();
+    let job = load(
+        r#"<shape type="serialized"><string name="filename" value="two.serialized"/>
+             <integer name="shape_index" value="1"/>
+             <transform name="to_world"><translate x="2"/></transform></shape>
+           <shape type="serialized"><string name="filename" value="two.serialized"/></shape>
+           <shape type="serialized"><string name="filename" value="two.serialized"/>
+             <boolean name="flip_normals" value="true"/></shape>"#,
+        &dir,
+    )
+    .unwrap();
+    let meshes: Vec<_> = job
+        .scene
+        .shapes
+        .iter()
+        .map(|s| match s {
+            Shape::Mesh(m) => m,
+            _ => panic!("not a mesh"),
+        })
+        .collect();
+    // Mesh 1, translated; its missing normals recomputed from the faces (+z).
+    assert_eq!(meshes[0].mesh.positions[0], Vec3::new(1.0, -1.0, 0.5));
+    assert!(meshes[0].mesh.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
+    // Mesh 0 keeps its stored normals; flip_normals negates them.
+    assert_eq!(meshes[1].mesh.normals[0], Vec3::new(0.0, 0.6, 0.8));
+    assert_eq!(meshes[2].mesh.normals[0], Vec3::new(0.0, -0.6, -0.8));
+
+    for (shape, words) in [
+        (
+            r#"<shape type="serialized"><string name="filename" value="two.serialized"/><integer name="shape_index" value="2"/></shape>"#,
+            &["out of range", "0..1"][..],
+        ),
+        (r#"<shape type="serialized"><string name="filename" value="none.serialized"/></shape>"#, &["not found"][..]),
+        (
+            r#"<shape type="serialized"><string name="filename" value="two.serialized"/><float name="max_smooth_angle" value="30"/></shape>"#,
+            &["max_smooth_angle"][..],
+        ),
+    ] {
+        let e = load(shape, &dir).err().expect("must fail").to_string();
+        assert!(words.iter().all(|w| e.contains(w)), "{e}");
+    }
+}
+
+#[test]
+fn cylinder_parameters_are_read() {
+    let dir = temp_dir();
+    let job = load(
+        r#"<shape type="cylinder"><point name="p0" x="0" y="0" z="-1"/><point name="p1" x="0" y="0" z="2"/>
+             <float name="radius" value="0.5"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#,
+        &dir,
+    )
+    .unwrap();
+    let s = &job.scene.shapes[0];
+    assert!((s.area() - 2.0 * std::f32::consts::PI * 0.5 * 3.0).abs() < 1e-5);
+    let e = load(
+        r#"<shape type="cylinder"><transform name="to_world"><scale x="2" y="1" z="1"/></transform></shape>"#,
+        &dir,
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("scene.xml:") && e.contains("cylinder"), "{e}");
+}
+
+mod common;
+
+/// Instanced geometry renders as the same geometry written out: the same
+/// random numbers follow the same paths, so the images agree to rounding
+/// (a path may branch differently where rounding moves a hit across an edge).
+#[test]
+fn instances_render_like_flattened_geometry() {
+    let dir = common::root().join("tests/scenes/shapes");
+    let a = common::render_with_variance(&dir.join("instanced.xml"), 16, 2, None, 5);
+    let b = common::render_with_variance(&dir.join("flattened.xml"), 16, 2, None, 5);
+    let n = a.mean.len();
+    let close =
+        a.mean.iter().zip(&b.mean).filter(|(x, y)| (0..3).all(|c| (x[c] - y[c]).abs() < 1e-3 * (1.0 + y[c]))).count();
+    assert!(close as f64 >= 0.97 * n as f64, "{close} of {n} pixels agree");
+    for c in 0..3 {
+        let ma = a.mean.iter().map(|p| p[c]).sum::<f64>() / n as f64;
+        let mb = b.mean.iter().map(|p| p[c]).sum::<f64>() / n as f64;
+        assert!((ma - mb).abs() < 1e-2 * mb, "channel {c}: {ma} vs {mb}");
+    }
+    // And the instances are really there: the image differs from an empty floor.
+    assert!(a.mean.iter().any(|p| p[0] > 1.5 * p[2]), "no red box visible");
+}
+
+#[test]
+fn instancing_errors_name_the_problem() {
+    let dir = temp_dir();
+    let group = |inner: &str| format!(r#"<shape type="shapegroup" id="g">{inner}</shape>"#);
+    let cases = [
+        (
+            group(r#"<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#),
+            "emitters inside a shapegroup",
+        ),
+        (group(r#"<shape type="sphere"/>"#) + r#"<shape type="instance"/>"#, "needs one shapegroup"),
+        (group(""), "holds no shapes"),
+        (group(r#"<shape type="instance"><ref id="x"/></shape>"#), "x"),
+    ];
+    for (xml, want) in cases {
+        let e = load(&xml, &dir).err().expect("must fail").to_string();
+        assert!(e.contains(want) && e.contains("scene.xml:"), "{e}");
+    }
+}
