@@ -95,3 +95,9 @@ fn thinlens_and_multijitter_match_mitsuba() {
 fn orthographic_and_ldsampler_match_mitsuba() {
     compare("orthographic", 256);
 }
+
+#[test]
+fn format_features_match_mitsuba() {
+    // <path>, sampled and .spd spectra, serialized meshes, a cylinder, instances.
+    compare("format_features", 256);
+}
