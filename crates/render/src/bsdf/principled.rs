@@ -271,19 +271,22 @@ impl Principled {
                 f_diff + f_retro
             };
             value += self.base_color * (brdf * cos_o.abs() * FRAC_1_PI * lobe);
-            // Sheen sits inside the diffuse branch in Mitsuba (scalar
-            // variants add it only when the diffuse lobe is active).
-            if self.sheen > 0.0 && 1.0 - self.metallic > 0.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let c_sheen = if self.sheen_tint != 0.0 {
-                    let lum = luminance(self.base_color);
-                    let c_tint = if lum > 0.0 { self.base_color / lum } else { Spectrum::ONE };
-                    Spectrum::ONE + (c_tint - Spectrum::ONE) * self.sheen_tint
-                } else {
-                    Spectrum::ONE
-                };
-                value += c_sheen * (self.sheen * (1.0 - self.metallic) * fd * cos_o.abs());
-            }
+        }
+        // Sheen: Mitsuba nests it in the diffuse branch, which its
+        // vectorised (llvm/cuda) variants, used for reference images, run
+        // regardless of that branch's mask; scalar variants skip it when
+        // the diffuse lobe is off (spec_trans = 1). The vectorised
+        // behaviour is implemented.
+        if self.sheen > 0.0 && 1.0 - self.metallic > 0.0 && reflect && front {
+            let fd = schlick_weight(h.dot(b).abs());
+            let c_sheen = if self.sheen_tint != 0.0 {
+                let lum = luminance(self.base_color);
+                let c_tint = if lum > 0.0 { self.base_color / lum } else { Spectrum::ONE };
+                Spectrum::ONE + (c_tint - Spectrum::ONE) * self.sheen_tint
+            } else {
+                Spectrum::ONE
+            };
+            value += c_sheen * (self.sheen * (1.0 - self.metallic) * fd * cos_o.abs());
         }
         value
     }
@@ -572,5 +575,18 @@ mod tests {
                 assert!((pd - p).abs() <= 1e-3 * p, "wo={a} wi={w}: pdf {pd} vs Mitsuba {p}");
             }
         }
+        // Sheen with the diffuse lobe off (spec_trans = 1): Mitsuba's
+        // llvm_ad_rgb variant (that of the reference images) gives
+        // 0.0135545, scalar_rgb 0.0135239 (it skips sheen there):
+        //   d = {'type':'principled','spec_trans':1.0,'sheen':1.0,'roughness':0.5}, eval at wo, r.
+        let b = Principled {
+            spec_trans: 1.0,
+            has_spec_trans: true,
+            sheen: 1.0,
+            eta: 2.0 / (1.0 - 0.04f32.sqrt()) - 1.0,
+            ..base()
+        };
+        let ours = b.eval(wo, r) * r.z;
+        assert!((ours - Spectrum::splat(0.0135545)).abs().max_element() < 1e-3 * 0.0135545, "{ours}");
     }
 }
