@@ -254,3 +254,29 @@ fn masks_and_null_let_light_through_in_expectation() {
     }
     assert_agree("mask opacity 0.4", &partial, &scaled, 0.01);
 }
+
+#[test]
+fn principled_parameters() {
+    use penumbra_render::material::principled::PrincipledMaterial;
+    let get = |xml: &str| match material(xml).unwrap() {
+        Material::Principled(p) => *p,
+        m => panic!("{m:?}"),
+    };
+    // Defaults: specular 0.5 ↦ η = 2 / (1 − √0.04) − 1 = 1.5; absent
+    // parameters (and the float 0, Mitsuba's get_flag) are off.
+    let p: PrincipledMaterial = get(r#"<bsdf type="principled"><float name="spec_trans" value="0"/></bsdf>"#);
+    assert!((p.eta - 1.5).abs() < 1e-6);
+    assert_eq!(constant(&p.base_color), Spectrum::splat(0.5));
+    assert_eq!(constant(&p.roughness), Spectrum::splat(0.5));
+    assert!(p.spec_trans.is_none() && p.metallic.is_none() && p.clearcoat.is_none() && p.sheen.is_none());
+    // eta = 1 with transmission becomes 1.001, as in Mitsuba.
+    let p = get(r#"<bsdf type="principled"><float name="eta" value="1"/><float name="spec_trans" value="0.5"/>
+        <texture type="checkerboard" name="metallic"/><float name="clearcoat" value="0.3"/></bsdf>"#);
+    assert!((p.eta - 1.001).abs() < 1e-6);
+    assert!(p.spec_trans.is_some() && p.metallic.is_some() && p.clearcoat.is_some());
+    let e =
+        error(r#"<bsdf type="principled"><float name="eta" value="1.3"/><float name="specular" value="0.3"/></bsdf>"#);
+    assert!(e.contains("either 'eta' or 'specular'"), "{e}");
+    let e = error(r#"<bsdf type="principled"><float name="sample_visible" value="1"/></bsdf>"#);
+    assert!(e.contains("sample_visible"), "{e}");
+}

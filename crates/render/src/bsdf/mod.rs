@@ -19,6 +19,7 @@ pub mod fresnel;
 pub mod microfacet;
 pub mod plastic;
 pub mod presets;
+pub mod principled;
 pub mod roughconductor;
 pub mod roughdielectric;
 pub mod roughplastic;
@@ -29,6 +30,7 @@ pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use plastic::Plastic;
+pub use principled::Principled;
 pub use roughconductor::RoughConductor;
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::{RoughPlastic, RoughPlasticTables};
@@ -62,6 +64,7 @@ pub enum BsdfKind<'a> {
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic<'a>),
+    Principled(Principled),
     /// Mitsuba `null`: light passes straight through.
     Null,
     /// Mitsuba `blendbsdf`: two nested materials, resolved on demand.
@@ -123,7 +126,8 @@ impl Bsdf<'_> {
                 | BsdfKind::RoughConductor(_)
                 | BsdfKind::RoughDielectric(_)
                 | BsdfKind::Plastic(_)
-                | BsdfKind::RoughPlastic(_) => true,
+                | BsdfKind::RoughPlastic(_)
+                | BsdfKind::Principled(_) => true,
                 BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                     false
                 }
@@ -139,6 +143,7 @@ impl Bsdf<'_> {
             BsdfKind::RoughDielectric(b) => b.eval(wo, wi),
             BsdfKind::Plastic(b) => b.eval(wo, wi),
             BsdfKind::RoughPlastic(b) => b.eval(wo, wi),
+            BsdfKind::Principled(b) => b.eval(wo, wi),
             BsdfKind::Blend(b) => b.eval(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                 Spectrum::ZERO
@@ -158,6 +163,7 @@ impl Bsdf<'_> {
             BsdfKind::RoughDielectric(b) => b.pdf(wo, wi),
             BsdfKind::Plastic(b) => b.pdf(wo, wi),
             BsdfKind::RoughPlastic(b) => b.pdf(wo, wi),
+            BsdfKind::Principled(b) => b.pdf(wo, wi),
             BsdfKind::Blend(b) => b.pdf(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => 0.0,
         };
@@ -194,6 +200,7 @@ impl Bsdf<'_> {
             BsdfKind::RoughDielectric(b) => b.sample(wo, u, u2),
             BsdfKind::Plastic(b) => b.sample(wo, u, u2),
             BsdfKind::RoughPlastic(b) => b.sample(wo, u, u2),
+            BsdfKind::Principled(b) => b.sample(wo, u, u2),
             BsdfKind::Blend(b) => b.sample(wo, u, u2),
             BsdfKind::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 }),
         }?;

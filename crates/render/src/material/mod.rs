@@ -6,6 +6,7 @@
 pub mod blend;
 pub mod bumpmap;
 pub mod normalmap;
+pub mod principled;
 
 use crate::bsdf::{
     Bsdf, BsdfKind, Conductor, Dielectric, Diffuse, Microfacet, MicrofacetType, Perturbation, Plastic, RoughConductor,
@@ -83,6 +84,8 @@ pub enum Material {
         specular_sampling_weight: f32,
         tables: RoughPlasticTables,
     },
+    /// Mitsuba `principled` (the Disney BSDF).
+    Principled(Box<principled::PrincipledMaterial>),
     /// Mitsuba `null`: invisible to every ray (a shape that only emits).
     Null,
     /// The front material, and the one seen from the back side.
@@ -230,6 +233,7 @@ impl Material {
                     specular_sampling_weight: *specular_sampling_weight,
                     tables,
                 }),
+                Material::Principled(p) => BsdfKind::Principled(p.eval(si)),
                 Material::Null => BsdfKind::Null,
                 Material::Blend { weight, first, second } => {
                     BsdfKind::Blend(blend::Blend { weight: weight.eval_1(si).clamp(0.0, 1.0), first, second, si: *si })

@@ -9,6 +9,7 @@ use crate::error::{LoadError, Result};
 use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
 use penumbra_render::bsdf::{presets, Microfacet, MicrofacetType, RoughPlasticTables};
+use penumbra_render::material::principled::PrincipledMaterial;
 use penumbra_render::material::{Material, Roughness};
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
@@ -28,6 +29,7 @@ pub(crate) const BSDFS: &[&str] = &[
     "bumpmap",
     "null",
     "blendbsdf",
+    "principled",
 ];
 
 /// An IOR given as a number or one of Mitsuba's named materials.
@@ -141,6 +143,64 @@ fn wrapper_defaults(node: &Node) -> Result<()> {
     Ok(())
 }
 
+/// Mitsuba `principled`. A parameter given as the float 0 counts as absent
+/// (Mitsuba's `get_flag`), which matters for `spec_trans`: present, it also
+/// enables transmission from the back side.
+fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let flagged = |tex: &mut Textures, name: &str| -> Result<Option<Texture>> {
+        let is_tex = node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some(name));
+        if !is_tex && (!node.has(name) || node.get_float(name)? == Some(0.0)) {
+            // Mark a zero float as used.
+            node.float(name, 0.0)?;
+            return Ok(None);
+        }
+        Ok(Some(tex.float(node, name, 0.0)?))
+    };
+    let spec_trans = flagged(tex, "spec_trans")?;
+    let has_spec_trans = spec_trans.is_some();
+    let eta = if node.has("eta") {
+        if node.has("specular") {
+            return Err(LoadError::at(
+                node.loc_of("specular"),
+                "principled: give either 'eta' or 'specular', not both (as in Mitsuba)",
+            ));
+        }
+        let eta = node.float("eta", 1.5)? as f32;
+        if has_spec_trans && eta == 1.0 {
+            1.001
+        } else {
+            eta
+        }
+    } else {
+        let mut specular = node.float("specular", 0.5)? as f32;
+        if has_spec_trans && specular == 0.0 {
+            specular = 1e-3;
+        }
+        2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
+    };
+    if !(eta > 0.0) {
+        return Err(node.error(format!("principled: eta must be positive (got {eta})")));
+    }
+    let p = PrincipledMaterial {
+        base_color: tex.spectrum(node, "base_color", Spectrum::splat(0.5))?,
+        roughness: tex.float(node, "roughness", 0.5)?,
+        anisotropic: flagged(tex, "anisotropic")?,
+        spec_trans,
+        metallic: flagged(tex, "metallic")?,
+        spec_tint: flagged(tex, "spec_tint")?,
+        sheen: flagged(tex, "sheen")?,
+        sheen_tint: flagged(tex, "sheen_tint")?,
+        clearcoat: flagged(tex, "clearcoat")?,
+        clearcoat_gloss: tex.float(node, "clearcoat_gloss", 0.0)?,
+        flatness: flagged(tex, "flatness")?,
+        eta,
+        spec_srate: node.float("main_specular_sampling_rate", 1.0)? as f32,
+        clearcoat_srate: node.float("clearcoat_sampling_rate", 1.0)? as f32,
+        diffuse_srate: node.float("diffuse_reflectance_sampling_rate", 1.0)? as f32,
+    };
+    Ok(Material::Principled(Box::new(p)))
+}
+
 pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material> {
     let one = Spectrum::ONE;
     let m = match node.plugin.as_str() {
@@ -248,6 +308,7 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
             wrapper_defaults(node)?;
             Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? }
         }
+        "principled" => principled(node, tex)?,
         "null" => Material::Null,
         "blendbsdf" => {
             let has_weight =
