@@ -67,6 +67,7 @@ SPP = {
     "format_features": 16384,
     "sensors_samplers": 16384,
     "orthographic": 16384,
+    "principled": 65536,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

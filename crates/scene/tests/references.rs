@@ -101,3 +101,8 @@ fn format_features_match_mitsuba() {
     // <path>, sampled and .spd spectra, serialized meshes, a cylinder, instances.
     compare("format_features", 256);
 }
+
+#[test]
+fn principled_matches_mitsuba() {
+    compare("principled", 256);
+}
