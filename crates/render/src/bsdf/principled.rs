@@ -391,7 +391,7 @@ impl Principled {
 mod tests {
     use super::*;
     use crate::bsdf::microfacet::checks::{check_weights, dir};
-    use crate::testing::chi2::{alpha, chi2_test};
+    use crate::testing::chi2::{chi2_cases, chi2_test};
 
     fn base() -> Principled {
         Principled {
@@ -480,20 +480,14 @@ mod tests {
 
     #[test]
     fn sampling_matches_pdf() {
-        let cases = cases();
-        let a = alpha(cases.len() + 1);
-        let mut worst = 1.0f64;
-        for (i, (b, wo)) in cases.iter().enumerate() {
-            let p = chi2_test(
-                200_000,
-                700 + i as u64,
-                |u1, u| b.sample(*wo, u1, u).map(|s| s.wi),
-                |wi| b.pdf(*wo, wi) as f64,
-            );
-            worst = worst.min(p);
-            assert!(p > a, "case {i} wo={wo}: p = {p}");
-        }
-        println!("principled chi2: {} cases, min p = {worst:.4} (alpha {a:.2e})", cases.len());
+        let a = chi2_cases(
+            "principled",
+            200_000,
+            700,
+            &cases(),
+            |b, wo, u1, u| b.sample(wo, u1, u).map(|s| s.wi),
+            |b, wo, wi| b.pdf(wo, wi) as f64,
+        );
         // Power: dropping the clearcoat lobe from the pdf must be rejected.
         let (b, wo) = (mitsuba_cases()[2], dir(0.9, 0.7));
         assert!(b.clearcoat > 0.0);

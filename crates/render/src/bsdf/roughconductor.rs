@@ -68,7 +68,7 @@ mod tests {
     use super::*;
     use crate::bsdf::microfacet::checks::{albedo, check_weights, dir, integrate_sphere_fine};
     use crate::bsdf::MicrofacetType::{self, Beckmann, Ggx};
-    use crate::testing::chi2::{alpha, chi2_test};
+    use crate::testing::chi2::{chi2_cases, chi2_test};
 
     fn conductor(kind: MicrofacetType, au: f32, av: f32) -> RoughConductor {
         RoughConductor {
@@ -98,20 +98,14 @@ mod tests {
 
     #[test]
     fn sampling_matches_pdf() {
-        let cases = cases();
-        let a = alpha(cases.len() + 1);
-        let mut worst = 1.0f64;
-        for (i, (b, wo)) in cases.iter().enumerate() {
-            let p = chi2_test(
-                200_000,
-                300 + i as u64,
-                |u1, u| b.sample(*wo, u1, u).map(|s| s.wi),
-                |wi| b.pdf(*wo, wi) as f64,
-            );
-            worst = worst.min(p);
-            assert!(p > a, "{:?} wo={wo}: p = {p}", b.distr);
-        }
-        println!("roughconductor chi2: {} cases, min p = {worst:.4} (alpha {a:.2e})", cases.len());
+        let a = chi2_cases(
+            "roughconductor",
+            200_000,
+            300,
+            &cases(),
+            |b, wo, u1, u| b.sample(wo, u1, u).map(|s| s.wi),
+            |b, wo, wi| b.pdf(wo, wi) as f64,
+        );
         // Power: the pdf without G1(wo) (the non-visible D cos density
         // transformed by the same Jacobian) must be rejected.
         let (b, wo) = (conductor(Ggx, 0.5, 0.5), dir(0.3, 0.0));

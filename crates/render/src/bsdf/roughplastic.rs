@@ -242,7 +242,7 @@ mod tests {
     use crate::bsdf::microfacet::checks::{albedo, check_weights, dir, integrate_sphere_fine};
     use crate::bsdf::plastic::fresnel_diffuse_reflectance;
     use crate::bsdf::MicrofacetType::{self, Beckmann, Ggx};
-    use crate::testing::chi2::{alpha, chi2_test};
+    use crate::testing::chi2::{chi2_cases, chi2_test};
 
     fn tables(kind: MicrofacetType, a: f32, eta: f32) -> RoughPlasticTables {
         RoughPlasticTables::new(Microfacet::isotropic(kind, a), eta)
@@ -410,19 +410,14 @@ mod tests {
     fn sampling_matches_pdf() {
         let ts = all_tables();
         let cases: Vec<_> = cases(&ts).into_iter().filter(|(b, _)| !b.nonlinear).collect();
-        let a = alpha(cases.len() + 1);
-        let mut worst = 1.0f64;
-        for (i, (b, wo)) in cases.iter().enumerate() {
-            let p = chi2_test(
-                200_000,
-                700 + i as u64,
-                |u1, u| b.sample(*wo, u1, u).map(|s| s.wi),
-                |wi| b.pdf(*wo, wi) as f64,
-            );
-            worst = worst.min(p);
-            assert!(p > a, "{:?} wo={wo}: p = {p}", b.distr);
-        }
-        println!("roughplastic chi2: {} cases, min p = {worst:.4} (alpha {a:.2e})", cases.len());
+        let a = chi2_cases(
+            "roughplastic",
+            200_000,
+            700,
+            &cases,
+            |b, wo, u1, u| b.sample(wo, u1, u).map(|s| s.wi),
+            |b, wo, wi| b.pdf(wo, wi) as f64,
+        );
         // Power: a pdf that ignores the specular lobe's selection probability.
         let (b, wo) = (cases[4].0, cases[4].1);
         let p = chi2_test(

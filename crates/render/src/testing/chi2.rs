@@ -136,6 +136,29 @@ pub fn alpha(tests: usize) -> f64 {
     1.0 - (1.0 - 0.01f64).powf(1.0 / tests as f64)
 }
 
+/// Runs `chi2_test` on every `(bsdf, wo)` case (seeds `seed0 + i`, `n`
+/// samples each) at the significance `alpha(cases + 1)` (one more test is
+/// left for the caller's wrong-pdf power check), asserts each passes,
+/// prints the smallest p-value and returns that significance.
+pub fn chi2_cases<B: std::fmt::Debug>(
+    name: &str,
+    n: usize,
+    seed0: u64,
+    cases: &[(B, Vec3)],
+    sample: impl Fn(&B, Vec3, f32, Vec2) -> Option<Vec3>,
+    pdf: impl Fn(&B, Vec3, Vec3) -> f64,
+) -> f64 {
+    let a = alpha(cases.len() + 1);
+    let mut worst = 1.0f64;
+    for (i, (b, wo)) in cases.iter().enumerate() {
+        let p = chi2_test(n, seed0 + i as u64, |u1, u| sample(b, *wo, u1, u), |wi| pdf(b, *wo, wi));
+        worst = worst.min(p);
+        assert!(p > a, "{name} case {i} {b:?} wo={wo}: p = {p}");
+    }
+    println!("{name} chi2: {} cases, min p = {worst:.4} (alpha {a:.2e})", cases.len());
+    a
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
