@@ -29,9 +29,8 @@ pub struct Roughness {
 impl Roughness {
     #[inline]
     fn eval(&self, si: &SurfaceInteraction) -> Microfacet {
-        // Mitsuba clamps nothing here; tiny values only need to stay positive.
-        let a = |t: &Texture| t.eval_1(si).max(1e-4);
-        Microfacet { kind: self.kind, alpha_u: a(&self.alpha_u), alpha_v: a(&self.alpha_v) }
+        // Microfacet keeps the roughness positive (its `alphas` clamp).
+        Microfacet { kind: self.kind, alpha_u: self.alpha_u.eval_1(si), alpha_v: self.alpha_v.eval_1(si) }
     }
 }
 

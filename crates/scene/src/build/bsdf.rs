@@ -259,7 +259,7 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
                 if au != av {
                     return Err(node.error("roughplastic does not support anisotropic roughness (as in Mitsuba)"));
                 }
-                let distr = Microfacet { kind: r.kind, alpha_u: au.x.max(1e-4), alpha_v: av.x.max(1e-4) };
+                let distr = Microfacet { kind: r.kind, alpha_u: au.x, alpha_v: av.x };
                 Material::RoughPlastic {
                     distr,
                     eta,
