@@ -79,6 +79,19 @@ pub struct BenchArgs {
     /// Mitsuba variant for the comparison.
     #[arg(long, default_value = "llvm_ad_rgb")]
     pub mitsuba_variant: String,
+    /// What to time: `scenes` (render the standard scenes), `rays` (BVH build
+    /// and incoherent-ray throughput on a procedural mesh, with Embree when
+    /// built with `--features embree`), `all` (both), or `scale` (build and
+    /// render a mesh of `--triangles` triangles, default 10 million, and
+    /// report peak memory).
+    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "scale"])]
+    pub suite: String,
+    /// Triangles of the procedural mesh (default: 1 million for `rays`, 10 million for `scale`).
+    #[arg(long)]
+    pub triangles: Option<usize>,
+    /// Rays of each kind in the `rays` suite.
+    #[arg(long, default_value_t = 2_000_000)]
+    pub rays: usize,
 }
 
 #[derive(Debug, Args)]

@@ -89,9 +89,10 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(ray, &self.shapes)?;
-        let prim = self.accel.prims[hit.prim as usize];
-        let shape = prim.shape();
-        Some(self.shapes[shape as usize].interaction(shape, hit.index as usize, ray, hit.t, hit.uv))
+        Some(match &self.shapes[hit.shape as usize] {
+            Shape::Instance(i) => i.interaction(hit.member as usize, hit.index as usize, ray, hit.t, hit.uv),
+            s => s.interaction(hit.shape, hit.index as usize, ray, hit.t, hit.uv),
+        })
     }
 
     /// Whether the segment from `si` along `wi` is blocked before `dist`.

@@ -1,128 +1,103 @@
-//! Bounding volume hierarchy: binned surface-area-heuristic build (Wald 2007,
-//! "On fast construction of SAH-based bounding volume hierarchies"), flattened
-//! depth-first into 32-byte nodes with the left child stored next to its
-//! parent, and front-to-back ordered traversal.
+//! The bounding volume hierarchy: 4-wide nodes (one SIMD slab test for all
+//! four child boxes) over leaves of 4-triangle blocks tested in SIMD lanes
+//! ([`super::tri4`]), built by binned SAH and collapsed from a binary tree
+//! ([`super::build`]). Traversal is ordered front to back and skips stacked
+//! subtrees that begin beyond the closest hit found so far.
 
+use super::build::{build_binary, wide_children, BNode, Item, ItemKind};
+use super::tri4::{intersect4, RayLanes, Tri4};
 #[cfg(test)]
 use crate::geometry::triangle::intersect_triangle;
-use crate::geometry::triangle::{intersect_triangle_k, RayShear};
+use crate::geometry::triangle::RayShear;
 use crate::geometry::{Aabb, Ray, Shape};
-use glam::{Vec2, Vec3, Vec3A, Vec4};
+use glam::{Vec2, Vec3, Vec4};
+use std::mem::MaybeUninit;
 
-/// A primitive as stored in BVH order. Triangles keep their vertices inline
-/// so traversal touches one cache line per test.
+/// A primitive other than a triangle, as stored in leaf order.
 #[derive(Debug, Clone, Copy)]
 pub enum Prim {
-    Triangle {
-        v: [Vec3; 3],
-        shape: u32,
-        index: u32,
-    },
     /// A sphere, disk or cylinder, intersected through its shape.
-    Analytic {
-        shape: u32,
-    },
+    Analytic { shape: u32 },
     /// An instance of a shape group (a BVH of its own, in object space).
-    Instance {
-        shape: u32,
-    },
+    Instance { shape: u32 },
 }
 
-impl Prim {
-    #[inline]
-    pub fn shape(&self) -> u32 {
-        match *self {
-            Prim::Triangle { shape, .. } | Prim::Analytic { shape } | Prim::Instance { shape } => shape,
-        }
-    }
-    /// Index of the primitive within its shape (triangle index; 0 otherwise).
-    #[inline]
-    pub fn index(&self) -> u32 {
-        match *self {
-            Prim::Triangle { index, .. } => index,
-            Prim::Analytic { .. } | Prim::Instance { .. } => 0,
-        }
-    }
-}
-
-/// A flattened node. Interior: `offset` is the right child (the left child
-/// is the next node), `count` = 0, `axis` the split axis. Leaf: `offset` is
-/// the first primitive, `count` how many.
+/// A 4-wide node: the children's boxes as lanes (min x, max x, min y,
+/// max y, min z, max z) and what each child is (see [`Slot`]). 128 bytes,
+/// two cache lines.
 #[derive(Debug, Clone, Copy)]
-#[repr(C, align(32))]
-struct Node {
-    min: [f32; 3],
-    offset: u32,
-    max: [f32; 3],
-    count: u16,
-    axis: u16,
+#[repr(C, align(64))]
+struct Node4 {
+    b: [Vec4; 6],
+    child: [u32; 4],
+    info: [u32; 4],
 }
 
-impl Node {
-    /// The box corners as SIMD vectors (one 16-byte load each; the fourth
-    /// lane holds `offset` / `count` bits and is ignored).
-    #[inline(always)]
-    fn corners(&self) -> (Vec3A, Vec3A) {
-        // SAFETY: Node is repr(C) and 32-byte aligned: min + offset and
-        // max + count + axis are each 16 contiguous, aligned bytes.
-        let (lo, hi) = unsafe {
-            let p = self as *const Node as *const Vec4;
-            (*p, *p.add(1))
-        };
-        (Vec3A::from_vec4(lo), Vec3A::from_vec4(hi))
-    }
+/// `info` of a child slot: 0 for an inner node (`child` is its index), the
+/// number of triangle blocks for a triangle leaf (`child` is the first
+/// block), or `OTHER | count` for a leaf of other primitives (`child` is
+/// the first index into `prims`). Empty slots have an empty box.
+const OTHER: u32 = 1 << 31;
+
+/// A stacked subtree and the distance at which the ray enters its box.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    info: u32,
+    t: f32,
 }
 
 /// The closest hit found by [`Accel::intersect`].
 #[derive(Debug, Clone, Copy)]
 pub struct Hit {
     pub t: f32,
-    /// Index into [`Accel::prims`].
-    pub prim: u32,
     /// Triangle barycentrics (b1, b2) or the analytic shape's local coordinates.
     pub uv: Vec2,
-    /// The primitive within its shape: the triangle index (0 for analytic
-    /// shapes), or for an instance the index into its group's BVH primitives.
+    /// The shape hit (for an instance: the instance's shape).
+    pub shape: u32,
+    /// The triangle index within the mesh (0 for analytic shapes).
     pub index: u32,
+    /// For an instance hit, the group member hit (its index in the group); else 0.
+    pub member: u32,
 }
 
 #[derive(Debug, Clone, Default)]
 pub struct Accel {
-    nodes: Vec<Node>,
+    nodes: Vec<Node4>,
+    tris: Vec<Tri4>,
+    /// (shape, triangle index) of each lane of `tris`.
+    tri_ids: Vec<[[u32; 2]; 4]>,
     pub prims: Vec<Prim>,
+    /// The root slot, `None` when there is nothing to hit.
+    root: Option<(u32, u32)>,
     pub bounds: Aabb,
 }
 
-const BINS: usize = 16;
-const MAX_LEAF: usize = 8;
-const TRAVERSAL_COST: f32 = 1.0;
-const INTERSECT_COST: f32 = 1.0;
-const STACK: usize = 64;
-
-struct BuildPrim {
-    bounds: Aabb,
-    centroid: Vec3,
-    prim: Prim,
-}
+const STACK: usize = 192;
 
 impl Accel {
     /// Builds the BVH over every primitive of every shape.
     pub fn build(shapes: &[Shape]) -> Accel {
         let mut items = Vec::new();
         for (si, shape) in shapes.iter().enumerate() {
+            let other =
+                |b: Aabb| Item { bounds: b, centroid: b.center(), kind: ItemKind::Other, shape: si as u32, index: 0 };
             match shape {
                 Shape::Mesh(m) => {
+                    items.reserve(m.mesh.indices.len());
                     for i in 0..m.mesh.indices.len() {
                         let v = m.vertices(i);
-                        let b = Aabb::from_points(&v);
                         // Degenerate triangles can never be hit; leave them out.
                         if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() == 0.0 {
                             continue;
                         }
-                        items.push(BuildPrim {
+                        let b = Aabb::from_points(&v);
+                        items.push(Item {
                             bounds: b,
                             centroid: b.center(),
-                            prim: Prim::Triangle { v, shape: si as u32, index: i as u32 },
+                            kind: ItemKind::Triangle,
+                            shape: si as u32,
+                            index: i as u32,
                         });
                     }
                 }
@@ -130,281 +105,352 @@ impl Accel {
                 Shape::Instance(i) => {
                     let b = i.bounds();
                     if b.min.x <= b.max.x {
-                        items.push(BuildPrim {
-                            bounds: b,
-                            centroid: b.center(),
-                            prim: Prim::Instance { shape: si as u32 },
-                        });
+                        items.push(other(b));
                     }
                 }
-                _ => {
-                    let b = shape.prim_bounds(0);
-                    items.push(BuildPrim {
-                        bounds: b,
-                        centroid: b.center(),
-                        prim: Prim::Analytic { shape: si as u32 },
-                    });
-                }
+                _ => items.push(other(shape.prim_bounds(0))),
             }
         }
-        let mut nodes = Vec::with_capacity(2 * items.len() / 2 + 1);
-        if !items.is_empty() {
-            build_recursive(&mut items, 0, &mut nodes);
+        let mut accel = Accel::default();
+        if items.is_empty() {
+            return accel;
         }
-        let bounds = items.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
-        Accel { nodes, prims: items.into_iter().map(|p| p.prim).collect(), bounds }
+        let tree = build_binary(&mut items);
+        accel.bounds = tree.bounds();
+        let n_tris = items.iter().filter(|p| p.kind == ItemKind::Triangle).count();
+        accel.tris.reserve(n_tris / 3);
+        accel.tri_ids.reserve(n_tris / 3);
+        accel.root = Some(accel.emit(&tree, &items, shapes));
+        accel
+    }
+
+    /// Appends `node` in wide form; returns its slot (child, info).
+    fn emit(&mut self, node: &BNode, items: &[Item], shapes: &[Shape]) -> (u32, u32) {
+        match node {
+            BNode::Leaf { first, count, .. } => {
+                let leaf = &items[*first..*first + *count];
+                if leaf[0].kind == ItemKind::Triangle {
+                    let start = self.tris.len() as u32;
+                    for block in leaf.chunks(4) {
+                        let verts: Vec<[Vec3; 3]> = block
+                            .iter()
+                            .map(|p| match &shapes[p.shape as usize] {
+                                Shape::Mesh(m) => m.vertices(p.index as usize),
+                                _ => unreachable!("triangle items come from meshes"),
+                            })
+                            .collect();
+                        self.tris.push(Tri4::new(&verts));
+                        let mut ids = [[u32::MAX; 2]; 4];
+                        for (l, p) in block.iter().enumerate() {
+                            ids[l] = [p.shape, p.index];
+                        }
+                        self.tri_ids.push(ids);
+                    }
+                    (start, self.tris.len() as u32 - start)
+                } else {
+                    let start = self.prims.len() as u32;
+                    for p in leaf {
+                        self.prims.push(match shapes[p.shape as usize] {
+                            Shape::Instance(_) => Prim::Instance { shape: p.shape },
+                            _ => Prim::Analytic { shape: p.shape },
+                        });
+                    }
+                    (start, OTHER | leaf.len() as u32)
+                }
+            }
+            BNode::Inner { .. } => {
+                let kids = wide_children(node);
+                let idx = self.nodes.len();
+                let empty = Aabb::EMPTY;
+                self.nodes.push(Node4 { b: [Vec4::ZERO; 6], child: [0; 4], info: [0; 4] });
+                let mut lanes = [[0.0f32; 4]; 6];
+                let (mut child, mut info) = ([0u32; 4], [0u32; 4]);
+                for l in 0..4 {
+                    let b = kids.get(l).map(|k| k.bounds()).unwrap_or(empty);
+                    for a in 0..3 {
+                        lanes[2 * a][l] = b.min[a];
+                        lanes[2 * a + 1][l] = b.max[a];
+                    }
+                    if let Some(k) = kids.get(l) {
+                        (child[l], info[l]) = self.emit(k, items, shapes);
+                    }
+                }
+                self.nodes[idx] = Node4 { b: lanes.map(Vec4::from_array), child, info };
+                (idx as u32, 0)
+            }
+        }
     }
 
     /// Closest hit with 0 < t < ray.t_max.
     #[inline]
     pub fn intersect(&self, ray: &Ray, shapes: &[Shape]) -> Option<Hit> {
-        let mut ray = *ray;
-        let mut best: Option<Hit> = None;
-        self.traverse(&mut ray, shapes, false, |ray, prim, t, uv, index| {
-            ray.t_max = t;
-            best = Some(Hit { t, prim, uv, index });
-            false
-        });
-        best
+        let shear = RayShear::new(ray.d);
+        match shear.kz {
+            0 => self.traverse::<0, false>(ray, &shear, shapes),
+            1 => self.traverse::<1, false>(ray, &shear, shapes),
+            _ => self.traverse::<2, false>(ray, &shear, shapes),
+        }
     }
 
     /// Whether anything blocks the ray before `ray.t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, shapes: &[Shape]) -> bool {
-        let mut ray = *ray;
-        let mut hit = false;
-        self.traverse(&mut ray, shapes, true, |_, _, _, _, _| {
-            hit = true;
-            true
-        });
-        hit
-    }
-
-    /// Walks the tree; `on_hit` returns true to stop (any-hit queries).
-    #[inline(always)]
-    fn traverse(
-        &self,
-        ray: &mut Ray,
-        shapes: &[Shape],
-        any_hit: bool,
-        on_hit: impl FnMut(&mut Ray, u32, f32, Vec2, u32) -> bool,
-    ) {
-        if self.nodes.is_empty() {
-            return;
-        }
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse_k::<0>(ray, &shear, shapes, any_hit, on_hit),
-            1 => self.traverse_k::<1>(ray, &shear, shapes, any_hit, on_hit),
-            _ => self.traverse_k::<2>(ray, &shear, shapes, any_hit, on_hit),
+            0 => self.traverse::<0, true>(ray, &shear, shapes),
+            1 => self.traverse::<1, true>(ray, &shear, shapes),
+            _ => self.traverse::<2, true>(ray, &shear, shapes),
+        }
+        .is_some()
+    }
+
+    /// Walks the tree. `ANY`: stop at the first hit (its fields other than
+    /// `t` are then meaningless).
+    #[inline(always)]
+    fn traverse<const KZ: usize, const ANY: bool>(&self, ray: &Ray, shear: &RayShear, shapes: &[Shape]) -> Option<Hit> {
+        let (root_child, root_info) = self.root?;
+        let mut ray = *ray;
+        let inv_d = ray.d.recip();
+        let o = [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)];
+        let id = [Vec4::splat(inv_d.x), Vec4::splat(inv_d.y), Vec4::splat(inv_d.z)];
+        // Lane rows of the near and far planes per axis, by direction sign.
+        let neg = [(inv_d.x < 0.0) as usize, (inv_d.y < 0.0) as usize, (inv_d.z < 0.0) as usize];
+        let near = [neg[0], 2 + neg[1], 4 + neg[2]];
+        let far = [1 - neg[0], 3 - neg[1], 5 - neg[2]];
+        let lanes = RayLanes::new(&ray, shear);
+        // Robust traversal (Ize 2013): widen the exit distance by gamma(3).
+        let widen = Vec4::splat(1.0 + 2.0 * 3.0 * f32::EPSILON);
+        let mut best: Option<Hit> = None;
+        // Left uninitialised: entries are written before they are read.
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK];
+        let mut sp = 0usize;
+        let mut cur = Entry { child: root_child, info: root_info, t: 0.0 };
+        loop {
+            if cur.info == 0 {
+                let node = &self.nodes[cur.child as usize];
+                let t0 = ((node.b[near[0]] - o[0]) * id[0]).max((node.b[near[1]] - o[1]) * id[1]);
+                let t0 = t0.max(((node.b[near[2]] - o[2]) * id[2]).max(Vec4::ZERO));
+                let t1 = ((node.b[far[0]] - o[0]) * id[0]).min((node.b[far[1]] - o[1]) * id[1]);
+                let t1 = t1.min(((node.b[far[2]] - o[2]) * id[2]).min(Vec4::splat(ray.t_max)));
+                let mut mask = t0.cmple(t1 * widen).bitmask();
+                if mask != 0 {
+                    // Incoherent rays are bound by memory latency: start
+                    // loading every child that will be visited now, so the
+                    // misses overlap instead of following one another.
+                    let mut m = mask;
+                    while m != 0 {
+                        let l = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        self.prefetch(node.child[l], node.info[l]);
+                    }
+                    let tn = t0.to_array();
+                    if mask & (mask - 1) == 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        cur = Entry { child: node.child[l], info: node.info[l], t: tn[l] };
+                        continue;
+                    }
+                    // Several children: stack them far to near, visit the nearest.
+                    let mut hits = [Entry { child: 0, info: 0, t: 0.0 }; 4];
+                    let mut n = 0;
+                    while mask != 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let e = Entry { child: node.child[l], info: node.info[l], t: tn[l] };
+                        // Insertion into descending order of entry distance.
+                        let mut k = n;
+                        while !ANY && k > 0 && hits[k - 1].t < e.t {
+                            hits[k] = hits[k - 1];
+                            k -= 1;
+                        }
+                        hits[k] = e;
+                        n += 1;
+                    }
+                    for e in &hits[..n - 1] {
+                        if sp < STACK {
+                            stack[sp].write(*e);
+                            sp += 1;
+                        } else {
+                            debug_assert!(false, "BVH traversal stack overflow");
+                        }
+                    }
+                    let next = hits[n - 1];
+                    cur = next;
+                    continue;
+                }
+            } else if cur.info & OTHER == 0 {
+                for blk in cur.child..cur.child + cur.info {
+                    let (mut mask, t, b1, b2) = intersect4::<KZ>(&lanes, ray.t_max, &self.tris[blk as usize]);
+                    if mask != 0 {
+                        if ANY {
+                            return Some(Hit { t: ray.t_max, uv: Vec2::ZERO, shape: 0, index: 0, member: 0 });
+                        }
+                        let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
+                        let mut l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        while mask != 0 {
+                            let k = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            if t[k] < t[l] {
+                                l = k;
+                            }
+                        }
+                        let [shape, index] = self.tri_ids[blk as usize][l];
+                        ray.t_max = t[l];
+                        best = Some(Hit { t: t[l], uv: Vec2::new(b1[l], b2[l]), shape, index, member: 0 });
+                    }
+                }
+            } else {
+                let first = cur.child as usize;
+                for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
+                    let found = match *prim {
+                        Prim::Analytic { shape } => shapes[shape as usize]
+                            .intersect_analytic(&ray)
+                            .map(|(t, uv)| Hit { t, uv, shape, index: 0, member: 0 }),
+                        Prim::Instance { shape } => {
+                            let Shape::Instance(inst) = &shapes[shape as usize] else { unreachable!() };
+                            if ANY {
+                                inst.occluded(&ray).then_some(Hit {
+                                    t: ray.t_max,
+                                    uv: Vec2::ZERO,
+                                    shape,
+                                    index: 0,
+                                    member: 0,
+                                })
+                            } else {
+                                inst.intersect(&ray).map(|h| Hit { shape, member: h.shape, ..h })
+                            }
+                        }
+                    };
+                    if let Some(h) = found {
+                        if ANY {
+                            return Some(h);
+                        }
+                        ray.t_max = h.t;
+                        best = Some(h);
+                    }
+                }
+            }
+            // Pop the next subtree that still starts before the closest hit.
+            loop {
+                if sp == 0 {
+                    return best;
+                }
+                sp -= 1;
+                // SAFETY: stack[..sp] were all written by the push above.
+                let e = unsafe { stack[sp].assume_init() };
+                if ANY || e.t <= ray.t_max {
+                    cur = e;
+                    break;
+                }
+            }
         }
     }
 
+    /// Hints the memory of a child slot into the cache.
     #[inline(always)]
-    fn traverse_k<const KZ: usize>(
-        &self,
-        ray: &mut Ray,
-        shear: &RayShear,
-        shapes: &[Shape],
-        any_hit: bool,
-        mut on_hit: impl FnMut(&mut Ray, u32, f32, Vec2, u32) -> bool,
-    ) {
-        let inv_d = Vec3A::from(ray.d.recip());
-        let o = Vec3A::from(ray.o);
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        // Left uninitialised: entries are written before they are read, and
-        // zeroing 256 bytes per ray showed up in profiles.
-        let mut stack = [std::mem::MaybeUninit::<u32>::uninit(); STACK];
-        let mut sp = 0usize;
-        let mut idx = 0usize;
-        loop {
-            let node = &self.nodes[idx];
-            if slab_test(node, o, inv_d, ray.t_max) {
-                if node.count > 0 {
-                    let first = node.offset as usize;
-                    for (k, prim) in self.prims[first..first + node.count as usize].iter().enumerate() {
-                        let found = match prim {
-                            Prim::Triangle { v, index, .. } => intersect_triangle_k::<KZ>(ray, shear, v)
-                                .map(|(t, b1, b2)| (t, Vec2::new(b1, b2), *index)),
-                            Prim::Analytic { shape } => {
-                                shapes[*shape as usize].intersect_analytic(ray).map(|(t, uv)| (t, uv, 0))
-                            }
-                            Prim::Instance { shape } => {
-                                let Shape::Instance(inst) = &shapes[*shape as usize] else { unreachable!() };
-                                if any_hit {
-                                    // Any hit will do: report t_max itself (never read).
-                                    inst.occluded(ray).then_some((ray.t_max, Vec2::ZERO, 0))
-                                } else {
-                                    inst.intersect(ray)
-                                }
-                            }
-                        };
-                        if let Some((t, uv, index)) = found {
-                            if on_hit(ray, (first + k) as u32, t, uv, index) {
-                                return;
-                            }
-                        }
-                    }
-                } else {
-                    // Visit the child on the ray's near side first.
-                    let (near, far) = if neg[node.axis as usize] {
-                        (node.offset as usize, idx + 1)
-                    } else {
-                        (idx + 1, node.offset as usize)
-                    };
-                    if sp < STACK {
-                        stack[sp].write(far as u32);
-                        sp += 1;
-                    }
-                    idx = near;
-                    continue;
-                }
-            }
-            if sp == 0 {
+    fn prefetch(&self, child: u32, info: u32) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let (p, len) = if info == 0 {
+                (self.nodes.as_ptr().wrapping_add(child as usize) as *const i8, std::mem::size_of::<Node4>())
+            } else if info & OTHER == 0 {
+                (self.tris.as_ptr().wrapping_add(child as usize) as *const i8, std::mem::size_of::<Tri4>())
+            } else {
                 return;
+            };
+            // SAFETY: prefetching has no side effects, even off an allocation.
+            unsafe {
+                let mut off = 0;
+                while off < len {
+                    _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off));
+                    off += 64;
+                }
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(len - 1));
             }
-            sp -= 1;
-            // SAFETY: stack[..sp] were all written by the push above.
-            idx = unsafe { stack[sp].assume_init() } as usize;
         }
     }
 
     /// Checks the structural invariants (children inside parents, every
-    /// primitive in exactly one leaf). Used by tests.
+    /// triangle and primitive in exactly one leaf). Used by tests.
     pub fn validate(&self) -> Result<(), String> {
-        let mut seen = vec![0u8; self.prims.len()];
-        if !self.nodes.is_empty() {
-            self.validate_node(0, None, &mut seen, 0)?;
-        }
-        if seen.iter().any(|&c| c != 1) {
-            return Err("a primitive is not referenced exactly once".into());
+        let Some(root) = self.root else { return Ok(()) };
+        let mut seen_blocks = vec![0u8; self.tris.len()];
+        let mut seen_prims = vec![0u8; self.prims.len()];
+        self.validate_slot(root, None, &mut seen_blocks, &mut seen_prims, 0)?;
+        if seen_blocks.iter().chain(&seen_prims).any(|&c| c != 1) {
+            return Err("a leaf entry is not referenced exactly once".into());
         }
         Ok(())
     }
 
-    fn validate_node(&self, idx: usize, parent: Option<Aabb>, seen: &mut [u8], depth: usize) -> Result<(), String> {
-        let n = &self.nodes[idx];
-        let b = Aabb { min: Vec3::from(n.min), max: Vec3::from(n.max) };
-        if let Some(p) = parent {
-            if !p.contains_box(&b) {
-                return Err(format!("node {idx} is not inside its parent"));
-            }
+    fn validate_slot(
+        &self,
+        (child, info): (u32, u32),
+        bounds: Option<Aabb>,
+        blocks: &mut [u8],
+        prims: &mut [u8],
+        depth: usize,
+    ) -> Result<(), String> {
+        if depth > 64 {
+            return Err("tree too deep".into());
         }
-        if depth >= STACK {
-            return Err("tree deeper than the traversal stack".into());
-        }
-        if n.count > 0 {
-            for i in n.offset as usize..n.offset as usize + n.count as usize {
-                seen[i] += 1;
+        if info == 0 {
+            let n = &self.nodes[child as usize];
+            for l in 0..4 {
+                let b = Aabb {
+                    min: Vec3::new(n.b[0].to_array()[l], n.b[2].to_array()[l], n.b[4].to_array()[l]),
+                    max: Vec3::new(n.b[1].to_array()[l], n.b[3].to_array()[l], n.b[5].to_array()[l]),
+                };
+                if b.is_empty() {
+                    continue;
+                }
+                if let Some(p) = bounds {
+                    if !p.contains_box(&b) {
+                        return Err(format!("node {child} lane {l} is not inside its parent"));
+                    }
+                }
+                self.validate_slot((n.child[l], n.info[l]), Some(b), blocks, prims, depth + 1)?;
             }
-            Ok(())
+        } else if info & OTHER == 0 {
+            for k in child..child + info {
+                blocks[k as usize] += 1;
+                let tri = &self.tris[k as usize];
+                for l in 0..tri.len() {
+                    if let Some(p) = bounds {
+                        if !p.contains_box(&Aabb::from_points(&tri.lane(l))) {
+                            return Err(format!("triangle block {k} lane {l} is outside its leaf"));
+                        }
+                    }
+                }
+            }
         } else {
-            self.validate_node(idx + 1, Some(b), seen, depth + 1)?;
-            self.validate_node(n.offset as usize, Some(b), seen, depth + 1)
-        }
-    }
-}
-
-#[inline(always)]
-fn slab_test(node: &Node, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
-    let (lo, hi) = node.corners();
-    let t0 = (lo - o) * inv_d;
-    let t1 = (hi - o) * inv_d;
-    let tmin = t0.min(t1).max_element().max(0.0);
-    let tmax = t0.max(t1).min_element().min(t_max);
-    // Slightly widen the exit distance so rays grazing a box's face still
-    // visit it (robust traversal: Ize 2013, gamma(3) factor).
-    tmin <= tmax * (1.0 + 2.0 * 3.0 * f32::EPSILON)
-}
-
-fn build_recursive(items: &mut [BuildPrim], first: usize, nodes: &mut Vec<Node>) -> usize {
-    let bounds = items.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
-    let idx = nodes.len();
-    nodes.push(Node { min: bounds.min.into(), offset: first as u32, max: bounds.max.into(), count: 0, axis: 0 });
-    let n = items.len();
-    let make_leaf = |nodes: &mut Vec<Node>| {
-        nodes[idx].count = n as u16;
-        nodes[idx].offset = first as u32;
-        idx
-    };
-    if n == 1 {
-        return make_leaf(nodes);
-    }
-    let cb = items.iter().fold(Aabb::EMPTY, |b, p| b.grow(p.centroid));
-    let ext = cb.extent();
-
-    // Binned SAH over all three axes.
-    let mut best = (f32::INFINITY, 0usize, 0usize); // (cost, axis, split bin)
-    for axis in 0..3 {
-        if ext[axis] <= 0.0 {
-            continue;
-        }
-        let scale = BINS as f32 / ext[axis];
-        let mut bin_b = [Aabb::EMPTY; BINS];
-        let mut bin_n = [0usize; BINS];
-        for p in items.iter() {
-            let b = (((p.centroid[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1);
-            bin_b[b] = bin_b[b].union(p.bounds);
-            bin_n[b] += 1;
-        }
-        // Sweep from the right to get suffix areas, then from the left.
-        let mut right_area = [0.0f32; BINS];
-        let mut right_n = [0usize; BINS];
-        let (mut acc_b, mut acc_n) = (Aabb::EMPTY, 0);
-        for i in (1..BINS).rev() {
-            acc_b = acc_b.union(bin_b[i]);
-            acc_n += bin_n[i];
-            right_area[i] = acc_b.area();
-            right_n[i] = acc_n;
-        }
-        let (mut left_b, mut left_n) = (Aabb::EMPTY, 0);
-        for i in 0..BINS - 1 {
-            left_b = left_b.union(bin_b[i]);
-            left_n += bin_n[i];
-            if left_n == 0 || right_n[i + 1] == 0 {
-                continue;
-            }
-            let cost = left_b.area() * left_n as f32 + right_area[i + 1] * right_n[i + 1] as f32;
-            if cost < best.0 {
-                best = (cost, axis, i + 1);
+            for k in child..child + (info & !OTHER) {
+                prims[k as usize] += 1;
             }
         }
+        Ok(())
     }
 
-    let leaf_cost = INTERSECT_COST * n as f32;
-    let split_cost = if best.0.is_finite() {
-        TRAVERSAL_COST + INTERSECT_COST * best.0 / bounds.area().max(f32::MIN_POSITIVE)
-    } else {
-        f32::INFINITY
-    };
-    let mid = if best.0.is_finite() && (split_cost < leaf_cost || n > MAX_LEAF) {
-        let (axis, split) = (best.1, best.2);
-        let scale = BINS as f32 / ext[axis];
-        partition(items, |p| ((((p.centroid[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1)) < split)
-    } else if n > MAX_LEAF {
-        // All centroids coincide: split by count.
-        n / 2
-    } else {
-        return make_leaf(nodes);
-    };
-    let axis = if best.0.is_finite() { best.1 } else { ext.max_position() };
-    let (left, right) = items.split_at_mut(mid);
-    build_recursive(left, first, nodes);
-    let right_idx = build_recursive(right, first + mid, nodes);
-    nodes[idx].offset = right_idx as u32;
-    nodes[idx].axis = axis as u16;
-    idx
-}
-
-fn partition<T>(items: &mut [T], pred: impl Fn(&T) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..items.len() {
-        if pred(&items[j]) {
-            items.swap(i, j);
-            i += 1;
-        }
+    /// (4-wide nodes, triangle blocks, average child slots used per node).
+    pub fn stats(&self) -> (usize, usize, f64) {
+        let used: usize =
+            self.nodes.iter().map(|n| (0..4).filter(|&l| n.b[0].to_array()[l] <= n.b[1].to_array()[l]).count()).sum();
+        (self.nodes.len(), self.tris.len(), used as f64 / self.nodes.len().max(1) as f64)
     }
-    i
+
+    /// Number of triangles stored (for tests and statistics).
+    pub fn triangle_count(&self) -> usize {
+        self.tris.iter().map(|t| t.len()).sum()
+    }
+
+    /// Bytes held by the hierarchy (nodes, triangle blocks, ids, primitives).
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<Node4>()
+            + self.tris.capacity() * std::mem::size_of::<Tri4>()
+            + self.tri_ids.capacity() * std::mem::size_of::<[[u32; 2]; 4]>()
+            + self.prims.capacity() * std::mem::size_of::<Prim>()
+    }
 }
 
 #[cfg(test)]
@@ -435,22 +481,21 @@ mod tests {
         let shapes = random_soup(2000);
         let accel = Accel::build(&shapes);
         accel.validate().unwrap();
+        assert_eq!(accel.triangle_count(), 2000);
         for i in 0..2000u64 {
             let o = Vec3::new(rnd(i, 100), rnd(i, 101), rnd(i, 102)) * 12.0 - 1.0;
             let d = (Vec3::new(rnd(i, 103), rnd(i, 104), rnd(i, 105)) - 0.5).normalize();
             let ray = Ray::new(o, d, if i % 3 == 0 { 4.0 } else { f32::INFINITY });
             let shear = RayShear::new(d);
             let mut brute = f32::INFINITY;
-            for p in &accel.prims {
-                let t = match p {
-                    Prim::Triangle { v, .. } => intersect_triangle(&ray, &shear, v).map(|h| h.0),
-                    Prim::Analytic { shape } | Prim::Instance { shape } => {
-                        shapes[*shape as usize].intersect_analytic(&ray).map(|h| h.0)
-                    }
-                };
-                if let Some(t) = t {
-                    brute = brute.min(t);
+            let Shape::Mesh(m) = &shapes[0] else { unreachable!() };
+            for k in 0..m.mesh.indices.len() {
+                if let Some(h) = intersect_triangle(&ray, &shear, &m.vertices(k)) {
+                    brute = brute.min(h.0);
                 }
+            }
+            if let Some(h) = shapes[1].intersect_analytic(&ray) {
+                brute = brute.min(h.0);
             }
             let hit = accel.intersect(&ray, &shapes);
             assert_eq!(hit.map(|h| h.t), brute.is_finite().then_some(brute), "ray {i}");

@@ -1,7 +1,11 @@
-//! Ray-query acceleration: a binned-SAH BVH over all primitives of the scene.
+//! Ray-query acceleration: a 4-wide BVH over all primitives of the scene.
 //!
 //! API: [`Accel::intersect`] (closest hit) and [`Accel::occluded`] (any hit).
+//! `build` makes the tree, `tri4` tests four triangles at once, `bvh` holds
+//! the nodes and the traversal.
 
+pub mod build;
 pub mod bvh;
+pub mod tri4;
 
 pub use bvh::{Accel, Hit, Prim};

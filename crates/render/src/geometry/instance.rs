@@ -5,7 +5,7 @@
 //! map, so hits compare across levels) and the hit is carried back.
 
 use super::{Aabb, Ray, Shape, SurfaceInteraction};
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::sync::Arc;
 
@@ -75,11 +75,12 @@ impl Instance {
         )
     }
 
-    /// Closest hit: (t, the member's hit coordinates, index into the group's BVH primitives).
+    /// Closest hit, with `shape` the member's index in the group (`t` is
+    /// the world ray's: the object-space ray keeps its unnormalised direction).
     #[inline]
-    pub fn intersect(&self, ray: &Ray) -> Option<(f32, Vec2, u32)> {
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let r = self.object_ray(ray);
-        self.group.accel.intersect(&r, &self.group.shapes).map(|h| (h.t, h.uv, h.prim))
+        self.group.accel.intersect(&r, &self.group.shapes)
     }
 
     #[inline]
@@ -87,13 +88,11 @@ impl Instance {
         self.group.accel.occluded(&self.object_ray(ray), &self.group.shapes)
     }
 
-    /// The interaction at a hit on group primitive `prim`, in world space;
-    /// `si.shape` is the member's scene-wide id.
-    pub fn interaction(&self, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
+    /// The interaction at a hit on triangle `index` of group member
+    /// `member`, in world space; `si.shape` is the member's scene-wide id.
+    pub fn interaction(&self, member: usize, index: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
         let r = self.object_ray(ray);
-        let p = self.group.accel.prims[prim];
-        let member = p.shape() as usize;
-        let mut si = self.group.shapes[member].interaction(0, p.index() as usize, &r, t, uv);
+        let mut si = self.group.shapes[member].interaction(0, index, &r, t, uv);
         let m = &self.world_from_object;
         si.p = m.transform_point3(si.p);
         si.n = (self.normal_m * si.n).normalize();
@@ -163,12 +162,10 @@ mod tests {
                 (Some(h1), Some(h2)) => {
                     hits += 1;
                     assert!((h1.t - h2.t).abs() < 1e-4 * h2.t.max(1.0), "ray {i}: {} vs {}", h1.t, h2.t);
-                    let p1 = a_top.prims[h1.prim as usize];
-                    let Shape::Instance(inst) = &instanced[p1.shape() as usize] else { panic!() };
-                    let si1 = inst.interaction(h1.index as usize, &ray, h1.t, h1.uv);
-                    let p2 = a_flat.prims[h2.prim as usize];
-                    let si2 = flat[p2.shape() as usize].interaction(0, h2.index as usize, &ray, h2.t, h2.uv);
-                    assert_eq!(si1.shape, flat_ids[p2.shape() as usize]);
+                    let Shape::Instance(inst) = &instanced[h1.shape as usize] else { panic!() };
+                    let si1 = inst.interaction(h1.member as usize, h1.index as usize, &ray, h1.t, h1.uv);
+                    let si2 = flat[h2.shape as usize].interaction(0, h2.index as usize, &ray, h2.t, h2.uv);
+                    assert_eq!(si1.shape, flat_ids[h2.shape as usize]);
                     assert!((si1.p - si2.p).length() < 1e-4, "ray {i}: p {} vs {}", si1.p, si2.p);
                     assert!((si1.n - si2.n).length() < 1e-4, "ray {i}: n {} vs {}", si1.n, si2.n);
                     assert!((si1.sh_frame.n - si2.sh_frame.n).length() < 1e-4);

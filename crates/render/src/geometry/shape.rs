@@ -145,7 +145,7 @@ impl Shape {
                 (p.x * p.x + p.y * p.y <= 1.0).then_some((t, Vec2::new(p.x, p.y)))
             }
             Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
-            Shape::Instance(i) => i.intersect(ray).map(|(t, uv, _)| (t, uv)),
+            Shape::Instance(i) => i.intersect(ray).map(|h| (h.t, h.uv)),
             Shape::Mesh(_) | Shape::GroupMember => None,
         }
     }
@@ -234,7 +234,9 @@ impl Shape {
                 let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);
                 (p, n, n, tex, dpdu, dpdv)
             }
-            Shape::Instance(i) => return i.interaction(prim, ray, t, uv),
+            Shape::Instance(_) => {
+                unreachable!("instance hits are resolved by Scene::intersect (Instance::interaction)")
+            }
             Shape::GroupMember => unreachable!("group members are hit through their instances"),
         };
         SurfaceInteraction {

@@ -9,9 +9,9 @@ use glam::Vec3;
 #[derive(Debug, Clone, Copy)]
 pub struct RayShear {
     pub kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub sx: f32,
+    pub sy: f32,
+    pub sz: f32,
 }
 
 impl RayShear {

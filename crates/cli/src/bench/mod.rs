@@ -2,6 +2,10 @@
 //! rays/s; with Mitsuba 3 available, times it on the same scene file and
 //! prints the ratio.
 
+#[cfg(feature = "embree")]
+mod embree;
+mod rays;
+
 use crate::args::BenchArgs;
 use anyhow::{anyhow, Result};
 use penumbra_scene::Overrides;
@@ -65,6 +69,17 @@ fn time_mitsuba(
 }
 
 pub fn run(a: &BenchArgs) -> Result<()> {
+    let pool = crate::thread_pool(a.threads)?;
+    if a.suite == "all" || a.suite == "scenes" {
+        scenes(a, &pool)?;
+    }
+    if a.suite == "all" || a.suite == "rays" {
+        rays::table(&pool, a.triangles.unwrap_or(1_000_000), a.rays);
+    }
+    Ok(())
+}
+
+fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
     let scenes: Vec<(PathBuf, Vec<(String, String)>)> = if a.scenes.is_empty() {
         DEFAULT_SCENES
             .iter()
@@ -73,7 +88,6 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     } else {
         a.scenes.iter().map(|p| (p.clone(), Vec::new())).collect()
     };
-    let pool = crate::thread_pool(a.threads)?;
     let threads = pool.current_num_threads();
     let mitsuba = mitsuba_python(a);
     println!(
@@ -86,8 +100,8 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         // One untimed warm-up pass at 1 spp (page faults, thread start-up).
         let mut warm = job.clone();
         warm.sampler.spp = 1;
-        crate::render_job(&warm, &pool, true);
-        let (_, stats, elapsed) = crate::render_job(&job, &pool, true);
+        crate::render_job(&warm, pool, true);
+        let (_, stats, elapsed) = crate::render_job(&job, pool, true);
         let secs = elapsed.as_secs_f64();
         let rays = (stats.rays.rays + stats.rays.shadow_rays) as f64;
         let (mi, ratio) = match &mitsuba {
@@ -117,7 +131,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     }
     println!("threads: {threads}; speedup = Mitsuba seconds / Penumbra seconds at equal spp ({})", a.mitsuba_variant);
     if a.scenes.is_empty() {
-        light_selection_table(&pool)?;
+        light_selection_table(pool)?;
     }
     Ok(())
 }

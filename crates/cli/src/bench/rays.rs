@@ -1,0 +1,219 @@
+//! Ray-traversal benchmark: BVH build time and closest-hit / any-hit
+//! throughput on a procedural mesh of about a million triangles with
+//! incoherent rays, next to Embree 3 on the same triangles and rays when
+//! Penumbra is built with the `embree` feature.
+//!
+//! The mesh is a "cave": a UV sphere whose radius is displaced by smooth
+//! waves plus per-vertex noise, seen from inside. Closest-hit rays are
+//! diffuse bounces: they start at uniformly chosen points of the inner
+//! surface and leave in cosine-distributed directions about the normal, so
+//! every ray crosses the cave in a random direction (no coherence at all).
+//! Any-hit rays are shadow segments between two random surface points.
+
+use glam::{Vec2, Vec3};
+use penumbra_render::accel::Accel;
+use penumbra_render::geometry::{Mesh, Ray, Shape, TriangleMesh};
+use penumbra_render::sampling::rng::{hash_words, to_unit_f32};
+use penumbra_render::sampling::warp;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// A displaced UV sphere with about `target` triangles (`nu` x `nu/2` quads,
+/// two triangles each; the pole rows hold degenerate ones, as real scanned
+/// meshes often do).
+pub fn cave_mesh(target: usize) -> TriangleMesh {
+    let nu = ((target as f64).sqrt().round() as u32).max(8);
+    let nv = nu / 2;
+    let mut m = TriangleMesh::default();
+    m.positions.reserve(((nv + 1) * nu) as usize);
+    for j in 0..=nv {
+        let theta = std::f32::consts::PI * j as f32 / nv as f32;
+        for i in 0..nu {
+            let phi = 2.0 * std::f32::consts::PI * i as f32 / nu as f32;
+            let noise = to_unit_f32(hash_words(&[j as u64, i as u64, 77])) - 0.5;
+            let r = 1.0
+                + 0.15 * (5.0 * theta).sin() * (7.0 * phi).cos()
+                + 0.05 * (23.0 * theta + 1.0).sin() * (19.0 * phi).sin()
+                + 0.02 * noise * theta.sin();
+            m.positions.push(r * Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()));
+        }
+    }
+    m.indices.reserve((2 * nu * nv) as usize);
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * nu + i;
+            let b = j * nu + (i + 1) % nu;
+            let (c, d) = (a + nu, b + nu);
+            m.indices.push([a, c, b]);
+            m.indices.push([b, c, d]);
+        }
+    }
+    m
+}
+
+/// One query: origin, direction, t_max.
+#[derive(Clone, Copy)]
+pub struct BenchRay {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub t_max: f32,
+}
+
+/// A uniformly chosen point of the surface (by triangle index, then
+/// uniform barycentrics) and the face normal turned towards the inside.
+fn surface_point(m: &TriangleMesh, key: u64) -> Option<(Vec3, Vec3)> {
+    let n_tri = m.indices.len() as u64;
+    let t = m.indices[(hash_words(&[key, 1]) % n_tri) as usize];
+    let [a, b, c] = t.map(|i| m.positions[i as usize]);
+    let n = (b - a).cross(c - a);
+    if n.length_squared() == 0.0 {
+        return None;
+    }
+    let u = Vec2::new(to_unit_f32(hash_words(&[key, 2])), to_unit_f32(hash_words(&[key, 3])));
+    let bary = warp::sample_uniform_triangle(u);
+    let p = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
+    let mut n = n.normalize();
+    if n.dot(p) > 0.0 {
+        n = -n;
+    }
+    Some((p + n * 1e-4, n))
+}
+
+/// `count` diffuse-bounce rays (closest hit) and `count` shadow segments
+/// (any hit), a pure function of `count`.
+pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<BenchRay>, Vec<BenchRay>) {
+    let bounce = (0..count as u64 * 2)
+        .into_par_iter()
+        .filter_map(|k| {
+            let (o, n) = surface_point(m, k)?;
+            let u = Vec2::new(to_unit_f32(hash_words(&[k, 4])), to_unit_f32(hash_words(&[k, 5])));
+            let local = warp::sample_cosine_hemisphere(u);
+            let frame = penumbra_render::math::Frame::from_normal(n);
+            Some(BenchRay { o, d: frame.to_world(local).normalize(), t_max: f32::INFINITY })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .take(count)
+        .collect();
+    let shadow = (0..count as u64 * 2)
+        .into_par_iter()
+        .filter_map(|k| {
+            let (o, _) = surface_point(m, k + (1 << 40))?;
+            let (q, _) = surface_point(m, k + (2 << 40))?;
+            let dist = (q - o).length();
+            (dist > 1e-3).then(|| BenchRay { o, d: (q - o) / dist, t_max: dist * 0.999 })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .take(count)
+        .collect();
+    (bounce, shadow)
+}
+
+/// Results of one engine on the benchmark.
+pub struct TraceResult {
+    pub build_s: f64,
+    pub closest_mrays: f64,
+    pub any_mrays: f64,
+    /// Closest hits found and their summed distances, and occluded segments:
+    /// the engines must agree on these (a check, not a timing).
+    pub hits: u64,
+    pub t_sum: f64,
+    pub occluded: u64,
+}
+
+/// Times `f` over all rays in parallel chunks; returns (Mrays/s, result).
+fn timed<R: Send>(rays: &[BenchRay], f: impl Fn(&[BenchRay]) -> R + Sync, sum: impl Fn(Vec<R>) -> R) -> (f64, R) {
+    let start = Instant::now();
+    let parts: Vec<R> = rays.par_chunks(4096).map(&f).collect();
+    let secs = start.elapsed().as_secs_f64();
+    (rays.len() as f64 / secs / 1e6, sum(parts))
+}
+
+/// Penumbra's BVH on the mesh and rays.
+pub fn trace_penumbra(mesh: &TriangleMesh, bounce: &[BenchRay], shadow: &[BenchRay]) -> TraceResult {
+    let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
+    let start = Instant::now();
+    let accel = Accel::build(&shapes);
+    let build_s = start.elapsed().as_secs_f64();
+    let (nodes, blocks, fill) = accel.stats();
+    eprintln!(
+        "penumbra BVH: {nodes} nodes ({fill:.2} children each), {blocks} triangle blocks ({:.2} triangles each), {:.1} bytes/triangle",
+        accel.triangle_count() as f64 / blocks as f64,
+        accel.memory_bytes() as f64 / accel.triangle_count() as f64
+    );
+    let closest = |c: &[BenchRay]| {
+        let (mut n, mut ts) = (0u64, 0f64);
+        for r in c {
+            if let Some(h) = accel.intersect(&Ray::new(r.o, r.d, r.t_max), &shapes) {
+                n += 1;
+                ts += h.t as f64;
+            }
+        }
+        (n, ts)
+    };
+    // Warm-up: touch the whole tree once, untimed.
+    closest(&bounce[..bounce.len().min(20_000)]);
+    let (closest_mrays, (hits, t_sum)) =
+        timed(bounce, closest, |v| v.into_iter().fold((0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1)));
+    let any =
+        |c: &[BenchRay]| c.iter().filter(|r| accel.occluded(&Ray::new(r.o, r.d, r.t_max), &shapes)).count() as u64;
+    let (any_mrays, occluded) = timed(shadow, any, |v| v.into_iter().sum());
+    TraceResult { build_s, closest_mrays, any_mrays, hits, t_sum, occluded }
+}
+
+#[cfg(feature = "embree")]
+pub use super::embree::trace_embree;
+
+/// Embree is not compiled in: no column.
+#[cfg(not(feature = "embree"))]
+pub fn trace_embree(_: &TriangleMesh, _: &[BenchRay], _: &[BenchRay]) -> Option<TraceResult> {
+    None
+}
+
+/// Prints the ray-traversal table.
+pub fn table(pool: &rayon::ThreadPool, triangles: usize, rays: usize) {
+    let mesh = cave_mesh(triangles);
+    let (bounce, shadow) = pool.install(|| incoherent_rays(&mesh, rays));
+    println!(
+        "\nray traversal: {} triangles (displaced sphere seen from inside), {} diffuse-bounce rays (closest hit), {} shadow segments (any hit)",
+        mesh.indices.len(),
+        bounce.len(),
+        shadow.len()
+    );
+    println!(
+        "{:<10} {:>9} {:>15} {:>15} {:>12} {:>10}",
+        "engine", "build s", "closest Mrays/s", "any-hit Mrays/s", "hits", "mean t"
+    );
+    let row = |name: &str, r: &TraceResult| {
+        println!(
+            "{name:<10} {:>9.2} {:>15.3} {:>15.3} {:>12} {:>10.5}",
+            r.build_s,
+            r.closest_mrays,
+            r.any_mrays,
+            r.hits,
+            r.t_sum / r.hits.max(1) as f64
+        );
+    };
+    let ours = pool.install(|| trace_penumbra(&mesh, &bounce, &shadow));
+    row("penumbra", &ours);
+    match pool.install(|| trace_embree(&mesh, &bounce, &shadow)) {
+        Some(e) => {
+            row("embree", &e);
+            println!(
+                "penumbra / embree throughput: closest {:.2}x, any hit {:.2}x (1.0 = equal; target >= 0.80, i.e. within 1.25x)",
+                ours.closest_mrays / e.closest_mrays,
+                ours.any_mrays / e.any_mrays
+            );
+            if ours.hits != e.hits || ours.occluded != e.occluded {
+                println!(
+                    "note: hit counts differ (penumbra {}/{} vs embree {}/{} closest/occluded): grazing rays",
+                    ours.hits, ours.occluded, e.hits, e.occluded
+                );
+            }
+        }
+        None => println!(
+            "(Embree column: build with `cargo build --release --features embree`; needs Debian's libembree-dev)"
+        ),
+    }
+}

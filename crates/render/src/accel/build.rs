@@ -1,0 +1,214 @@
+//! BVH construction: a binary tree by binned SAH (Wald 2007, "On fast
+//! construction of SAH-based bounding volume hierarchies"), built in
+//! parallel, then collapsed into 4-wide nodes by repeatedly opening the
+//! child of largest surface area (as Embree and pbrt's wide BVHs do).
+
+use crate::geometry::Aabb;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// What a build primitive refers to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ItemKind {
+    Triangle,
+    /// A sphere, disk, cylinder or instance: intersected through its shape.
+    Other,
+}
+
+/// A primitive to build over: its box, centroid and reference.
+#[derive(Debug, Clone, Copy)]
+pub struct Item {
+    pub bounds: Aabb,
+    pub centroid: Vec3,
+    pub kind: ItemKind,
+    pub shape: u32,
+    pub index: u32,
+}
+
+/// A node of the binary tree; leaves hold a range of the item array, all of one kind.
+pub enum BNode {
+    Leaf { bounds: Aabb, first: usize, count: usize },
+    Inner { bounds: Aabb, children: Box<[BNode; 2]> },
+}
+
+impl BNode {
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            BNode::Leaf { bounds, .. } | BNode::Inner { bounds, .. } => *bounds,
+        }
+    }
+}
+
+const BINS: usize = 32;
+/// Largest leaf: two blocks of four triangles.
+pub const MAX_LEAF: usize = 8;
+/// SAH costs: one node visit against one 4-wide triangle block.
+const TRAVERSAL_COST: f32 = 1.0;
+const BLOCK_COST: f32 = 0.5;
+/// Subtrees at least this large are built on two threads.
+const PARALLEL: usize = 4096;
+
+#[derive(Clone, Copy)]
+struct Bins {
+    b: [[Aabb; BINS]; 3],
+    n: [[u32; BINS]; 3],
+}
+
+impl Bins {
+    fn empty() -> Bins {
+        Bins { b: [[Aabb::EMPTY; BINS]; 3], n: [[0; BINS]; 3] }
+    }
+    fn merge(mut self, o: Bins) -> Bins {
+        for a in 0..3 {
+            for i in 0..BINS {
+                self.b[a][i] = self.b[a][i].union(o.b[a][i]);
+                self.n[a][i] += o.n[a][i];
+            }
+        }
+        self
+    }
+}
+
+#[inline]
+fn bin_of(c: f32, min: f32, scale: f32) -> usize {
+    (((c - min) * scale) as usize).min(BINS - 1)
+}
+
+/// SAH cost of a primitive count: blocks of four.
+#[inline]
+fn blocks(n: u32) -> f32 {
+    n.div_ceil(4) as f32
+}
+
+/// Builds the binary tree over `items`, reordering them into leaf order.
+pub fn build_binary(items: &mut [Item]) -> BNode {
+    build_rec(items, 0)
+}
+
+fn build_rec(items: &mut [Item], first: usize) -> BNode {
+    let n = items.len();
+    let bounds = if n >= PARALLEL {
+        items.par_iter().map(|p| p.bounds).reduce(|| Aabb::EMPTY, Aabb::union)
+    } else {
+        items.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds))
+    };
+    let leaf = |items: &mut [Item]| make_leaf(items, first, bounds);
+    if n == 1 {
+        return leaf(items);
+    }
+    let cb = items.iter().fold(Aabb::EMPTY, |b, p| b.grow(p.centroid));
+    let ext = cb.extent();
+    let scale = Vec3::new(
+        if ext.x > 0.0 { BINS as f32 / ext.x } else { 0.0 },
+        if ext.y > 0.0 { BINS as f32 / ext.y } else { 0.0 },
+        if ext.z > 0.0 { BINS as f32 / ext.z } else { 0.0 },
+    );
+    let fill = |chunk: &[Item]| {
+        let mut bins = Bins::empty();
+        for p in chunk {
+            for a in 0..3 {
+                let i = bin_of(p.centroid[a], cb.min[a], scale[a]);
+                bins.b[a][i] = bins.b[a][i].union(p.bounds);
+                bins.n[a][i] += 1;
+            }
+        }
+        bins
+    };
+    let bins =
+        if n >= PARALLEL { items.par_chunks(2048).map(fill).reduce(Bins::empty, Bins::merge) } else { fill(items) };
+
+    // Sweep each axis: suffix areas from the right, then prefixes.
+    let mut best = (f32::INFINITY, 0usize, 0usize); // (cost, axis, first bin on the right)
+    for a in 0..3 {
+        if ext[a] <= 0.0 {
+            continue;
+        }
+        let mut right = [(0.0f32, 0u32); BINS];
+        let (mut acc_b, mut acc_n) = (Aabb::EMPTY, 0);
+        for i in (1..BINS).rev() {
+            acc_b = acc_b.union(bins.b[a][i]);
+            acc_n += bins.n[a][i];
+            right[i] = (acc_b.area(), acc_n);
+        }
+        let (mut left_b, mut left_n) = (Aabb::EMPTY, 0);
+        for i in 0..BINS - 1 {
+            left_b = left_b.union(bins.b[a][i]);
+            left_n += bins.n[a][i];
+            let (ra, rn) = right[i + 1];
+            if left_n == 0 || rn == 0 {
+                continue;
+            }
+            let cost = left_b.area() * blocks(left_n) + ra * blocks(rn);
+            if cost < best.0 {
+                best = (cost, a, i + 1);
+            }
+        }
+    }
+
+    let leaf_cost = BLOCK_COST * blocks(n as u32);
+    let split_cost = TRAVERSAL_COST + BLOCK_COST * best.0 / bounds.area().max(f32::MIN_POSITIVE);
+    let mid = if best.0.is_finite() && (split_cost < leaf_cost || n > MAX_LEAF) {
+        let (a, split) = (best.1, best.2);
+        partition(items, |p| bin_of(p.centroid[a], cb.min[a], scale[a]) < split)
+    } else if n > MAX_LEAF {
+        // All centroids coincide: split by count.
+        n / 2
+    } else {
+        return leaf(items);
+    };
+    let (l, r) = items.split_at_mut(mid);
+    let (left, right) = if n >= PARALLEL {
+        rayon::join(|| build_rec(l, first), || build_rec(r, first + mid))
+    } else {
+        (build_rec(l, first), build_rec(r, first + mid))
+    };
+    BNode::Inner { bounds, children: Box::new([left, right]) }
+}
+
+/// A leaf, or two when triangles and other primitives meet (a leaf holds one kind).
+fn make_leaf(items: &mut [Item], first: usize, bounds: Aabb) -> BNode {
+    let tris = partition(items, |p| p.kind == ItemKind::Triangle);
+    if tris == 0 || tris == items.len() {
+        return BNode::Leaf { bounds, first, count: items.len() };
+    }
+    let (a, b) = items.split_at(tris);
+    let ba = a.iter().fold(Aabb::EMPTY, |x, p| x.union(p.bounds));
+    let bb = b.iter().fold(Aabb::EMPTY, |x, p| x.union(p.bounds));
+    BNode::Inner {
+        bounds,
+        children: Box::new([
+            BNode::Leaf { bounds: ba, first, count: tris },
+            BNode::Leaf { bounds: bb, first: first + tris, count: items.len() - tris },
+        ]),
+    }
+}
+
+fn partition<T>(items: &mut [T], pred: impl Fn(&T) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..items.len() {
+        if pred(&items[j]) {
+            items.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+/// Up to four children for a wide node: starting from `node`'s two, the
+/// inner child of largest area is replaced by its own two children.
+pub fn wide_children(node: &BNode) -> Vec<&BNode> {
+    let BNode::Inner { children, .. } = node else { return vec![node] };
+    let mut out: Vec<&BNode> = vec![&children[0], &children[1]];
+    while out.len() < 4 {
+        let best = out
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| matches!(c, BNode::Inner { .. }))
+            .max_by(|a, b| a.1.bounds().area().total_cmp(&b.1.bounds().area()));
+        let Some((i, _)) = best else { break };
+        let BNode::Inner { children, .. } = out.swap_remove(i) else { unreachable!() };
+        out.push(&children[0]);
+        out.push(&children[1]);
+    }
+    out
+}
