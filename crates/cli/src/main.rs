@@ -57,6 +57,14 @@ pub fn render_job(job: &RenderJob, pool: &rayon::ThreadPool, quiet: bool) -> (Fi
     (film, stats, start.elapsed())
 }
 
+/// The process's peak resident memory (Linux VmHWM), in MB.
+pub fn peak_memory_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
 fn render(a: &RenderArgs) -> Result<()> {
     // Check the output name before spending time on the render.
     image_io::Format::from_path(&a.output).map_err(|e| anyhow!(e))?;
@@ -69,14 +77,15 @@ fn render(a: &RenderArgs) -> Result<()> {
     let secs = elapsed.as_secs_f64();
     let rays = stats.rays.rays + stats.rays.shadow_rays;
     eprintln!(
-        "rendered {} ({}x{}, {} spp) in {:.2} s: {:.3} M samples/s, {:.2} M rays/s",
+        "rendered {} ({}x{}, {} spp) in {:.2} s: {:.3} M samples/s, {:.2} M rays/s{}",
         a.output.display(),
         job.width,
         job.height,
         job.sampler.spp,
         secs,
         stats.samples as f64 / secs / 1e6,
-        rays as f64 / secs / 1e6
+        rays as f64 / secs / 1e6,
+        peak_memory_mb().map(|m| format!(", peak memory {m:.0} MB")).unwrap_or_default()
     );
     if stats.non_finite > 0 {
         eprintln!("warning: {} samples were NaN or infinite and were dropped", stats.non_finite);

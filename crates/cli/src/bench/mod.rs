@@ -5,6 +5,7 @@
 #[cfg(feature = "embree")]
 mod embree;
 mod rays;
+mod scale;
 
 use crate::args::BenchArgs;
 use anyhow::{anyhow, Result};
@@ -75,6 +76,9 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     }
     if a.suite == "all" || a.suite == "rays" {
         rays::table(&pool, a.triangles.unwrap_or(1_000_000), a.rays);
+    }
+    if a.suite == "scale" {
+        scale::run(a.triangles.unwrap_or(10_000_000), pool.current_num_threads())?;
     }
     Ok(())
 }

@@ -4,7 +4,7 @@
 //! child of largest surface area (as Embree and pbrt's wide BVHs do).
 
 use crate::geometry::Aabb;
-use glam::Vec3;
+use glam::{UVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
 /// What a build primitive refers to.
@@ -87,35 +87,40 @@ pub fn build_binary(items: &mut [Item]) -> BNode {
 
 fn build_rec(items: &mut [Item], first: usize) -> BNode {
     let n = items.len();
-    let bounds = if n >= PARALLEL {
-        items.par_iter().map(|p| p.bounds).reduce(|| Aabb::EMPTY, Aabb::union)
+    // Primitive bounds and centroid bounds in one pass.
+    let both =
+        |c: &[Item]| c.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, cb), p| (b.union(p.bounds), cb.grow(p.centroid)));
+    let join = |a: (Aabb, Aabb), b: (Aabb, Aabb)| (a.0.union(b.0), a.1.union(b.1));
+    let (bounds, cb) = if n >= PARALLEL {
+        items.par_chunks(4096).map(both).reduce(|| (Aabb::EMPTY, Aabb::EMPTY), join)
     } else {
-        items.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds))
+        both(items)
     };
     let leaf = |items: &mut [Item]| make_leaf(items, first, bounds);
     if n == 1 {
         return leaf(items);
     }
-    let cb = items.iter().fold(Aabb::EMPTY, |b, p| b.grow(p.centroid));
     let ext = cb.extent();
-    let scale = Vec3::new(
+    let scale = Vec3A::from(Vec3::new(
         if ext.x > 0.0 { BINS as f32 / ext.x } else { 0.0 },
         if ext.y > 0.0 { BINS as f32 / ext.y } else { 0.0 },
         if ext.z > 0.0 { BINS as f32 / ext.z } else { 0.0 },
-    );
+    ));
+    let cmin = Vec3A::from(cb.min);
     let fill = |chunk: &[Item]| {
         let mut bins = Bins::empty();
         for p in chunk {
+            let i = ((Vec3A::from(p.centroid) - cmin) * scale).as_uvec3().min(UVec3::splat(BINS as u32 - 1));
             for a in 0..3 {
-                let i = bin_of(p.centroid[a], cb.min[a], scale[a]);
-                bins.b[a][i] = bins.b[a][i].union(p.bounds);
-                bins.n[a][i] += 1;
+                let k = i[a] as usize;
+                bins.b[a][k] = bins.b[a][k].union(p.bounds);
+                bins.n[a][k] += 1;
             }
         }
         bins
     };
     let bins =
-        if n >= PARALLEL { items.par_chunks(2048).map(fill).reduce(Bins::empty, Bins::merge) } else { fill(items) };
+        if n >= PARALLEL { items.par_chunks(4096).map(fill).reduce(Bins::empty, Bins::merge) } else { fill(items) };
 
     // Sweep each axis: suffix areas from the right, then prefixes.
     let mut best = (f32::INFINITY, 0usize, 0usize); // (cost, axis, first bin on the right)
