@@ -176,10 +176,10 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         driver::run(&job, &pool, &samples, a.max_pass_spp.max(1), &mut state, budget, hooks, &signals.cancel, a.quiet)?;
 
     let complete = stop == Stop::Complete;
-    if stop == Stop::Cancelled {
+    // Cancelled: resume from here; --time: the next run goes on from here;
+    // complete: only if asked to keep it.
+    if !complete || a.keep_checkpoint {
         save_checkpoint(&state)?;
-    } else if a.checkpoint.is_some() && !complete {
-        save_checkpoint(&state)?; // --time: the next run goes on from here
     }
     if state.spp > 0 {
         out.write(&a.output, &state, complete)?;
