@@ -65,6 +65,15 @@ pub struct Budget {
     pub partial_every: Option<f64>,
 }
 
+/// What the loop did besides rendering.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Extras {
+    pub checkpoints: u32,
+    pub checkpoint_seconds: f64,
+    pub partials: u32,
+    pub partial_seconds: f64,
+}
+
 /// Called between passes when due.
 pub struct Hooks<'a> {
     pub checkpoint: &'a mut dyn FnMut(&State) -> Result<()>,
@@ -83,7 +92,7 @@ pub fn run(
     hooks: Hooks,
     cancel: &AtomicBool,
     quiet: bool,
-) -> Result<(Stop, RenderStats)> {
+) -> Result<(Stop, RenderStats, Extras)> {
     let pixels = job.width as u64 * job.height as u64;
     let left = (samples.end - samples.start).saturating_sub(state.spp) as u64;
     let progress = Progress::new(left * pixels, quiet);
@@ -94,6 +103,7 @@ pub fn run(
     // renders at least one pass, so that it makes progress.
     let mut per_spp: Option<f64> = None;
     let mut stats = RenderStats::default();
+    let mut extras = Extras::default();
     let stop = loop {
         let Some(range) = pass_range(samples, max_pass_spp, state.passes) else {
             break Stop::Complete;
@@ -124,16 +134,22 @@ pub fn run(
             continue; // Complete: the caller writes the final image.
         }
         if budget.checkpoint_every.is_some_and(|e| last_checkpoint.elapsed().as_secs_f64() >= e) {
+            let t = Instant::now();
             (hooks.checkpoint)(state)?;
             last_checkpoint = Instant::now();
+            extras.checkpoints += 1;
+            extras.checkpoint_seconds += (last_checkpoint - t).as_secs_f64();
         }
         if budget.partial_every.is_some_and(|e| last_partial.elapsed().as_secs_f64() >= e) {
+            let t = Instant::now();
             (hooks.partial)(state)?;
             last_partial = Instant::now();
+            extras.partials += 1;
+            extras.partial_seconds += (last_partial - t).as_secs_f64();
         }
     };
     progress.finish();
-    Ok((stop, stats))
+    Ok((stop, stats, extras))
 }
 
 #[cfg(test)]

@@ -50,9 +50,11 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
         assert_eq!(w.len(), n);
         channels.push(AnyChannel::new(WEIGHT_CHANNEL, FlatSamples::F32(w.clone())));
     }
-    let mut attrs = LayerAttributes::default();
-    attrs.layer_position = Vec2(img.offset.0 as i32, img.offset.1 as i32);
-    attrs.software_name = Some(text(&format!("penumbra {}", crate::settings::VERSION)));
+    let mut attrs = LayerAttributes {
+        layer_position: Vec2(img.offset.0 as i32, img.offset.1 as i32),
+        software_name: Some(text(&format!("penumbra {}", crate::settings::VERSION))),
+        ..LayerAttributes::default()
+    };
     for (k, v) in &img.meta {
         attrs.other.insert(text(&format!("{PREFIX}{k}")), AttributeValue::Text(text(v)));
     }

@@ -166,8 +166,8 @@ pub fn run(a: &MergeArgs) -> Result<()> {
                 Some(wt) if i.part.is_some() => {
                     for k in 0..m {
                         let wk = wt[k] as f64;
-                        for c in 0..3 {
-                            sum[k][c] += i.img.rgb[k][c] as f64 * wk;
+                        for (acc, v) in sum[k].iter_mut().zip(i.img.rgb[k]) {
+                            *acc += v as f64 * wk;
                         }
                         wsum[k] += wk;
                     }

@@ -61,9 +61,9 @@ pub fn parse(s: &str, env: &dyn Fn(&str) -> Option<String>) -> Result<Part> {
         let num = |k: &str| env(k).and_then(|v| v.trim().parse::<u32>().ok());
         let (min, max, step) = (num("SLURM_ARRAY_TASK_MIN"), num("SLURM_ARRAY_TASK_MAX"), num("SLURM_ARRAY_TASK_STEP"));
         let numbered_0_to_n = id < count
-            && min.map_or(true, |m| m == 0)
-            && max.map_or(true, |m| m + 1 == count)
-            && step.map_or(true, |s| s == 1);
+            && !matches!(min, Some(m) if m != 0)
+            && !matches!(max, Some(m) if m + 1 != count)
+            && !matches!(step, Some(s) if s != 1);
         if !numbered_0_to_n {
             bail!(
                 "--part auto: this Slurm job array is not numbered 0..{}: task {id} of {count} tasks \

@@ -172,7 +172,7 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     let hooks = Hooks { checkpoint: &mut ck_hook, partial: &mut partial_hook };
     let run_start = std::time::Instant::now();
     let seconds_before = state.seconds;
-    let (stop, stats) =
+    let (stop, stats, extras) =
         driver::run(&job, &pool, &samples, a.max_pass_spp.max(1), &mut state, budget, hooks, &signals.cancel, a.quiet)?;
 
     let complete = stop == Stop::Complete;
@@ -190,6 +190,7 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         }
     }
     let secs = run_start.elapsed().as_secs_f64().max(1e-9);
+    let this_run = state.seconds - seconds_before;
     let rays = stats.rays.rays + stats.rays.shadow_rays;
     let target = samples.end - samples.start;
     let what = match stop {
@@ -205,10 +206,26 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         state.spp,
         part.map_or(String::new(), |p| format!(", part {p}")),
         state.seconds,
-        state.seconds - seconds_before,
+        this_run,
         stats.samples as f64 / secs / 1e6,
         rays as f64 / secs / 1e6
     );
+    if extras.checkpoints > 0 {
+        eprintln!(
+            "{} checkpoints in {:.3} s ({:.2}% of this run)",
+            extras.checkpoints,
+            extras.checkpoint_seconds,
+            100.0 * extras.checkpoint_seconds / this_run.max(1e-9)
+        );
+    }
+    if extras.partials > 0 {
+        eprintln!(
+            "{} partial images in {:.3} s ({:.2}% of this run)",
+            extras.partials,
+            extras.partial_seconds,
+            100.0 * extras.partial_seconds / this_run.max(1e-9)
+        );
+    }
     if state.spp == 0 {
         eprintln!("no pass was complete: no image written");
     }
