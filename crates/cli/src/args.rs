@@ -19,6 +19,9 @@ pub enum Command {
     Info(InfoArgs),
     /// Time the bundled scenes: samples/s and rays/s (and Mitsuba 3, if installed).
     Bench(BenchArgs),
+    /// Merge the EXRs of `render --part I/N` and/or `--crop` into one image:
+    /// the image one machine would render with all samples (up to float rounding).
+    Merge(MergeArgs),
     /// Compare an image with a reference: per-channel means, MSE and relMSE
     /// (mean of (a-b)²/(b²+0.01), B the reference), optionally a false-colour error image.
     Diff(DiffArgs),
@@ -51,6 +54,65 @@ pub struct RenderArgs {
     /// Never show the progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Time budget in seconds: stop after the last pass that fits (estimated
+    /// from the previous pass). The spp target (--spp or the scene's
+    /// sample_count) still applies: whichever comes first. The output's
+    /// metadata records the spp reached. With --checkpoint, each run gets
+    /// this budget anew.
+    #[arg(long, value_name = "SECONDS")]
+    pub time: Option<f64>,
+    /// Rewrite the output image every SECONDS (atomically: temporary file,
+    /// then rename) so a viewer can watch the render progress.
+    #[arg(long, value_name = "SECONDS")]
+    pub write_partial_images: Option<f64>,
+    /// Save the render's state to FILE every --checkpoint-every seconds and on
+    /// SIGINT/SIGTERM; running the same command again resumes from it, and
+    /// gives an image bitwise identical to an uninterrupted render. A checkpoint
+    /// of another scene, other settings or another version is refused. The
+    /// checkpoint is deleted once the render is complete and its image written
+    /// (unless --keep-checkpoint); a render stopped by --time keeps it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long, value_name = "SECONDS", default_value_t = 300.0)]
+    pub checkpoint_every: f64,
+    /// Ignore (and replace) an existing checkpoint: start over.
+    #[arg(long)]
+    pub fresh: bool,
+    /// Keep the checkpoint after the render completes.
+    #[arg(long)]
+    pub keep_checkpoint: bool,
+    /// Render part I (0-based) of N: sample indices [I·spp/N, (I+1)·spp/N) of
+    /// every pixel; `penumbra merge` adds the parts into the full render.
+    /// `auto` takes I and N from a Slurm job array (SLURM_ARRAY_TASK_ID and
+    /// SLURM_ARRAY_TASK_COUNT; the array must be numbered 0..N-1), `auto/N`
+    /// also from a Kubernetes Indexed Job (JOB_COMPLETION_INDEX). Part EXRs
+    /// carry the weight sums as channel `penumbra.weight`.
+    #[arg(long, value_name = "I/N|auto|auto/N")]
+    pub part: Option<String>,
+    /// Render only the window x0 <= x < x1, y0 <= y < y1 of the full frame
+    /// (overrides the scene's crop); `penumbra merge` assembles crops.
+    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop)]
+    pub crop: Option<[u32; 4]>,
+    /// Most samples per pixel in one pass (passes have 1, 1, 2, 4, ... samples
+    /// up to this). Part of the render's identity: it sets the order in which
+    /// samples are summed.
+    #[arg(long, value_name = "N", default_value_t = crate::driver::DEFAULT_MAX_PASS_SPP)]
+    pub max_pass_spp: u32,
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// EXRs written by `penumbra render --part I/N` and/or `--crop`.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// The merged EXR.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Merge the parts that exist when some are missing (the metadata records
+    /// the spp reached); pixels of missing crops stay black.
+    #[arg(long)]
+    pub allow_missing: bool,
 }
 
 #[derive(Debug, Args)]
@@ -103,6 +165,19 @@ pub struct DiffArgs {
     /// Write a false-colour image of the per-pixel relMSE (log scale) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+fn parse_crop(s: &str) -> Result<[u32; 4], String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("'{s}' is not of the form x0,y0,x1,y1 (pixels, non-negative integers)"))?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        [_, _, _, _] => Err(format!("crop '{s}' is empty: it needs x0 < x1 and y0 < y1")),
+        _ => Err(format!("'{s}' is not of the form x0,y0,x1,y1")),
+    }
 }
 
 fn parse_define(s: &str) -> Result<(String, String), String> {

@@ -3,30 +3,37 @@
 
 mod args;
 mod bench;
+mod checkpoint;
+mod driver;
+mod exrmeta;
 mod imgtool;
 mod info;
+mod merge;
+mod part;
 mod progress;
+mod render_cmd;
+mod settings;
+mod signals;
 
 use anyhow::{anyhow, Context, Result};
-use args::{Cli, Command, RenderArgs};
+use args::{Cli, Command};
 use clap::Parser;
 use penumbra_render::film::Film;
 use penumbra_render::render::{RenderJob, RenderStats};
-use penumbra_scene::image_io::{self, RgbImage};
-use penumbra_scene::Overrides;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(a) => render(&a),
-        Command::Info(a) => info::run(&a),
-        Command::Bench(a) => bench::run(&a),
-        Command::Diff(a) => imgtool::run(&a),
+        Command::Render(a) => render_cmd::run(&a),
+        Command::Info(a) => info::run(&a).map(|()| ExitCode::SUCCESS),
+        Command::Bench(a) => bench::run(&a).map(|()| ExitCode::SUCCESS),
+        Command::Diff(a) => imgtool::run(&a).map(|()| ExitCode::SUCCESS),
+        Command::Merge(a) => merge::run(&a).map(|()| ExitCode::SUCCESS),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -63,32 +70,4 @@ pub fn peak_memory_mb() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb / 1024.0)
-}
-
-fn render(a: &RenderArgs) -> Result<()> {
-    // Check the output name before spending time on the render.
-    image_io::Format::from_path(&a.output).map_err(|e| anyhow!(e))?;
-    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone() };
-    let job = penumbra_scene::load_scene(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
-    let pool = thread_pool(a.threads)?;
-    let (film, stats, elapsed) = render_job(&job, &pool, a.quiet);
-    let img = RgbImage { width: job.width, height: job.height, pixels: film.develop() };
-    image_io::write_image(&a.output, &img).map_err(|e| anyhow!(e))?;
-    let secs = elapsed.as_secs_f64();
-    let rays = stats.rays.rays + stats.rays.shadow_rays;
-    eprintln!(
-        "rendered {} ({}x{}, {} spp) in {:.2} s: {:.3} M samples/s, {:.2} M rays/s{}",
-        a.output.display(),
-        job.width,
-        job.height,
-        job.sampler.spp,
-        secs,
-        stats.samples as f64 / secs / 1e6,
-        rays as f64 / secs / 1e6,
-        peak_memory_mb().map(|m| format!(", peak memory {m:.0} MB")).unwrap_or_default()
-    );
-    if stats.non_finite > 0 {
-        eprintln!("warning: {} samples were NaN or infinite and were dropped", stats.non_finite);
-    }
-    Ok(())
 }

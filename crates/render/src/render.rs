@@ -10,6 +10,7 @@ use crate::scene::Scene;
 use glam::Vec2;
 use rayon::prelude::*;
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 const TILE: u32 = 16;
 
@@ -59,17 +60,39 @@ impl RenderJob {
     /// Adds samples `samples` (sample indices) of every pixel to `film`.
     /// `progress` is called after each tile with the samples it added.
     pub fn render_into(&self, film: &mut Film, samples: Range<u32>, progress: &(dyn Fn(u64) + Sync)) -> RenderStats {
+        let never = AtomicBool::new(false);
+        self.render_pass(film, samples, progress, &never).expect("not cancelled")
+    }
+
+    /// As [`render_into`](Self::render_into), but checks `cancel` before each
+    /// tile: once it is set, the remaining tiles are skipped, the film is left
+    /// untouched and `None` is returned. A pass is thus added whole or not at
+    /// all, which keeps interrupted renders reproducible.
+    pub fn render_pass(
+        &self,
+        film: &mut Film,
+        samples: Range<u32>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Option<RenderStats> {
         assert_eq!((film.width, film.height), (self.width, self.height));
         let tiles_x = self.width.div_ceil(TILE);
         let tiles_y = self.height.div_ceil(TILE);
-        let results: Vec<TileResult> = (0..tiles_x * tiles_y)
+        let results: Option<Vec<TileResult>> = (0..tiles_x * tiles_y)
             .into_par_iter()
             .map(|t| {
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
+                }
                 let r = self.render_tile(t % tiles_x * TILE, t / tiles_x * TILE, samples.clone());
                 progress(r.stats.samples);
-                r
+                Some(r)
             })
             .collect();
+        let results = results?;
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
         let mut stats = RenderStats::default();
         for r in results {
             for y in 0..r.film.height {
@@ -84,7 +107,7 @@ impl RenderJob {
             }
             stats.add(&r.stats);
         }
-        stats
+        Some(stats)
     }
 
     fn render_tile(&self, x0: u32, y0: u32, samples: Range<u32>) -> TileResult {

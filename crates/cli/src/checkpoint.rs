@@ -1,0 +1,200 @@
+//! Checkpoint files: the film's f64 sums and weights after a whole number of
+//! passes, with what is needed to check that a resumed render is the same
+//! render. Written atomically (temporary file, fsync, rename, fsync of the
+//! directory), so a kill at any moment leaves the previous checkpoint or the
+//! new one, never a mix.
+//!
+//! Layout (little-endian): magic `PNMBRCKP`, format version u32, then
+//! length-prefixed (u32) UTF-8 strings penumbra version and settings, seed
+//! u64, passes u32, spp reached u32, render seconds f64, width u32, height
+//! u32, per pixel R, G, B sums and the weight sum as f64, and a CRC-32 of
+//! everything before it.
+
+use crate::settings::{Settings, VERSION};
+use anyhow::{bail, Context, Result};
+use penumbra_render::film::Film;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+const MAGIC: &[u8; 8] = b"PNMBRCKP";
+const FORMAT: u32 = 1;
+
+/// A render's state after `passes` whole passes.
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    pub version: String,
+    pub settings: Settings,
+    pub seed: u64,
+    pub passes: u32,
+    pub spp: u32,
+    pub seconds: f64,
+    pub film: Film,
+}
+
+fn tmp_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(".tmp");
+    path.with_file_name(name)
+}
+
+fn put_str(out: &mut Vec<u8>, s: &str) {
+    out.extend_from_slice(&(s.len() as u32).to_le_bytes());
+    out.extend_from_slice(s.as_bytes());
+}
+
+impl Checkpoint {
+    pub fn encode(&self) -> Vec<u8> {
+        let n = self.film.weight.len();
+        let mut out = Vec::with_capacity(128 + n * 32);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT.to_le_bytes());
+        put_str(&mut out, &self.version);
+        put_str(&mut out, &self.settings.to_text());
+        out.extend_from_slice(&self.seed.to_le_bytes());
+        out.extend_from_slice(&self.passes.to_le_bytes());
+        out.extend_from_slice(&self.spp.to_le_bytes());
+        out.extend_from_slice(&self.seconds.to_le_bytes());
+        out.extend_from_slice(&self.film.width.to_le_bytes());
+        out.extend_from_slice(&self.film.height.to_le_bytes());
+        for (s, w) in self.film.sum.iter().zip(&self.film.weight) {
+            for v in [s[0], s[1], s[2], *w] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let crc = crc32fast::hash(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        out
+    }
+
+    /// Decodes a checkpoint; `what` names the file in errors.
+    pub fn decode(bytes: &[u8], what: &str) -> Result<Checkpoint> {
+        let corrupt =
+            |why: &str| anyhow::anyhow!("checkpoint '{what}' is not usable: {why}; use --fresh to start over");
+        if bytes.len() < 12 || &bytes[..8] != MAGIC {
+            return Err(corrupt("it is not a penumbra checkpoint"));
+        }
+        let (body, crc) = bytes.split_at(bytes.len() - 4);
+        if crc32fast::hash(body) != u32::from_le_bytes(crc.try_into().unwrap()) {
+            return Err(corrupt("its checksum is wrong (truncated or damaged)"));
+        }
+        let mut r = Reader { b: body, at: 8 };
+        let format = r.u32()?;
+        if format != FORMAT {
+            return Err(corrupt(&format!("it has format version {format}, this penumbra reads {FORMAT}")));
+        }
+        let version = r.string()?;
+        let settings = Settings::parse(&r.string()?);
+        let seed = r.u64()?;
+        let passes = r.u32()?;
+        let spp = r.u32()?;
+        let seconds = f64::from_bits(r.u64()?);
+        let (width, height) = (r.u32()?, r.u32()?);
+        let n = width as usize * height as usize;
+        if r.b.len() - r.at != n * 32 {
+            return Err(corrupt("its size does not match its resolution"));
+        }
+        let mut film = Film::new(width, height);
+        for i in 0..n {
+            for c in 0..3 {
+                film.sum[i][c] = f64::from_bits(r.u64()?);
+            }
+            film.weight[i] = f64::from_bits(r.u64()?);
+        }
+        Ok(Checkpoint { version, settings, seed, passes, spp, seconds, film })
+    }
+
+    /// Writes atomically: temporary file, fsync, rename, fsync directory.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let tmp = tmp_path(path);
+        let err = || format!("cannot write checkpoint '{}'", path.display());
+        let mut f = fs::File::create(&tmp).with_context(err)?;
+        f.write_all(&self.encode()).with_context(err)?;
+        f.sync_all().with_context(err)?;
+        drop(f);
+        fs::rename(&tmp, path).with_context(err)?;
+        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if let Ok(d) = fs::File::open(dir) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    }
+
+    /// Loads `path` if it exists and checks that it belongs to this render:
+    /// same penumbra version and settings, else an error naming what differs.
+    pub fn load_matching(path: &Path, settings: &Settings) -> Result<Option<Checkpoint>> {
+        let bytes = match fs::read(path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(e).with_context(|| format!("cannot read checkpoint '{}'", path.display())),
+        };
+        let what = path.display().to_string();
+        let ck = Checkpoint::decode(&bytes, &what)?;
+        if ck.version != VERSION {
+            bail!(
+                "checkpoint '{what}' was written by penumbra {}, this is penumbra {VERSION}: it cannot be resumed \
+                 (the image could differ); use --fresh to start over",
+                ck.version
+            );
+        }
+        let diff = settings.differences(&ck.settings, "now", "in the checkpoint", true);
+        if !diff.is_empty() {
+            bail!(
+                "checkpoint '{what}' belongs to another render: {}; run the same command as before, \
+                 or use --fresh to start over",
+                diff.join("; ")
+            );
+        }
+        Ok(Some(ck))
+    }
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize) -> Result<&[u8]> {
+        if self.at + n > self.b.len() {
+            bail!("checkpoint is truncated");
+        }
+        let s = &self.b[self.at..self.at + n];
+        self.at += n;
+        Ok(s)
+    }
+    fn u32(&mut self) -> Result<u32> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    fn u64(&mut self) -> Result<u64> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    fn string(&mut self) -> Result<String> {
+        let n = self.u32()? as usize;
+        Ok(String::from_utf8_lossy(self.take(n)?).into_owned())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_and_detects_damage() {
+        let mut film = Film::new(3, 2);
+        film.sum[4] = [1.5, 0.1 + 0.2, -0.0];
+        film.weight[4] = 7.25;
+        let settings = Settings { entries: vec![("spp".into(), "8".into())] };
+        let ck = Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film };
+        let bytes = ck.encode();
+        let back = Checkpoint::decode(&bytes, "x").unwrap();
+        assert_eq!(back.film.sum, ck.film.sum);
+        assert_eq!(back.film.weight, ck.film.weight);
+        assert_eq!((back.seed, back.passes, back.spp, back.seconds), (9, 3, 4, 1.5));
+        assert_eq!(back.settings, ck.settings);
+        let mut bad = bytes.clone();
+        bad[40] ^= 1;
+        assert!(Checkpoint::decode(&bad, "x").unwrap_err().to_string().contains("checksum"));
+        assert!(Checkpoint::decode(&bytes[..bytes.len() - 9], "x").is_err());
+    }
+}

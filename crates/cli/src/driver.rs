@@ -1,0 +1,173 @@
+//! The pass loop: a render proceeds in passes over the whole image, each
+//! adding a range of sample indices to every pixel. The schedule of ranges is
+//! fixed (1, 1, 2, 4, 8, ... samples, at most `max_pass_spp` per pass), and
+//! the film only ever receives whole passes in that order, so the image after
+//! k passes is bitwise the same however often the render was stopped and
+//! resumed. Between passes the loop checks the time budget, and writes
+//! checkpoints and partial images when they are due; a signal cancels the
+//! current pass (it is discarded) at the next tile.
+
+use crate::progress::Progress;
+use anyhow::Result;
+use penumbra_render::film::Film;
+use penumbra_render::render::{RenderJob, RenderStats};
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+pub const DEFAULT_MAX_PASS_SPP: u32 = 16;
+
+/// The sample indices of pass `pass` of a render of `samples`, or `None`
+/// once all are done.
+pub fn pass_range(samples: &Range<u32>, max_pass_spp: u32, pass: u32) -> Option<Range<u32>> {
+    let size =
+        |p: u32| if p == 0 { 1 } else { 1u64.checked_shl(p - 1).unwrap_or(u64::MAX).min(max_pass_spp.max(1) as u64) };
+    let mut start = samples.start as u64;
+    for p in 0..pass {
+        start += size(p);
+        if start >= samples.end as u64 {
+            return None;
+        }
+    }
+    let end = (start + size(pass)).min(samples.end as u64);
+    (start < end).then_some(start as u32..end as u32)
+}
+
+/// The state a render can be resumed from.
+#[derive(Debug, Clone)]
+pub struct State {
+    pub film: Film,
+    /// Whole passes added to the film.
+    pub passes: u32,
+    /// Samples per pixel in the film.
+    pub spp: u32,
+    /// Render time so far, over all runs (seconds).
+    pub seconds: f64,
+}
+
+/// Why the loop stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stop {
+    /// Every sample was rendered.
+    Complete,
+    /// The next pass would not fit the time budget.
+    TimeUp,
+    /// `cancel` was set (a signal): the pass under way was discarded.
+    Cancelled,
+}
+
+/// Time limits, in seconds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Budget {
+    /// Stop after the last pass that fits (this run's wall time).
+    pub time: Option<f64>,
+    pub checkpoint_every: Option<f64>,
+    pub partial_every: Option<f64>,
+}
+
+/// What the loop did besides rendering.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Extras {
+    pub checkpoints: u32,
+    pub checkpoint_seconds: f64,
+    pub partials: u32,
+    pub partial_seconds: f64,
+}
+
+/// Called between passes when due.
+pub struct Hooks<'a> {
+    pub checkpoint: &'a mut dyn FnMut(&State) -> Result<()>,
+    pub partial: &'a mut dyn FnMut(&State) -> Result<()>,
+}
+
+/// Renders passes of `samples` into `state` until done, out of time or cancelled.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    job: &RenderJob,
+    pool: &rayon::ThreadPool,
+    samples: &Range<u32>,
+    max_pass_spp: u32,
+    state: &mut State,
+    budget: Budget,
+    hooks: Hooks,
+    cancel: &AtomicBool,
+    quiet: bool,
+) -> Result<(Stop, RenderStats, Extras)> {
+    let pixels = job.width as u64 * job.height as u64;
+    let left = (samples.end - samples.start).saturating_sub(state.spp) as u64;
+    let progress = Progress::new(left * pixels, quiet);
+    let start = Instant::now();
+    let base_seconds = state.seconds;
+    let (mut last_checkpoint, mut last_partial) = (start, start);
+    // Seconds per sample per pixel, from the previous pass; every run
+    // renders at least one pass, so that it makes progress.
+    let mut per_spp: Option<f64> = None;
+    let mut stats = RenderStats::default();
+    let mut extras = Extras::default();
+    let stop = loop {
+        let Some(range) = pass_range(samples, max_pass_spp, state.passes) else {
+            break Stop::Complete;
+        };
+        if let (Some(limit), Some(per)) = (budget.time, per_spp) {
+            let n = (range.end - range.start) as f64;
+            if start.elapsed().as_secs_f64() + per * n > limit {
+                break Stop::TimeUp;
+            }
+        }
+        if cancel.load(Ordering::Relaxed) {
+            break Stop::Cancelled;
+        }
+        let t0 = Instant::now();
+        let n = range.end - range.start;
+        let r = pool.install(|| job.render_pass(&mut state.film, range, &|k| progress.inc(k), cancel));
+        let Some(s) = r else {
+            break Stop::Cancelled;
+        };
+        stats.samples += s.samples;
+        stats.rays.add(&s.rays);
+        stats.non_finite += s.non_finite;
+        state.passes += 1;
+        state.spp += n;
+        state.seconds = base_seconds + start.elapsed().as_secs_f64();
+        per_spp = Some(t0.elapsed().as_secs_f64() / n as f64);
+        if pass_range(samples, max_pass_spp, state.passes).is_none() {
+            continue; // Complete: the caller writes the final image.
+        }
+        if budget.checkpoint_every.is_some_and(|e| last_checkpoint.elapsed().as_secs_f64() >= e) {
+            let t = Instant::now();
+            (hooks.checkpoint)(state)?;
+            last_checkpoint = Instant::now();
+            extras.checkpoints += 1;
+            extras.checkpoint_seconds += (last_checkpoint - t).as_secs_f64();
+        }
+        if budget.partial_every.is_some_and(|e| last_partial.elapsed().as_secs_f64() >= e) {
+            let t = Instant::now();
+            (hooks.partial)(state)?;
+            last_partial = Instant::now();
+            extras.partials += 1;
+            extras.partial_seconds += (last_partial - t).as_secs_f64();
+        }
+    };
+    progress.finish();
+    Ok((stop, stats, extras))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schedule_doubles_up_to_the_cap_and_covers_the_range() {
+        let r = 3..40;
+        let passes: Vec<Range<u32>> = (0..).map_while(|p| pass_range(&r, 8, p)).collect();
+        let sizes: Vec<u32> = passes.iter().map(|p| p.end - p.start).collect();
+        assert_eq!(sizes, [1, 1, 2, 4, 8, 8, 8, 5]);
+        assert_eq!(passes[0].start, 3);
+        for w in passes.windows(2) {
+            assert_eq!(w[0].end, w[1].start);
+        }
+        assert_eq!(passes.last().unwrap().end, 40);
+        assert_eq!(pass_range(&(0..1), 16, 1), None);
+        assert_eq!(pass_range(&(0..0), 16, 0), None);
+    }
+}
