@@ -4,7 +4,7 @@
 Usage:
     /work/.venv-mitsuba/bin/python tools/mitsuba_bench.py SCENE.xml
         [--variant llvm_ad_rgb|scalar_rgb] [--spp 64] [--threads 2]
-        [--runs 2] [-D name=value ...]
+        [--runs 2] [--budget SECONDS] [--out FILE.exr] [-D name=value ...]
 
 Loads the scene once (timed separately, not counted), then renders it
 `--runs` times with different seeds. The first render includes Dr.Jit's
@@ -42,6 +42,10 @@ def main():
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=2)
+    ap.add_argument("--out", help="write the last render here (EXR)")
+    ap.add_argument("--budget", type=float,
+                    help="after the timed runs, render once more with as many spp as the "
+                         "warm time per spp says fit in this many seconds, and time that")
     ap.add_argument("-D", dest="defines", action="append", default=[],
                     metavar="NAME=VALUE", help="scene parameter (like mitsuba -D)")
     args = ap.parse_args()
@@ -93,6 +97,17 @@ def main():
           f"seconds={best:.4f} samples_per_sec={nsamples / best:.0f} "
           f"first_seconds={times[0]:.4f} load_seconds={load_s:.4f} "
           f"threads={args.threads}", flush=True)
+
+    if args.budget:
+        spp = max(1, int(args.budget / (best / args.spp)))
+        t0 = time.perf_counter()
+        img = mi.render(scene, spp=spp, seed=1000)
+        arr = np.array(img)
+        dr.sync_thread()
+        dt = time.perf_counter() - t0
+        print(f"mitsuba_budget variant={args.variant} scene={name} spp={spp} seconds={dt:.4f}", flush=True)
+    if args.out:
+        mi.Bitmap(img).write(args.out)
 
 
 if __name__ == "__main__":

@@ -143,11 +143,15 @@ pub struct BenchArgs {
     pub mitsuba_variant: String,
     /// What to time: `scenes` (render the standard scenes), `rays` (BVH build
     /// and incoherent-ray throughput on a procedural mesh, with Embree when
-    /// built with `--features embree`), `all` (both), or `scale` (build and
-    /// render a mesh of `--triangles` triangles, default 10 million, and
-    /// report peak memory).
-    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "scale"])]
+    /// built with `--features embree`), `efficiency` (relMSE after equal
+    /// render time, against Mitsuba 3), `all` (these three), or `scale`
+    /// (build and render a mesh of `--triangles` triangles, default 10
+    /// million, and report peak memory).
+    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "efficiency", "scale"])]
     pub suite: String,
+    /// Render seconds per renderer and scene in the `efficiency` suite.
+    #[arg(long, default_value_t = 4.0)]
+    pub budget: f64,
     /// Triangles of the procedural mesh (default: 1 million for `rays`, 10 million for `scale`).
     #[arg(long)]
     pub triangles: Option<usize>,

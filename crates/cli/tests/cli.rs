@@ -178,7 +178,16 @@ fn a_crop_window_renders_exactly_its_part_of_the_full_image() {
 fn bench_prints_its_table() {
     let o = bin()
         .current_dir(root())
-        .args(["bench", "--spp", "1", "--mitsuba", "/nonexistent/python", "scenes/cornell-box.xml"])
+        .args([
+            "bench",
+            "--suite",
+            "scenes",
+            "--spp",
+            "1",
+            "--mitsuba",
+            "/nonexistent/python",
+            "scenes/cornell-box.xml",
+        ])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);

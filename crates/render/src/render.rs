@@ -1,9 +1,10 @@
-//! The render loop: 16×16 tiles rendered in parallel with rayon. Each pixel
-//! belongs to one tile and accumulates its samples in index order, so the
-//! film is bitwise identical for any thread count or scheduling.
+//! The render loop: 16×16 tiles rendered in parallel with rayon. Each tile
+//! splats its samples (in pixel and sample-index order) into a film of its
+//! own with the filter's margin, and the tile films are added in tile order,
+//! so the film is bitwise identical for any thread count or scheduling.
 
 use crate::camera::Camera;
-use crate::film::{Film, Filter};
+use crate::film::{Film, Filter, MAX_MARGIN};
 use crate::integrator::{Integrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -48,10 +49,10 @@ impl RenderStats {
     }
 }
 
+/// A tile's film; its pixel (0, 0) is image pixel (x0, y0).
 struct TileResult {
-    x0: u32,
-    y0: u32,
-    w: u32,
+    x0: i32,
+    y0: i32,
     film: Film,
     stats: RenderStats,
 }
@@ -76,15 +77,22 @@ impl RenderJob {
         cancel: &AtomicBool,
     ) -> Option<RenderStats> {
         assert_eq!((film.width, film.height), (self.width, self.height));
-        let tiles_x = self.width.div_ceil(TILE);
-        let tiles_y = self.height.div_ceil(TILE);
+        // Samples are taken in the image and, for a crop window, in the ring
+        // of pixels around it whose splats reach into it (so a crop holds
+        // exactly the contributions the full frame gives those pixels).
+        let (left, top, right, bottom) = self.sample_ring();
+        let (gw, gh) = (self.width + left + right, self.height + top + bottom);
+        let tiles_x = gw.div_ceil(TILE);
+        let tiles_y = gh.div_ceil(TILE);
         let results: Option<Vec<TileResult>> = (0..tiles_x * tiles_y)
             .into_par_iter()
             .map(|t| {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                let r = self.render_tile(t % tiles_x * TILE, t / tiles_x * TILE, samples.clone());
+                let (tx, ty) = (t % tiles_x * TILE, t / tiles_x * TILE);
+                let size = (TILE.min(gw - tx), TILE.min(gh - ty));
+                let r = self.render_tile(tx as i32 - left as i32, ty as i32 - top as i32, size, samples.clone());
                 progress(r.stats.samples);
                 Some(r)
             })
@@ -93,12 +101,21 @@ impl RenderJob {
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
+        // Added in tile order: the sums do not depend on the scheduling.
         let mut stats = RenderStats::default();
         for r in results {
             for y in 0..r.film.height {
-                for x in 0..r.w {
-                    let src = (y * r.w + x) as usize;
-                    let dst = ((r.y0 + y) * self.width + r.x0 + x) as usize;
+                let iy = r.y0 + y as i32;
+                if iy < 0 || iy >= self.height as i32 {
+                    continue;
+                }
+                for x in 0..r.film.width {
+                    let ix = r.x0 + x as i32;
+                    if ix < 0 || ix >= self.width as i32 {
+                        continue;
+                    }
+                    let src = (y * r.film.width + x) as usize;
+                    let dst = (iy as u32 * self.width + ix as u32) as usize;
                     for c in 0..3 {
                         film.sum[dst][c] += r.film.sum[src][c];
                     }
@@ -110,33 +127,43 @@ impl RenderJob {
         Some(stats)
     }
 
-    fn render_tile(&self, x0: u32, y0: u32, samples: Range<u32>) -> TileResult {
-        let w = TILE.min(self.width - x0);
-        let h = TILE.min(self.height - y0);
-        let mut film = Film::new(w, h);
+    /// Pixels sampled beyond the image on each side (left, top, right,
+    /// bottom): those of the full film within the filter's reach of a crop
+    /// window; none for a full frame, as Mitsuba (`sample_border` false).
+    fn sample_ring(&self) -> (u32, u32, u32, u32) {
+        let m = self.filter.margin().min(MAX_MARGIN);
+        let (cx, cy) = self.crop_offset;
+        (m.min(cx), m.min(cy), m.min(self.full_size.0 - cx - self.width), m.min(self.full_size.1 - cy - self.height))
+    }
+
+    /// Renders the pixels [x0, x0+w) × [y0, y0+h) (image coordinates; may
+    /// start in the crop ring) into a film with the filter's margin.
+    fn render_tile(&self, x0: i32, y0: i32, (w, h): (u32, u32), samples: Range<u32>) -> TileResult {
+        let m = self.filter.margin().min(MAX_MARGIN);
+        let mut film = Film::new(w + 2 * m, h + 2 * m);
         let mut stats = RenderStats::default();
         let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
-        let origin = Vec2::new(self.crop_offset.0 as f32 + 0.5, self.crop_offset.1 as f32 + 0.5);
         for y in 0..h {
             for x in 0..w {
-                let (px, py) = (x0 + x, y0 + y);
+                // The pixel in full-film coordinates: it keys the random
+                // streams, so a crop renders exactly its part of the full image.
+                let gx = (x0 + x as i32 + self.crop_offset.0 as i32) as u32;
+                let gy = (y0 + y as i32 + self.crop_offset.1 as i32) as u32;
                 for s in samples.clone() {
-                    // Keyed by the pixel's position in the full film, so a
-                    // crop window renders exactly its part of the full image.
-                    let mut rng = self.sampler.stream((px + self.crop_offset.0, py + self.crop_offset.1), s);
-                    let (offset, weight) = self.filter.sample_2d(rng.next_2d());
-                    let pos = (origin + Vec2::new(px as f32, py as f32) + offset) * inv;
-                    let ray = self.camera.sample_ray(pos, &mut rng);
+                    let mut rng = self.sampler.stream((gx, gy), s);
+                    let u = rng.next_2d();
+                    let ray = self.camera.sample_ray((Vec2::new(gx as f32, gy as f32) + u) * inv, &mut rng);
                     let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays);
                     stats.samples += 1;
-                    if l.is_finite() && weight.is_finite() {
-                        film.add(x, y, l, weight);
+                    if l.is_finite() {
+                        // The pixel's place in the tile film (margin included).
+                        film.splat((x + m) as i32, (y + m) as i32, u, l, &self.filter);
                     } else {
                         stats.non_finite += 1;
                     }
                 }
             }
         }
-        TileResult { x0, y0, w, film, stats }
+        TileResult { x0: x0 - m as i32, y0: y0 - m as i32, film, stats }
     }
 }

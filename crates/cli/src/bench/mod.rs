@@ -2,6 +2,7 @@
 //! rays/s; with Mitsuba 3 available, times it on the same scene file and
 //! prints the ratio.
 
+mod efficiency;
 #[cfg(feature = "embree")]
 mod embree;
 mod rays;
@@ -76,6 +77,12 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     }
     if a.suite == "all" || a.suite == "rays" {
         rays::table(&pool, a.triangles.unwrap_or(1_000_000), a.rays);
+    }
+    if a.suite == "all" || a.suite == "efficiency" {
+        let py = mitsuba_python(a);
+        if let Err(e) = efficiency::table(py.as_deref(), &a.mitsuba_variant, a.budget, pool.current_num_threads()) {
+            println!("equal-time error: skipped ({e:#})");
+        }
     }
     if a.suite == "scale" {
         scale::run(a.triangles.unwrap_or(10_000_000), pool.current_num_threads())?;

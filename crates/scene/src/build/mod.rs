@@ -15,7 +15,7 @@ use crate::error::{LoadError, Result};
 use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
 use penumbra_render::camera::{Camera, FovAxis};
-use penumbra_render::film::{Filter, FilterKind};
+use penumbra_render::film::{Filter, FilterKind, MAX_MARGIN};
 use penumbra_render::geometry::{Instance, Mesh, Shape, ShapeGroup, TriangleMesh};
 use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
@@ -779,7 +779,14 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
                 _ => return Err(unsupported(&f, &["box", "tent", "gaussian"])),
             };
             f.check_all_used(&[])?;
-            Filter::new(kind)
+            let filter = Filter::new(kind);
+            if filter.margin() > MAX_MARGIN || !(filter.radius > 0.0) {
+                return Err(f.error(format!(
+                    "the {} filter's radius {} is not supported: it must be positive and reach at most {MAX_MARGIN} pixels",
+                    f.plugin, filter.radius
+                )));
+            }
+            filter
         }
     };
     film.check_all_used(&[Kind::Rfilter])?;

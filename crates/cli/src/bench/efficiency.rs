@@ -1,0 +1,129 @@
+//! Equal-time error against Mitsuba 3: each renderer gets the same number
+//! of render seconds on a scene (Penumbra through `--time`, Mitsuba with as
+//! many spp as its warm time per spp says fit), and each image's relMSE is
+//! measured against a converged reference rendered by Mitsuba (cached under
+//! `target/bench-refs/`). Lower is better; the ratio is Mitsuba's relMSE
+//! over Penumbra's, so above 1 means Penumbra is more efficient.
+
+use anyhow::{anyhow, Result};
+use penumbra_scene::image_io::read_exr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// (scene, -D parameters) at a size that keeps the reference affordable.
+const SCENES: &[(&str, &[(&str, &str)])] = &[
+    ("scenes/cornell-box.xml", &[("res", "128")]),
+    ("tests/scenes/envmap_sun.xml", &[("res", "128")]),
+    ("scenes/material-showcase.xml", &[("width", "192"), ("height", "80")]),
+];
+const REFERENCE_SPP: u32 = 2048;
+
+fn mitsuba(python: &Path, variant: &str, scene: &str, defines: &[(&str, &str)], extra: &[String]) -> Result<String> {
+    let mut cmd = Command::new(python);
+    cmd.args(["tools/mitsuba_bench.py", "--variant", variant, "--threads", "2"]);
+    for (k, v) in defines {
+        cmd.arg("-D").arg(format!("{k}={v}"));
+    }
+    let out = cmd.args(extra).arg(scene).output().map_err(|e| anyhow!("cannot run {}: {e}", python.display()))?;
+    if !out.status.success() {
+        return Err(anyhow!("Mitsuba failed on {scene}: {}", String::from_utf8_lossy(&out.stderr)));
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+fn field(text: &str, prefix: &str, key: &str) -> Option<f64> {
+    text.lines()
+        .filter(|l| l.starts_with(prefix))
+        .last()?
+        .split_whitespace()
+        .find_map(|kv| kv.strip_prefix(key))
+        .and_then(|v| v.parse().ok())
+}
+
+fn rel_mse(img: &Path, reference: &Path) -> Result<f64> {
+    let a = read_exr(img).map_err(|e| anyhow!(e))?;
+    let b = read_exr(reference).map_err(|e| anyhow!(e))?;
+    Ok(crate::imgtool::diff(&a, &b)?.rel_mse)
+}
+
+/// Prints the equal-time table for `budget` render seconds per renderer.
+pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) -> Result<()> {
+    let Some(py) = python else {
+        println!("\nequal-time error: skipped (needs Mitsuba 3: pass --mitsuba PYTHON)");
+        return Ok(());
+    };
+    let dir = PathBuf::from("target/bench-refs");
+    std::fs::create_dir_all(&dir)?;
+    let tmp = std::env::temp_dir().join(format!("penumbra-eff-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp)?;
+    println!(
+        "\nequal-time error: {budget} s of rendering each, relMSE against Mitsuba at {REFERENCE_SPP} spp ({variant})"
+    );
+    println!(
+        "{:<22} {:>9} {:>9} {:>13} {:>9} {:>13} {:>10}",
+        "scene", "size", "mi spp", "mi relMSE", "pen spp", "pen relMSE", "mi / pen"
+    );
+    for (scene, defines) in SCENES {
+        let stem = Path::new(scene).file_stem().unwrap().to_string_lossy().into_owned();
+        let tag: String = defines.iter().map(|(k, v)| format!("-{k}{v}")).collect();
+        let reference = dir.join(format!("{stem}{tag}-{REFERENCE_SPP}.exr"));
+        if !reference.exists() {
+            eprintln!("rendering the reference {} with Mitsuba (once)", reference.display());
+            let extra = [
+                "--spp".into(),
+                REFERENCE_SPP.to_string(),
+                "--runs".into(),
+                "1".into(),
+                "--out".into(),
+                reference.display().to_string(),
+            ];
+            mitsuba(py, variant, scene, defines, &extra)?;
+        }
+        let mi_out = tmp.join(format!("{stem}-mitsuba.exr"));
+        let extra = [
+            "--spp".into(),
+            "16".into(),
+            "--runs".into(),
+            "3".into(),
+            "--budget".into(),
+            budget.to_string(),
+            "--out".into(),
+            mi_out.display().to_string(),
+        ];
+        let text = mitsuba(py, variant, scene, defines, &extra)?;
+        let mi_spp = field(&text, "mitsuba_budget", "spp=").unwrap_or(f64::NAN);
+        let mi_secs = field(&text, "mitsuba_budget", "seconds=").unwrap_or(f64::NAN);
+
+        let pen_out = tmp.join(format!("{stem}-penumbra.exr"));
+        let mut cmd = Command::new(std::env::current_exe()?);
+        cmd.args(["render", "--quiet", "--spp", "1000000", "--seed", "1000", "--threads", &threads.to_string()])
+            .args(["--time", &budget.to_string(), "-o"])
+            .arg(&pen_out)
+            .arg(scene);
+        for (k, v) in *defines {
+            cmd.arg("-D").arg(format!("{k}={v}"));
+        }
+        let run = cmd.output()?;
+        let err = String::from_utf8_lossy(&run.stderr);
+        if !run.status.success() {
+            return Err(anyhow!("penumbra failed on {scene}: {err}"));
+        }
+        // "... rendered N of 1000000 spp to ..."
+        let pen_spp: f64 = err
+            .split_once("rendered ")
+            .and_then(|(_, r)| r.split_whitespace().next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(f64::NAN);
+        let (mi_err, pen_err) = (rel_mse(&mi_out, &reference)?, rel_mse(&pen_out, &reference)?);
+        let size = read_exr(&reference).map(|i| format!("{}x{}", i.width, i.height)).unwrap_or_default();
+        println!(
+            "{stem:<22} {size:>9} {mi_spp:>9.0} {mi_err:>13.4e} {pen_spp:>9.0} {pen_err:>13.4e} {:>9.2}x",
+            mi_err / pen_err
+        );
+        if (mi_secs - budget).abs() > 0.25 * budget {
+            println!("  (Mitsuba's budget render took {mi_secs:.2} s, not {budget} s: its time per spp varied)");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+    Ok(())
+}
