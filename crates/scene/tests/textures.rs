@@ -61,6 +61,8 @@ fn si(u: f32, v: f32) -> SurfaceInteraction {
         dpdu: Vec3::X,
         dpdv: Vec3::Y,
         shape: 0,
+        prim: 0,
+        bary: Vec2::ZERO,
         wo: Vec3::Z,
     }
 }
