@@ -68,6 +68,8 @@ SPP = {
     "sensors_samplers": 16384,
     "orthographic": 16384,
     "principled": 65536,
+    "vertex_colors": 65536,
+    "principledthin": 65536,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

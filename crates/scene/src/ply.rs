@@ -14,6 +14,7 @@
 use crate::error::{FileLoc, LoadError, Result};
 use glam::{Vec2, Vec3};
 use penumbra_render::geometry::TriangleMesh;
+use penumbra_render::texture::MeshAttributeData;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -25,6 +26,12 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh> {
 /// Loads a PLY file; `flip_tex_coords` is the Mitsuba shape parameter of
 /// that name (true replaces each `v` by `1 - v`).
 pub fn load_ply_with(path: &Path, flip_tex_coords: bool) -> Result<TriangleMesh> {
+    Ok(load_ply_with_attributes(path, flip_tex_coords)?.0)
+}
+
+/// Loads a PLY file with its other vertex and face properties as Mitsuba's
+/// mesh attributes (see [`parse_ply_with_attributes`]).
+pub fn load_ply_with_attributes(path: &Path, flip_tex_coords: bool) -> Result<(TriangleMesh, Vec<MeshAttributeData>)> {
     let bytes = std::fs::read(path).map_err(|e| {
         let msg = match e.kind() {
             std::io::ErrorKind::NotFound => "PLY file not found".to_string(),
@@ -32,7 +39,7 @@ pub fn load_ply_with(path: &Path, flip_tex_coords: bool) -> Result<TriangleMesh>
         };
         LoadError::in_file(path, msg)
     })?;
-    parse_ply(&bytes, path, flip_tex_coords)
+    parse_ply_with_attributes(&bytes, path, flip_tex_coords)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -227,6 +234,18 @@ fn vertex_slots(el: &Element) -> Vec<Slot> {
 
 /// Parses PLY data; `path` names the file in messages.
 pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<TriangleMesh> {
+    Ok(parse_ply_with_attributes(bytes, path, flip_tex_coords)?.0)
+}
+
+/// Parses PLY data and the vertex and face properties Mitsuba 3.9.1 keeps
+/// as mesh attributes (`vertex_<name>`, `face_<name>`; see
+/// [`other_fields`]). Face attributes are repeated for every triangle of a
+/// fan-triangulated polygon, so they hold one entry per triangle.
+pub fn parse_ply_with_attributes(
+    bytes: &[u8],
+    path: &Path,
+    flip_tex_coords: bool,
+) -> Result<(TriangleMesh, Vec<MeshAttributeData>)> {
     let file = Arc::new(path.to_path_buf());
     let header = parse_header(bytes, &file)?;
     let data = &bytes[header.body..];
@@ -257,6 +276,8 @@ pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<Tri
     let capacity = |count: usize| count.min(data.len());
     let mut mesh = TriangleMesh::default();
     let mut face = Vec::new();
+    let mut attributes = Vec::new();
+    let mut face_values = Vec::new();
 
     for el in &header.elements {
         let truncated = |i: usize| {
@@ -274,18 +295,30 @@ pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<Tri
                 }
                 let with_normals = has(|s| matches!(s, Slot::Normal(_)), 3);
                 let with_uvs = has(|s| matches!(s, Slot::Uv(_)), 2);
+                let (specs, attr_slots) = other_fields("vertex_", el, &["x", "y", "z", "nx", "ny", "nz", "u", "v"]);
+                let first = attributes.len();
+                attributes.extend(specs);
                 mesh.positions.reserve(capacity(el.count));
                 for i in 0..el.count {
                     let (mut p, mut n, mut uv) = ([0f32; 3], [0f32; 3], [0f32; 2]);
-                    for (prop, slot) in el.props.iter().zip(&slots) {
+                    for a in &mut attributes[first..] {
+                        a.data.resize(a.data.len() + a.dim, 0.0);
+                    }
+                    for ((prop, slot), attr) in el.props.iter().zip(&slots).zip(&attr_slots) {
                         match (&prop.ty, *slot) {
                             (PropType::Scalar(ty), slot) => {
-                                let v = body.read(*ty).ok_or_else(|| truncated(i))? as f32;
+                                let raw = body.read(*ty).ok_or_else(|| truncated(i))?;
+                                let v = raw as f32;
                                 match slot {
                                     Slot::Pos(k) => p[k] = v,
                                     Slot::Normal(k) => n[k] = v,
                                     Slot::Uv(k) => uv[k] = v,
                                     Slot::Skip => {}
+                                }
+                                if let Some((a, k)) = *attr {
+                                    let a = &mut attributes[first + a];
+                                    let at = i * a.dim + k;
+                                    a.data[at] = attribute_value(*ty, raw);
                                 }
                             }
                             (PropType::List { count, item }, _) => {
@@ -304,12 +337,29 @@ pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<Tri
             }
             "face" => {
                 let index_prop = face_index_prop.unwrap_or_default();
+                let (specs, attr_slots) = other_fields("face_", el, &[]);
+                let first = attributes.len();
+                attributes.extend(specs);
+                let stride: usize = attributes[first..].iter().map(|a| a.dim).sum();
+                let offsets: Vec<usize> = attributes[first..]
+                    .iter()
+                    .scan(0, |o, a| {
+                        let at = *o;
+                        *o += a.dim;
+                        Some(at)
+                    })
+                    .collect();
+                face_values.resize(stride, 0.0);
                 mesh.indices.reserve(capacity(el.count));
                 for i in 0..el.count {
+                    let tris_before = mesh.indices.len();
                     for (k, prop) in el.props.iter().enumerate() {
                         match &prop.ty {
                             PropType::Scalar(ty) => {
-                                body.read(*ty).ok_or_else(|| truncated(i))?;
+                                let raw = body.read(*ty).ok_or_else(|| truncated(i))?;
+                                if let Some((a, c)) = attr_slots[k] {
+                                    face_values[offsets[a] + c] = attribute_value(*ty, raw);
+                                }
                             }
                             PropType::List { count, item } if k == index_prop => {
                                 let n = read_count(&mut body, *count).ok_or_else(|| truncated(i))?;
@@ -336,6 +386,11 @@ pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<Tri
                             }
                         }
                     }
+                    for _ in tris_before..mesh.indices.len() {
+                        for (a, &o) in attributes[first..].iter_mut().zip(&offsets) {
+                            a.data.extend_from_slice(&face_values[o..o + a.dim]);
+                        }
+                    }
                 }
             }
             _ => {
@@ -354,7 +409,199 @@ pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<Tri
             }
         }
     }
-    Ok(mesh)
+    Ok((mesh, attributes))
+}
+
+/// A property value as Mitsuba 3.9.1 stores it in a mesh attribute: PLY
+/// integer properties carry Mitsuba's `Normalized | Gamma` flags, so they
+/// are divided by the type's maximum and decoded from sRGB, except `uchar`,
+/// which Mitsuba's converter keeps as the raw 0..255 value (checked against
+/// Mitsuba 3.9.1: `mi.traverse(mi.load_dict({'type': 'ply', ...}))` gives
+/// `vertex_color [255, 128, 0, ...]` for uchar red/green/blue and
+/// 1000/65535 decoded from sRGB = 0.00118104 for a ushort).
+fn attribute_value(ty: Scalar, v: f64) -> f32 {
+    let max = match ty {
+        Scalar::F32 | Scalar::F64 | Scalar::U8 => return v as f32,
+        Scalar::I8 => i8::MAX as f64,
+        Scalar::I16 => i16::MAX as f64,
+        Scalar::U16 => u16::MAX as f64,
+        Scalar::I32 => i32::MAX as f64,
+        Scalar::U32 => u32::MAX as f64,
+    };
+    let x = (v / max) as f32;
+    if x <= 0.04045 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Mitsuba 3.9.1's `find_other_fields` (`src/shapes/ply.h`): which of an
+/// element's scalar properties form mesh attributes. `r g b [a]` (or `red
+/// green blue [alpha]`) become `<kind>color`; otherwise consecutive
+/// properties `<prefix>_<c>` with postfixes from one of the sequences x y z w,
+/// r g b a, 0 1 2 3 or 1 2 3 4 become `<kind><prefix>` (`<kind><prefix>_color`
+/// for r g b), kept when they have one or three components. Mitsuba warns
+/// about and skips the rest; so does this (silently). Returns the attributes
+/// (empty data) and, per property, the (attribute, component) it feeds.
+fn other_fields(kind: &str, el: &Element, reserved: &[&str]) -> (Vec<MeshAttributeData>, Vec<Option<(usize, usize)>>) {
+    let mut names: Vec<Option<String>> =
+        el.props.iter().map(|p| matches!(p.ty, PropType::Scalar(_)).then(|| p.name.clone())).collect();
+    let find = |names: &[Option<String>], n: &str| names.iter().position(|x| x.as_deref() == Some(n));
+    let mut specs = Vec::new();
+    let mut slots = vec![None; el.props.len()];
+    if !(find(&names, "r").is_some() && find(&names, "g").is_some() && find(&names, "b").is_some())
+        && find(&names, "red").is_some()
+        && find(&names, "green").is_some()
+        && find(&names, "blue").is_some()
+    {
+        for (from, to) in [("red", "r"), ("green", "g"), ("blue", "b"), ("alpha", "a")] {
+            if let Some(i) = find(&names, from) {
+                names[i] = Some(to.to_string());
+            }
+        }
+    }
+    if let (Some(r), Some(g), Some(b)) = (find(&names, "r"), find(&names, "g"), find(&names, "b")) {
+        let mut fields = vec![r, g, b];
+        fields.extend(find(&names, "a"));
+        for (c, &f) in fields.iter().enumerate() {
+            slots[f] = Some((specs.len(), c));
+        }
+        specs.push(MeshAttributeData {
+            name: format!("{kind}color"),
+            per_vertex: kind == "vertex_",
+            dim: fields.len(),
+            data: Vec::new(),
+        });
+    }
+    let reserved: Vec<&str> = reserved.iter().copied().chain(["r", "g", "b", "a"]).collect();
+    const POSTFIXES: [&[u8; 4]; 4] = [b"xr01", b"yg12", b"zb23", b"wa34"];
+    let mut encountered: Vec<String> = Vec::new();
+    let (mut prefix, mut index, mut level, mut reading) = (String::new(), 0usize, 0usize, false);
+    // Mitsuba's state machine, transcribed with its quirks (a skipped run of
+    // properties also skips the property after it).
+    let flush = |prefix: &mut String,
+                 index: &mut usize,
+                 level: &mut usize,
+                 reading: &mut bool,
+                 specs: &mut Vec<MeshAttributeData>,
+                 slots: &mut Vec<Option<(usize, usize)>>,
+                 encountered: &mut Vec<String>,
+                 names: &[Option<String>]| {
+        if *level == 1 || *level == 3 {
+            let fields: Vec<Option<usize>> = (0..*level)
+                .map(|c| {
+                    let n = format!("{prefix}_{}", POSTFIXES[c][*index] as char);
+                    names.iter().position(|x| x.as_deref() == Some(n.as_str()))
+                })
+                .collect();
+            if fields.iter().all(|f| f.is_some()) {
+                for (c, f) in fields.iter().enumerate() {
+                    slots[f.unwrap()] = Some((specs.len(), c));
+                }
+                let color = if *index == 1 { "_color" } else { "" };
+                specs.push(MeshAttributeData {
+                    name: format!("{kind}{prefix}{color}"),
+                    per_vertex: kind == "vertex_",
+                    dim: *level,
+                    data: Vec::new(),
+                });
+                encountered.push(prefix.clone());
+            }
+        }
+        prefix.clear();
+        *index = 0;
+        *level = 0;
+        *reading = false;
+    };
+    let count = names.len();
+    let mut i = 0;
+    while i < count {
+        let Some(name) = names[i].clone() else {
+            i += 1;
+            continue;
+        };
+        if reserved.contains(&name.as_str()) {
+            i += 1;
+            continue;
+        }
+        let Some(pos) = name.rfind('_') else {
+            if reading {
+                flush(
+                    &mut prefix,
+                    &mut index,
+                    &mut level,
+                    &mut reading,
+                    &mut specs,
+                    &mut slots,
+                    &mut encountered,
+                    &names,
+                );
+            }
+            i += 1;
+            continue;
+        };
+        let postfix = &name[pos + 1..];
+        if postfix.len() != 1 {
+            if reading {
+                flush(
+                    &mut prefix,
+                    &mut index,
+                    &mut level,
+                    &mut reading,
+                    &mut specs,
+                    &mut slots,
+                    &mut encountered,
+                    &names,
+                );
+            }
+            i += 1;
+            continue;
+        }
+        let this_prefix = &name[..pos];
+        if reading && this_prefix != prefix {
+            flush(&mut prefix, &mut index, &mut level, &mut reading, &mut specs, &mut slots, &mut encountered, &names);
+        }
+        let skip_run = |i: &mut usize| {
+            while *i < count && names[*i].as_deref().is_some_and(|n| n.starts_with(this_prefix)) {
+                *i += 1;
+            }
+        };
+        if !reading && encountered.iter().any(|e| e == this_prefix) {
+            skip_run(&mut i);
+            i += 1;
+            continue;
+        }
+        let ch = postfix.as_bytes()[0];
+        if !reading {
+            match POSTFIXES[0].iter().position(|&c| c == ch) {
+                Some(j) => {
+                    reading = true;
+                    index = j;
+                    prefix = this_prefix.to_string();
+                }
+                None => {
+                    i += 1;
+                    continue;
+                }
+            }
+        } else if level >= 4 || ch != POSTFIXES[level][index] {
+            prefix.clear();
+            index = 0;
+            level = 0;
+            reading = false;
+            skip_run(&mut i);
+            if i >= count {
+                break;
+            }
+        }
+        level += 1;
+        i += 1;
+    }
+    if reading {
+        flush(&mut prefix, &mut index, &mut level, &mut reading, &mut specs, &mut slots, &mut encountered, &names);
+    }
+    (specs, slots)
 }
 
 fn read_count(body: &mut Body, ty: Scalar) -> Option<usize> {
@@ -524,6 +771,52 @@ mod tests {
         let mut b = binary(false);
         b.truncate(b.len() - 3);
         check(&b, &["face 1 of 2"]);
+    }
+
+    /// Mesh attributes as Mitsuba 3.9.1 groups and converts them; expected
+    /// values from `mi.traverse(mi.load_dict({'type': 'ply', 'filename': f}))`
+    /// on the same files (scalar_rgb).
+    #[test]
+    fn attributes_as_mitsuba() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+            property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+            property float rough_x\nproperty float temp_0\nproperty float temp_1\nproperty float temp_2\n\
+            element face 1\nproperty list uchar int vertex_indices\nproperty float q_x\n\
+            property uchar r\nproperty uchar g\nproperty uchar b\nend_header\n\
+            0 0 0 255 128 0 0.5 1 2 3\n1 0 0 10 20 30 0.25 4 5 6\n0 1 0 0 0 255 0.75 7 8 9\n\
+            3 0 1 2 0.3 64 128 192\n";
+        let (_, attrs) = parse_ply_with_attributes(text.as_bytes(), Path::new(FILE), false).unwrap();
+        let get = |n: &str| attrs.iter().find(|a| a.name == n).unwrap_or_else(|| panic!("{n} in {attrs:?}"));
+        // uchar colours stay 0..255 in Mitsuba 3.9.1 (it warns about it).
+        assert_eq!(get("vertex_color").data, [255., 128., 0., 10., 20., 30., 0., 0., 255.]);
+        assert_eq!(get("vertex_rough").data, [0.5, 0.25, 0.75]);
+        assert_eq!(get("vertex_temp").data, [1., 2., 3., 4., 5., 6., 7., 8., 9.]);
+        assert_eq!(get("face_q").data, [0.3]);
+        assert_eq!((get("face_color").data.as_slice(), get("face_color").per_vertex), (&[64., 128., 192.][..], false));
+        assert_eq!(attrs.len(), 5);
+
+        // Other integer types are normalised and decoded from sRGB; RGBA
+        // colours have four components; a quad's face value repeats.
+        let text = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+            property float z\nproperty ushort r\nproperty ushort g\nproperty ushort b\nproperty ushort a\n\
+            property char k_x\nproperty int i_x\nproperty double d_x\n\
+            element face 1\nproperty list uchar int vertex_indices\nproperty float w_y\nend_header\n\
+            0 0 0 65535 1000 0 0 -128 7 0.5\n1 0 0 1000 0 0 0 127 -3 0.25\n0 1 0 0 0 0 0 0 0 1\n\
+            1 1 0 0 0 0 0 0 0 1\n4 0 1 3 2 0.5\n";
+        let (m, attrs) = parse_ply_with_attributes(text.as_bytes(), Path::new(FILE), false).unwrap();
+        let get = |n: &str| attrs.iter().find(|a| a.name == n).unwrap_or_else(|| panic!("{n} in {attrs:?}"));
+        let close = |a: &[f32], b: &[f32]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-6 * y.abs().max(1e-3))
+        };
+        let c = get("vertex_color");
+        assert_eq!(c.dim, 4);
+        assert!(close(&c.data[..8], &[1.0, 0.00118104, 0.0, 0.0, 0.00118104, 0.0, 0.0, 0.0]), "{:?}", c.data);
+        assert!(close(&get("vertex_k").data[..3], &[-0.0780088, 1.0, 0.0]), "{:?}", get("vertex_k").data);
+        assert!(close(&get("vertex_i").data[..3], &[2.52293e-10, -1.08126e-10, 0.0]), "{:?}", get("vertex_i").data);
+        assert_eq!(get("vertex_d").data, [0.5, 0.25, 1.0, 1.0]);
+        // 'w_y' does not start a postfix sequence (x, r, 0 or 1): ignored.
+        assert!(attrs.iter().all(|a| !a.name.starts_with("face_")), "{attrs:?}");
+        assert_eq!(m.indices.len(), 2);
     }
 
     #[test]

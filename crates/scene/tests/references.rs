@@ -106,3 +106,14 @@ fn format_features_match_mitsuba() {
 fn principled_matches_mitsuba() {
     compare("principled", 256);
 }
+
+#[test]
+fn vertex_colors_match_mitsuba() {
+    // PLY vertex and face attributes through mesh_attribute.
+    compare("vertex_colors", 256);
+}
+
+#[test]
+fn principledthin_matches_mitsuba() {
+    compare("principledthin", 256);
+}

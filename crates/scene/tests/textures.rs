@@ -61,6 +61,8 @@ fn si(u: f32, v: f32) -> SurfaceInteraction {
         dpdu: Vec3::X,
         dpdv: Vec3::Y,
         shape: 0,
+        prim: 0,
+        bary: Vec2::ZERO,
         wo: Vec3::Z,
     }
 }
@@ -173,5 +175,67 @@ fn texture_errors_name_file_and_line() {
     .unwrap();
     let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="nan.exr"/></texture>"#);
     assert!(e.contains("nan.exr") && e.contains("not finite"), "{e}");
+    std::fs::remove_dir_all(scene.parent().unwrap()).ok();
+}
+
+/// Builds a scene with `shape` (inner XML of a ply shape or another shape).
+fn attr_job(scene: &Path, shape: &str) -> Result<penumbra_render::render::RenderJob, penumbra_scene::LoadError> {
+    let xml = format!(
+        r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+{shape}
+</scene>"#
+    );
+    build(&parse_str(&xml, scene, &[])?, &Overrides::default())
+}
+
+/// A PLY with two triangles, float vertex colours and a one-component face value.
+const ATTR_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+    property float z\nproperty float r\nproperty float g\nproperty float b\nelement face 2\n\
+    property list uchar int vertex_indices\nproperty float id_x\nend_header\n\
+    0 0 0 1 0 0\n1 0 0 0 1 0\n0 1 0 0 0 1\n1 1 0 1 1 1\n3 0 1 2 0.25\n3 2 1 3 0.75\n";
+
+#[test]
+fn mesh_attributes_interpolate_per_vertex_and_hold_per_face() {
+    let scene = temp_scene("attributes");
+    std::fs::write(scene.with_file_name("m.ply"), ATTR_PLY).unwrap();
+    let diffuse = |name: &str, extra: &str| {
+        format!(
+            r#"<shape type="ply"><string name="filename" value="m.ply"/>
+<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="{name}"/>{extra}</texture></bsdf>
+</shape>"#
+        )
+    };
+    let at = |prim: u32, b1: f32, b2: f32| SurfaceInteraction { prim, bary: Vec2::new(b1, b2), ..si(0.0, 0.0) };
+
+    let j = attr_job(&scene, &diffuse("vertex_color", r#"<float name="scale" value="2"/>"#)).unwrap();
+    let t = reflectance(&j);
+    let c = t.eval(&at(0, 0.25, 0.5));
+    assert!((c - Vec3::new(0.5, 0.5, 1.0)).abs().max_element() < 1e-6, "{c}");
+    let c = t.eval(&at(1, 0.0, 1.0));
+    assert_eq!(c, Vec3::splat(2.0));
+
+    let j = attr_job(&scene, &diffuse("face_id", "")).unwrap();
+    let t = reflectance(&j);
+    assert_eq!(t.eval(&at(1, 0.1, 0.2)), Vec3::splat(0.75));
+    assert_eq!(t.eval_1(&at(0, 0.6, 0.2)), 0.25);
+
+    // Errors: unknown attribute (listing those the mesh has), a bad name, a
+    // shape without attributes, a colour used as a scalar.
+    let file = scene.display().to_string();
+    let e = attr_job(&scene, &diffuse("vertex_colour", "")).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("vertex_colour") && e.contains("vertex_color (3 components)") && e.contains("face_id"), "{e}");
+    assert!(e.contains(&format!("{file}:4")), "{e}");
+    let e = attr_job(&scene, &diffuse("color", "")).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("vertex_") && e.contains(&format!("{file}:4")), "{e}");
+    let sphere = r#"<shape type="sphere"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance">
+<string name="name" value="vertex_color"/></texture></bsdf></shape>"#;
+    let e = attr_job(&scene, sphere).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("only meshes carry attributes"), "{e}");
+    let rough = r#"<shape type="ply"><string name="filename" value="m.ply"/>
+<bsdf type="roughconductor"><texture type="mesh_attribute" name="alpha"><string name="name" value="vertex_color"/></texture></bsdf>
+</shape>"#;
+    let e = attr_job(&scene, rough).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("3 components") && e.contains("scalar"), "{e}");
     std::fs::remove_dir_all(scene.parent().unwrap()).ok();
 }

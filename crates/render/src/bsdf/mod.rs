@@ -20,6 +20,7 @@ pub mod microfacet;
 pub mod plastic;
 pub mod presets;
 pub mod principled;
+pub mod principledthin;
 pub mod roughconductor;
 pub mod roughdielectric;
 pub mod roughplastic;
@@ -31,6 +32,7 @@ pub use diffuse::Diffuse;
 pub use microfacet::{Microfacet, MicrofacetType};
 pub use plastic::Plastic;
 pub use principled::Principled;
+pub use principledthin::PrincipledThin;
 pub use roughconductor::RoughConductor;
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::{RoughPlastic, RoughPlasticTables};
@@ -65,6 +67,7 @@ pub enum BsdfKind<'a> {
     Plastic(Plastic),
     RoughPlastic(RoughPlastic<'a>),
     Principled(Principled),
+    PrincipledThin(PrincipledThin),
     /// Mitsuba `null`: light passes straight through.
     Null,
     /// Mitsuba `blendbsdf`: two nested materials, resolved on demand.
@@ -127,7 +130,8 @@ impl Bsdf<'_> {
                 | BsdfKind::RoughDielectric(_)
                 | BsdfKind::Plastic(_)
                 | BsdfKind::RoughPlastic(_)
-                | BsdfKind::Principled(_) => true,
+                | BsdfKind::Principled(_)
+                | BsdfKind::PrincipledThin(_) => true,
                 BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                     false
                 }
@@ -144,6 +148,7 @@ impl Bsdf<'_> {
             BsdfKind::Plastic(b) => b.eval(wo, wi),
             BsdfKind::RoughPlastic(b) => b.eval(wo, wi),
             BsdfKind::Principled(b) => b.eval(wo, wi),
+            BsdfKind::PrincipledThin(b) => b.eval(wo, wi),
             BsdfKind::Blend(b) => b.eval(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                 Spectrum::ZERO
@@ -164,6 +169,7 @@ impl Bsdf<'_> {
             BsdfKind::Plastic(b) => b.pdf(wo, wi),
             BsdfKind::RoughPlastic(b) => b.pdf(wo, wi),
             BsdfKind::Principled(b) => b.pdf(wo, wi),
+            BsdfKind::PrincipledThin(b) => b.pdf(wo, wi),
             BsdfKind::Blend(b) => b.pdf(wo, wi),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => 0.0,
         };
@@ -201,6 +207,7 @@ impl Bsdf<'_> {
             BsdfKind::Plastic(b) => b.sample(wo, u, u2),
             BsdfKind::RoughPlastic(b) => b.sample(wo, u, u2),
             BsdfKind::Principled(b) => b.sample(wo, u, u2),
+            BsdfKind::PrincipledThin(b) => b.sample(wo, u, u2),
             BsdfKind::Blend(b) => b.sample(wo, u, u2),
             BsdfKind::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 }),
         }?;

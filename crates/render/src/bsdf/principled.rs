@@ -48,7 +48,7 @@ pub struct Principled {
 }
 
 #[inline]
-fn mulsign(v: Vec3, s: f32) -> Vec3 {
+pub(super) fn mulsign(v: Vec3, s: f32) -> Vec3 {
     if s.is_sign_negative() {
         -v
     } else {
@@ -58,7 +58,7 @@ fn mulsign(v: Vec3, s: f32) -> Vec3 {
 
 /// (1 − cos)⁵ clamped, Mitsuba's `schlick_weight`.
 #[inline]
-fn schlick_weight(c: f32) -> f32 {
+pub(super) fn schlick_weight(c: f32) -> f32 {
     let m = (1.0 - c).clamp(0.0, 1.0);
     m * m * m * m * m
 }
@@ -66,7 +66,7 @@ fn schlick_weight(c: f32) -> f32 {
 /// Mitsuba's `calc_schlick`: Schlick's approximation using the transmitted
 /// angle when going from the denser medium.
 #[inline]
-fn calc_schlick(r0: Spectrum, cos_i: f32, eta: f32) -> Spectrum {
+pub(super) fn calc_schlick(r0: Spectrum, cos_i: f32, eta: f32) -> Spectrum {
     let (eta_it, eta_ti) = if cos_i >= 0.0 { (eta, 1.0 / eta) } else { (1.0 / eta, eta) };
     let w = if eta_it > 1.0 {
         schlick_weight(cos_i.abs())
@@ -127,7 +127,7 @@ fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
 
 /// Mitsuba's `mac_mic_compatibility`.
 #[inline]
-fn mac_mic(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
+pub(super) fn mac_mic(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
     let ms = mulsign(m, cos_i);
     if reflection {
         wi.dot(ms) > 0.0 && wo.dot(ms) > 0.0

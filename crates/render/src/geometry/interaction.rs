@@ -27,6 +27,11 @@ pub struct SurfaceInteraction {
     pub dpdv: Vec3,
     /// Index of the hit shape in the scene.
     pub shape: u32,
+    /// Index of the hit triangle within its mesh (0 for analytic shapes).
+    pub prim: u32,
+    /// Barycentric coordinates (b1, b2) of the hit on that triangle (what
+    /// `mesh_attribute` interpolates with; zero for analytic shapes).
+    pub bary: Vec2,
     /// Direction back towards the ray origin, in world space (unit length).
     pub wo: Vec3,
 }

@@ -248,6 +248,8 @@ impl Shape {
             dpdu,
             dpdv,
             shape: shape_id,
+            prim: prim as u32,
+            bary: if matches!(self, Shape::Mesh(_)) { uv } else { Vec2::ZERO },
             wo,
         }
     }

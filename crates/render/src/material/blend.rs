@@ -182,6 +182,8 @@ mod tests {
             dpdu: Vec3::X,
             dpdv: Vec3::Y,
             shape: 0,
+            prim: 0,
+            bary: Vec2::ZERO,
             wo: Vec3::Z,
         }
     }

@@ -85,6 +85,8 @@ pub enum Material {
     },
     /// Mitsuba `principled` (the Disney BSDF).
     Principled(Box<principled::PrincipledMaterial>),
+    /// Mitsuba `principledthin` (the thin-sheet Disney BSDF).
+    PrincipledThin(Box<principled::PrincipledThinMaterial>),
     /// Mitsuba `null`: invisible to every ray (a shape that only emits).
     Null,
     /// The front material, and the one seen from the back side.
@@ -233,6 +235,7 @@ impl Material {
                     tables,
                 }),
                 Material::Principled(p) => BsdfKind::Principled(p.eval(si)),
+                Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.eval(si)),
                 Material::Null => BsdfKind::Null,
                 Material::Blend { weight, first, second } => {
                     BsdfKind::Blend(blend::Blend { weight: weight.eval_1(si).clamp(0.0, 1.0), first, second, si: *si })

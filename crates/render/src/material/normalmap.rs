@@ -70,6 +70,8 @@ pub(crate) mod tests {
             dpdu,
             dpdv: n.cross(dpdu),
             shape: 0,
+            prim: 0,
+            bary: glam::Vec2::ZERO,
             wo: wo.normalize(),
         }
     }

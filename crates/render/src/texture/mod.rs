@@ -2,14 +2,16 @@
 //!
 //! Every BSDF parameter Mitsuba lets a texture drive is a [`Texture`]; a
 //! plain `<rgb>` or `<float>` becomes [`Texture::Constant`], Mitsuba's
-//! `bitmap` a [`Texture::Bitmap`] and `checkerboard` a
-//! [`Texture::Checkerboard`].
+//! `bitmap` a [`Texture::Bitmap`], `checkerboard` a
+//! [`Texture::Checkerboard`] and `mesh_attribute` a [`Texture::MeshAttribute`].
 
 pub mod bitmap;
 pub mod checkerboard;
+pub mod mesh_attribute;
 
 pub use bitmap::{Bitmap, FilterType, WrapMode};
 pub use checkerboard::Checkerboard;
+pub use mesh_attribute::{AttributeTable, MeshAttribute, MeshAttributeData};
 
 use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
@@ -21,6 +23,7 @@ pub enum Texture {
     Constant(Spectrum),
     Bitmap(Arc<Bitmap>),
     Checkerboard(Arc<Checkerboard>),
+    MeshAttribute(Arc<MeshAttribute>),
 }
 
 /// Rec. 709 luminance of linear RGB, with Mitsuba's coefficients.
@@ -37,6 +40,7 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Bitmap(b) => b.eval(si.uv),
             Texture::Checkerboard(c) => c.eval(si),
+            Texture::MeshAttribute(m) => m.eval(si),
         }
     }
 
@@ -50,6 +54,7 @@ impl Texture {
             Texture::Constant(c) => (c.x + c.y + c.z) / 3.0,
             Texture::Bitmap(b) => b.eval_1(si.uv),
             Texture::Checkerboard(c) => c.eval_1(si),
+            Texture::MeshAttribute(m) => m.eval_1(si),
         }
     }
 
@@ -68,7 +73,17 @@ impl Texture {
     /// Whether Mitsuba implements `eval_1_grad` for this texture (bump maps
     /// need it).
     pub fn has_gradient(&self) -> bool {
-        !matches!(self, Texture::Checkerboard(_))
+        !matches!(self, Texture::Checkerboard(_) | Texture::MeshAttribute(_))
+    }
+
+    /// Whether Mitsuba implements `mean` for this texture (not for
+    /// `mesh_attribute`: plugins that need it fail to load there).
+    pub fn has_mean(&self) -> bool {
+        match self {
+            Texture::MeshAttribute(_) => false,
+            Texture::Checkerboard(c) => c.color0.has_mean() && c.color1.has_mean(),
+            _ => true,
+        }
     }
 
     /// Mean value over the texture's domain (Mitsuba's `Texture::mean`, used
@@ -79,6 +94,8 @@ impl Texture {
             Texture::Constant(c) => (c.x + c.y + c.z) / 3.0,
             Texture::Bitmap(b) => b.mean(),
             Texture::Checkerboard(c) => 0.5 * (c.color0.mean() + c.color1.mean()),
+            // Never asked for: the builder checks `has_mean` first.
+            Texture::MeshAttribute(_) => 0.0,
         }
     }
 

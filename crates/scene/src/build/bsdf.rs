@@ -9,7 +9,7 @@ use crate::error::{LoadError, Result};
 use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
 use penumbra_render::bsdf::{presets, Microfacet, MicrofacetType, RoughPlasticTables};
-use penumbra_render::material::principled::PrincipledMaterial;
+use penumbra_render::material::principled::{PrincipledMaterial, PrincipledThinMaterial};
 use penumbra_render::material::{Material, Roughness};
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
@@ -30,6 +30,7 @@ pub(crate) const BSDFS: &[&str] = &[
     "null",
     "blendbsdf",
     "principled",
+    "principledthin",
 ];
 
 /// An IOR given as a number or one of Mitsuba's named materials.
@@ -146,16 +147,43 @@ fn wrapper_defaults(node: &Node) -> Result<()> {
 /// Mitsuba `principled`. A parameter given as the float 0 counts as absent
 /// (Mitsuba's `get_flag`), which matters for `spec_trans`: present, it also
 /// enables transmission from the back side.
-fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
-    let flagged = |tex: &mut Textures, name: &str| -> Result<Option<Texture>> {
-        let is_tex = node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some(name));
-        if !is_tex && (!node.has(name) || node.get_float(name)? == Some(0.0)) {
-            // Mark a zero float as used.
-            node.float(name, 0.0)?;
-            return Ok(None);
-        }
-        Ok(Some(tex.float(node, name, 0.0)?))
+/// Mitsuba's `get_flag`: a parameter absent or given as the float 0 is `None`.
+fn flagged_param(node: &Node, tex: &mut Textures, name: &str) -> Result<Option<Texture>> {
+    let is_tex = node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some(name));
+    if !is_tex && (!node.has(name) || node.get_float(name)? == Some(0.0)) {
+        // Mark a zero float as used.
+        node.float(name, 0.0)?;
+        return Ok(None);
+    }
+    Ok(Some(tex.float(node, name, 0.0)?))
+}
+
+/// Mitsuba `principledthin`, with its parameters and defaults
+/// (src/bsdfs/principledthin.cpp); every parameter but the sampling rates
+/// may be a texture.
+fn principledthin(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let flagged = |tex: &mut Textures, name: &str| flagged_param(node, tex, name);
+    let p = PrincipledThinMaterial {
+        base_color: tex.spectrum(node, "base_color", Spectrum::splat(0.5))?,
+        roughness: tex.float(node, "roughness", 0.5)?,
+        anisotropic: flagged(tex, "anisotropic")?,
+        spec_trans: flagged(tex, "spec_trans")?,
+        spec_tint: flagged(tex, "spec_tint")?,
+        sheen: flagged(tex, "sheen")?,
+        sheen_tint: flagged(tex, "sheen_tint")?,
+        flatness: flagged(tex, "flatness")?,
+        diff_trans: flagged(tex, "diff_trans")?,
+        eta: tex.float(node, "eta", 1.5)?,
+        spec_refl_srate: node.float("specular_reflectance_sampling_rate", 1.0)? as f32,
+        spec_trans_srate: node.float("specular_transmittance_sampling_rate", 1.0)? as f32,
+        diff_trans_srate: node.float("diffuse_transmittance_sampling_rate", 1.0)? as f32,
+        diff_refl_srate: node.float("diffuse_reflectance_sampling_rate", 1.0)? as f32,
     };
+    Ok(Material::PrincipledThin(Box::new(p)))
+}
+
+fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let flagged = |tex: &mut Textures, name: &str| flagged_param(node, tex, name);
     let spec_trans = flagged(tex, "spec_trans")?;
     let has_spec_trans = spec_trans.is_some();
     let eta = if node.has("eta") {
@@ -240,6 +268,13 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
             let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
             let nonlinear = node.bool("nonlinear", false)?;
             // Mitsuba steers lobe selection by the textures' mean values.
+            if !diffuse_reflectance.has_mean() || !specular_reflectance.has_mean() {
+                return Err(node.error(format!(
+                    "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
+                     for lobe selection and fails the same way)",
+                    node.plugin
+                )));
+            }
             let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
             let specular_sampling_weight = s_mean / (d_mean + s_mean);
             if node.plugin == "plastic" {
@@ -309,6 +344,7 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
             Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? }
         }
         "principled" => principled(node, tex)?,
+        "principledthin" => principledthin(node, tex)?,
         "null" => Material::Null,
         "blendbsdf" => {
             let has_weight =

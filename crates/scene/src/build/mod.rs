@@ -126,6 +126,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
         (None, Some(node)) => build_integrator(node)?,
         (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
     };
+    b.textures.finish_mesh_attributes(b.shapes.len());
     let mut scene = Scene::new(b.shapes, b.infos, b.materials, b.lights);
     let radius = scene.bounds().bounding_radius();
     for l in &mut scene.lights {
@@ -256,6 +257,8 @@ impl Builder {
     fn plain_shape(&mut self, node: &Rc<Node>) -> Result<(Shape, ShapeInfo)> {
         let to_world = node.transform("to_world")?;
         let flip = node.bool("flip_normals", false)?;
+        // Mitsuba's mesh attributes (PLY vertex colours and other properties).
+        let mut attributes = Vec::new();
         let shape = match node.plugin.as_str() {
             "rectangle" | "cube" => {
                 let mut m = if node.plugin == "rectangle" { TriangleMesh::rectangle() } else { TriangleMesh::cube() };
@@ -275,7 +278,9 @@ impl Builder {
                 let mut m = if node.plugin == "obj" {
                     obj::load_obj_with(&path, flip_uv)?
                 } else {
-                    ply::load_ply_with(&path, flip_uv)?
+                    let (m, a) = ply::load_ply_with_attributes(&path, flip_uv)?;
+                    attributes = a;
+                    m
                 };
                 let face_normals = node.bool("face_normals", false)?;
                 m.transform(&to_world.as_mat4());
@@ -315,8 +320,9 @@ impl Builder {
         }
 
         let emitter = node.single_child(Kind::Emitter)?;
-        let bsdf = match node.single_child(Kind::Bsdf)? {
-            Some(bn) => self.bsdf(&bn)?,
+        let bsdf_node = node.single_child(Kind::Bsdf)?;
+        let bsdf = match &bsdf_node {
+            Some(bn) => self.bsdf(bn)?,
             // Mitsuba's default: diffuse with reflectance 0.5, but black for
             // emitters (checked against Mitsuba 3.9: an emitter without a BSDF
             // reflects nothing).
@@ -330,6 +336,10 @@ impl Builder {
             }),
         };
         let shape_id = self.shapes.len() as u32;
+        if let Some(bn) = &bsdf_node {
+            let indices = if let Shape::Mesh(m) = &shape { Some(&m.mesh.indices[..]) } else { None };
+            self.textures.bind_mesh_attributes(bn, shape_id, node, &attributes, indices)?;
+        }
         let light = match emitter {
             Some(en) => {
                 if en.plugin != "area" {

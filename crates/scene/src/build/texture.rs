@@ -1,28 +1,37 @@
 //! Texture parameters: a BSDF parameter given as a constant (`<rgb>`,
 //! `<float>`, `<spectrum>`) or as a nested / referenced `<texture>`
-//! (Mitsuba's `bitmap` and `checkerboard`).
+//! (Mitsuba's `bitmap`, `checkerboard` and `mesh_attribute`).
 
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
 use glam::{Affine2, DMat4, Mat2, Vec2, Vec3};
 use penumbra_render::math::Spectrum;
-use penumbra_render::texture::{Bitmap, Checkerboard, FilterType, Texture, WrapMode};
+use penumbra_render::texture::{
+    AttributeTable, Bitmap, Checkerboard, FilterType, MeshAttribute, MeshAttributeData, Texture, WrapMode,
+};
 use std::collections::HashMap;
+use std::rc::Rc;
 use std::sync::Arc;
 
-const TEXTURES: &[&str] = &["bitmap", "checkerboard"];
+const TEXTURES: &[&str] = &["bitmap", "checkerboard", "mesh_attribute"];
 
 /// Textures already built, by node identity (shared through `<ref>`).
 #[derive(Default)]
 pub(crate) struct Textures {
     cache: HashMap<*const Node, Texture>,
+    /// `mesh_attribute` nodes read as a scalar (`eval_1`) and/or as a colour (`eval`).
+    attr_uses: HashMap<*const Node, (bool, bool)>,
+    /// Per-shape tables of `mesh_attribute` textures, installed by
+    /// [`Textures::finish_mesh_attributes`].
+    attr_tables: Vec<(Arc<MeshAttribute>, u32, AttributeTable)>,
 }
 
 impl Textures {
     /// The colour parameter `name` of `node`: a constant or a texture.
     pub fn spectrum(&mut self, node: &Node, name: &str, default: Spectrum) -> Result<Texture> {
         if let Some(child) = node.children_of(Kind::Texture).find(|c| c.name.as_deref() == Some(name)) {
+            self.attr_uses.entry(Rc::as_ptr(&child.node)).or_default().1 = true;
             return self.build(&child.node);
         }
         Ok(Texture::Constant(
@@ -34,14 +43,15 @@ impl Textures {
     /// through `eval_1`.
     pub fn float(&mut self, node: &Node, name: &str, default: f32) -> Result<Texture> {
         if let Some(child) = node.children_of(Kind::Texture).find(|c| c.name.as_deref() == Some(name)) {
+            self.attr_uses.entry(Rc::as_ptr(&child.node)).or_default().0 = true;
             return self.build(&child.node);
         }
         Ok(Texture::Constant(Spectrum::splat(node.float(name, default as f64)? as f32)))
     }
 
     /// A top-level or nested `<texture>`.
-    pub fn build(&mut self, node: &std::rc::Rc<Node>) -> Result<Texture> {
-        let key = std::rc::Rc::as_ptr(node);
+    pub fn build(&mut self, node: &Rc<Node>) -> Result<Texture> {
+        let key = Rc::as_ptr(node);
         if let Some(t) = self.cache.get(&key) {
             return Ok(t.clone());
         }
@@ -68,6 +78,19 @@ impl Textures {
                 let to_uv = to_uv(node)?;
                 Texture::Checkerboard(Arc::new(Checkerboard { color0, color1, to_uv }))
             }
+            "mesh_attribute" => {
+                let (name, loc) = node
+                    .get_string("name")?
+                    .ok_or_else(|| node.error("mesh_attribute needs a 'name', e.g. \"vertex_color\""))?;
+                if !name.contains("vertex_") && !name.contains("face_") {
+                    return Err(LoadError::at(
+                        &loc,
+                        format!("invalid mesh attribute name \"{name}\": it must start with \"vertex_\" or \"face_\""),
+                    ));
+                }
+                let scale = node.float("scale", 1.0)? as f32;
+                Texture::MeshAttribute(Arc::new(MeshAttribute::new(name, scale)))
+            }
             other => {
                 return Err(node.error(format!(
                     "texture type '{other}' is not supported; Penumbra supports {}",
@@ -77,6 +100,76 @@ impl Textures {
         };
         node.check_all_used(&[Kind::Texture])?;
         Ok(t)
+    }
+}
+
+impl Textures {
+    /// Connects the `mesh_attribute` textures that the BSDF `bsdf` (already
+    /// built) uses to shape `shape_id`, whose mesh has `attributes` over the
+    /// triangles `indices` (`None` for analytic shapes). Fails, at the
+    /// texture's line, where Mitsuba would fail when rendering: the shape
+    /// lacks the attribute, or its size does not fit (a colour parameter
+    /// takes 1 or 3 components, a scalar one 1).
+    pub fn bind_mesh_attributes(
+        &mut self,
+        bsdf: &Rc<Node>,
+        shape_id: u32,
+        shape: &Node,
+        attributes: &[MeshAttributeData],
+        indices: Option<&[[u32; 3]]>,
+    ) -> Result<()> {
+        let mut stack = vec![bsdf.clone()];
+        while let Some(n) = stack.pop() {
+            for c in &n.children {
+                if matches!(c.node.kind, Kind::Bsdf | Kind::Texture) {
+                    stack.push(c.node.clone());
+                }
+            }
+            let key = Rc::as_ptr(&n);
+            let Some(Texture::MeshAttribute(tex)) = self.cache.get(&key) else { continue };
+            let tex = tex.clone();
+            let have = || {
+                if attributes.is_empty() {
+                    "it has no attributes".to_string()
+                } else {
+                    let list: Vec<String> =
+                        attributes.iter().map(|a| format!("{} ({} components)", a.name, a.dim)).collect();
+                    format!("it has {}", list.join(", "))
+                }
+            };
+            let (Some(indices), Some(attr)) = (indices, attributes.iter().find(|a| a.name == tex.name)) else {
+                return Err(n.error(format!(
+                    "mesh_attribute: the {} at {} has no attribute \"{}\"; {}",
+                    shape.describe(),
+                    shape.loc,
+                    tex.name,
+                    if indices.is_some() { have() } else { "only meshes carry attributes".to_string() }
+                )));
+            };
+            let (as_float, as_color) = self.attr_uses.get(&key).copied().unwrap_or((false, true));
+            if (as_float && attr.dim != 1) || (as_color && attr.dim != 1 && attr.dim != 3) {
+                return Err(n.error(format!(
+                    "mesh_attribute \"{}\" has {} components; Mitsuba evaluates 1 or 3 for a colour and 1 for a scalar parameter",
+                    tex.name, attr.dim
+                )));
+            }
+            self.attr_tables.push((tex, shape_id, AttributeTable::new(attr, indices)));
+        }
+        Ok(())
+    }
+
+    /// Installs every `mesh_attribute` texture's per-shape tables once all
+    /// `shape_count` shapes exist.
+    pub fn finish_mesh_attributes(&mut self, shape_count: usize) {
+        let mut by_texture: HashMap<*const MeshAttribute, (Arc<MeshAttribute>, Vec<Option<AttributeTable>>)> =
+            HashMap::new();
+        for (tex, shape, table) in self.attr_tables.drain(..) {
+            let entry = by_texture.entry(Arc::as_ptr(&tex)).or_insert_with(|| (tex, vec![None; shape_count]));
+            entry.1[shape as usize] = Some(table);
+        }
+        for (tex, tables) in by_texture.into_values() {
+            tex.set_tables(tables);
+        }
     }
 }
 
