@@ -94,7 +94,7 @@ fn slurm_example_scripts_render_parts_rerun_one_alone_and_merge() {
         .arg(root().join("scenes/cornell-box.xml"))
         .arg("-o")
         .arg(&other)
-        .args(&args)
+        .args(["-D", "res=24", "--spp", "8"])
         .args(["--seed", "6"])
         .output()
         .unwrap());

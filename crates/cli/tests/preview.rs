@@ -36,7 +36,7 @@ fn start_xvfb() -> (u32, Guard) {
         }
         let child = Command::new("Xvfb")
             .arg(format!(":{n}"))
-            .args(["-screen", "0", "800x600x24", "-nolisten", "tcp"])
+            .args(["-screen", "0", "800x600x24", "-nolisten", "tcp", "-noreset"])
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -44,7 +44,14 @@ fn start_xvfb() -> (u32, Guard) {
         let mut g = Guard(child);
         let t = Instant::now();
         while t.elapsed() < Duration::from_secs(10) {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+            // Ready once it answers (its socket appears before it accepts clients).
+            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
+                && Command::new("xwd")
+                    .args(["-display", &format!(":{n}"), "-root", "-silent", "-out", "/dev/null"])
+                    .stderr(Stdio::null())
+                    .status()
+                    .is_ok_and(|s| s.success())
+            {
                 return (n, g);
             }
             if g.0.try_wait().unwrap().is_some() {
@@ -63,7 +70,7 @@ fn read_xwd(b: &[u8]) -> (usize, usize, Vec<[u8; 3]>) {
     assert_eq!(version, 7, "XWD version");
     let (width, height) = (be(4) as usize, be(5) as usize);
     let (byte_order, bits_per_pixel, bytes_per_line) = (be(7), be(11) as usize, be(12) as usize);
-    let masks = [be(15), be(16), be(17)];
+    let masks = [be(14), be(15), be(16)];
     let ncolors = be(19) as usize;
     assert_eq!(bits_per_pixel, 32, "expected a 24-bit TrueColor visual with 32-bit pixels");
     let data = &b[header_size + 12 * ncolors..];
@@ -144,10 +151,21 @@ fn preview_window_shows_the_image_under_xvfb() {
         let pixels = px.iter().map(|p| p.map(|c| image_io::srgb_to_linear(c as f32 / 255.0))).collect();
         image_io::write_image(Path::new(&out), &RgbImage { width: w as u32, height: h as u32, pixels }).unwrap();
     }
-    // Not blank: the red and the green wall are there.
-    let red = px.iter().filter(|p| p[0] > 100 && p[1] < 60 && p[2] < 60).count();
-    let green = px.iter().filter(|p| p[1] > 100 && p[0] < 80 && p[2] < 80).count();
-    assert!(red > w * h / 20 && green > w * h / 20, "red {red}, green {green} of {} pixels", w * h);
+    // Not blank: the red wall on the left, the green wall on the right.
+    let mean = |x0: usize, x1: usize| {
+        let mut m = [0f64; 3];
+        for y in 128..384 {
+            for x in x0..x1 {
+                for k in 0..3 {
+                    m[k] += px[y * w + x][k] as f64 / ((x1 - x0) * 256) as f64;
+                }
+            }
+        }
+        m
+    };
+    let (left, right) = (mean(8, 88), mean(424, 504));
+    assert!(left[0] > 60.0 && left[0] > 1.3 * left[1] && left[0] > 2.0 * left[2], "left wall {left:?}");
+    assert!(right[1] > 60.0 && right[1] > 1.3 * right[0] && right[1] > 2.0 * right[2], "right wall {right:?}");
     // And it is the rendered image: every 8x8 block is the PNG's pixel.
     let img = image_io::read_image(&png).unwrap();
     let mut worst = 0;
@@ -162,7 +180,33 @@ fn preview_window_shows_the_image_under_xvfb() {
             }
         }
     }
-    eprintln!("preview screenshot: {w}x{h}, red {red} and green {green} pixels, largest 8-bit difference from the PNG {worst}");
+    eprintln!(
+        "preview screenshot: {w}x{h}, left wall mean sRGB {left:.0?}, right wall {right:.0?}, \
+         largest 8-bit difference from the PNG {worst}"
+    );
     assert!(worst <= 1, "the window shows another image: difference {worst}");
+    fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn preview_without_a_display_says_so_once_and_renders() {
+    let d = std::env::temp_dir().join(format!("penumbra-nopreview-{}", std::process::id()));
+    fs::create_dir_all(&d).unwrap();
+    for (display, want) in [(None, "no display"), (Some(":4077"), "cannot open a window")] {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        c.arg("render").arg(root().join("scenes/cornell-box.xml")).arg("-o").arg(d.join("a.png"));
+        c.args(["-D", "res=16", "--spp", "4", "--quiet", "--preview"]).env_remove("WAYLAND_DISPLAY");
+        match display {
+            Some(v) => c.env("DISPLAY", v),
+            None => c.env_remove("DISPLAY"),
+        };
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(err.matches("--preview:").count(), 1, "{err}");
+        assert!(err.contains(want) && err.contains("rendering without"), "{err}");
+        assert!(d.join("a.png").exists());
+        fs::remove_file(d.join("a.png")).unwrap();
+    }
     fs::remove_dir_all(&d).ok();
 }
