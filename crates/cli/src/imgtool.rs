@@ -136,7 +136,7 @@ pub fn run(args: &DiffArgs) -> Result<()> {
         );
     }
     if let Some(limit) = args.max_rel {
-        if !(s.max_rel <= limit) {
+        if s.max_rel.is_nan() || s.max_rel > limit {
             bail!("the largest relative difference {:.3e} is above --max-rel {limit:e}", s.max_rel);
         }
     }

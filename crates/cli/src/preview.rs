@@ -115,8 +115,8 @@ mod tests {
 
     #[test]
     fn pixels_are_clamped_srgb_as_the_png_writer_writes_them() {
-        assert_eq!(pack([0.0, 1.0, 7.0]), 0x00ff_ff);
-        assert_eq!(pack([f32::NAN, -1.0, 0.18]), 0x00_0000 | 118); // sRGB(0.18) = 0.4613
+        assert_eq!(pack([0.0, 1.0, 7.0]), 0x0000_ffff);
+        assert_eq!(pack([f32::NAN, -1.0, 0.18]), 118); // sRGB(0.18) = 0.4613
         assert_eq!(pack([1.0, 0.0, 0.0]), 0xff_0000);
     }
 
