@@ -99,6 +99,11 @@ pub struct RenderArgs {
     /// samples are summed.
     #[arg(long, value_name = "N", default_value_t = crate::driver::DEFAULT_MAX_PASS_SPP)]
     pub max_pass_spp: u32,
+    /// Show the image in a window, refreshed after every pass (sRGB, clamped).
+    /// Without a display the render goes on without it.
+    /// PENUMBRA_PREVIEW_HOLD=SECONDS keeps the window open after the last pass.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 #[derive(Debug, Args)]
@@ -169,6 +174,10 @@ pub struct DiffArgs {
     /// Write a false-colour image of the per-pixel relMSE (log scale) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Fail (exit status 1) if the largest relative difference |a-b|/|b| over
+    /// all pixels and channels is above this (e.g. 1e-6 for a merge).
+    #[arg(long, value_name = "X")]
+    pub max_rel: Option<f64>,
 }
 
 fn parse_crop(s: &str) -> Result<[u32; 4], String> {

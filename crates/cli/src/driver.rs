@@ -78,6 +78,8 @@ pub struct Extras {
 pub struct Hooks<'a> {
     pub checkpoint: &'a mut dyn FnMut(&State) -> Result<()>,
     pub partial: &'a mut dyn FnMut(&State) -> Result<()>,
+    /// After every pass, the last one included (the `--preview` window).
+    pub after_pass: Option<&'a mut dyn FnMut(&State)>,
 }
 
 /// Renders passes of `samples` into `state` until done, out of time or cancelled.
@@ -89,7 +91,7 @@ pub fn run(
     max_pass_spp: u32,
     state: &mut State,
     budget: Budget,
-    hooks: Hooks,
+    mut hooks: Hooks,
     cancel: &AtomicBool,
     quiet: bool,
 ) -> Result<(Stop, RenderStats, Extras)> {
@@ -130,6 +132,9 @@ pub fn run(
         state.spp += n;
         state.seconds = base_seconds + start.elapsed().as_secs_f64();
         per_spp = Some(t0.elapsed().as_secs_f64() / n as f64);
+        if let Some(f) = hooks.after_pass.as_mut() {
+            f(state);
+        }
         if pass_range(samples, max_pass_spp, state.passes).is_none() {
             continue; // Complete: the caller writes the final image.
         }

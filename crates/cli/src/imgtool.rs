@@ -25,6 +25,9 @@ pub struct DiffStats {
     pub mean_b: [f64; 3],
     pub mse: f64,
     pub rel_mse: f64,
+    /// Largest |a - b| / |b| over pixels and channels (infinite where b is 0
+    /// and a is not): how `merge` is compared with a single-machine render.
+    pub max_rel: f64,
 }
 
 /// Compares `a` with the reference `b` (same size).
@@ -36,7 +39,7 @@ pub fn diff(a: &RgbImage, b: &RgbImage) -> Result<DiffStats> {
         bail!("the images are empty");
     }
     let (mut mean_a, mut mean_b) = ([0f64; 3], [0f64; 3]);
-    let (mut se, mut rel) = (0f64, 0f64);
+    let (mut se, mut rel, mut max_rel) = (0f64, 0f64, 0f64);
     for (pa, pb) in a.pixels.iter().zip(&b.pixels) {
         for k in 0..3 {
             let (x, y) = (pa[k] as f64, pb[k] as f64);
@@ -45,6 +48,14 @@ pub fn diff(a: &RgbImage, b: &RgbImage) -> Result<DiffStats> {
             let d2 = (x - y) * (x - y);
             se += d2;
             rel += d2 / (y * y + REL_EPS);
+            let d = (x - y).abs();
+            max_rel = max_rel.max(if d == 0.0 {
+                0.0
+            } else if y == 0.0 {
+                f64::INFINITY
+            } else {
+                d / y.abs()
+            });
         }
     }
     let n = a.pixels.len() as f64;
@@ -53,6 +64,7 @@ pub fn diff(a: &RgbImage, b: &RgbImage) -> Result<DiffStats> {
         mean_b: mean_b.map(|m| m / n),
         mse: se / (3.0 * n),
         rel_mse: rel / (3.0 * n),
+        max_rel,
     })
 }
 
@@ -113,6 +125,7 @@ pub fn run(args: &DiffArgs) -> Result<()> {
     println!("mean B:    {}", fmt(s.mean_b));
     println!("MSE:       {:.6e}", s.mse);
     println!("relMSE:    {:.6e}", s.rel_mse);
+    println!("max rel:   {:.3e}", s.max_rel);
     if let Some(out) = &args.out {
         image_io::write_image(out, &error_image(&a, &b)).map_err(|e| anyhow!(e))?;
         println!(
@@ -121,6 +134,11 @@ pub fn run(args: &DiffArgs) -> Result<()> {
             LOG_MIN,
             LOG_MAX
         );
+    }
+    if let Some(limit) = args.max_rel {
+        if s.max_rel.is_nan() || s.max_rel > limit {
+            bail!("the largest relative difference {:.3e} is above --max-rel {limit:e}", s.max_rel);
+        }
     }
     Ok(())
 }
@@ -137,7 +155,9 @@ mod tests {
     fn identical_images_have_zero_error() {
         let a = img(vec![[0.1, 0.2, 0.3], [4.0, 5.0, 6.0]], 2);
         let s = diff(&a, &a).unwrap();
-        assert_eq!((s.mse, s.rel_mse), (0.0, 0.0));
+        assert_eq!((s.mse, s.rel_mse, s.max_rel), (0.0, 0.0, 0.0));
+        let b = img(vec![[0.1, 0.2, 0.3], [4.0, 5.0, 6.003]], 2);
+        assert!((diff(&b, &a).unwrap().max_rel - 0.0005).abs() < 1e-6);
         assert!((s.mean_a[2] - 3.15).abs() < 1e-6 && s.mean_a == s.mean_b);
     }
 

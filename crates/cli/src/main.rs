@@ -10,6 +10,7 @@ mod imgtool;
 mod info;
 mod merge;
 mod part;
+mod preview;
 mod progress;
 mod render_cmd;
 mod settings;

@@ -169,7 +169,24 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     };
     let mut ck_hook = |st: &State| save_checkpoint(st);
     let mut partial_hook = |st: &State| out.write(&a.output, st, false);
-    let hooks = Hooks { checkpoint: &mut ck_hook, partial: &mut partial_hook };
+    let mut preview = a.preview.then(|| {
+        let name = a.scene.file_name().map_or("scene".into(), |n| n.to_string_lossy().into_owned());
+        crate::preview::Preview::open(&name, job.width, job.height)
+    });
+    let target = samples.end - samples.start;
+    if let Some(p) = preview.as_mut().filter(|_| state.spp > 0) {
+        p.show(&state.film.develop(), state.spp, target); // resumed
+    }
+    let mut preview_hook = |st: &State| {
+        if let Some(p) = preview.as_mut() {
+            p.show(&st.film.develop(), st.spp, target);
+        }
+    };
+    let hooks = Hooks {
+        checkpoint: &mut ck_hook,
+        partial: &mut partial_hook,
+        after_pass: if a.preview { Some(&mut preview_hook) } else { None },
+    };
     let run_start = std::time::Instant::now();
     let seconds_before = state.seconds;
     let (stop, stats, extras) =
@@ -189,10 +206,12 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
             let _ = std::fs::remove_file(ck);
         }
     }
+    if let Some(p) = preview.as_mut() {
+        p.hold(&signals.cancel);
+    }
     let secs = run_start.elapsed().as_secs_f64().max(1e-9);
     let this_run = state.seconds - seconds_before;
     let rays = stats.rays.rays + stats.rays.shadow_rays;
-    let target = samples.end - samples.start;
     let what = match stop {
         Stop::Complete => "rendered".to_string(),
         Stop::TimeUp => format!("time budget reached: rendered {} of {target} spp to", state.spp),
