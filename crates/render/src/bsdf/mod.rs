@@ -42,6 +42,17 @@ use crate::math::Spectrum;
 use glam::{Vec2, Vec3};
 
 /// A sampled direction with its weight.
+/// `v` with the sign of `s` (+ for s = 0), as Dr.Jit's `mulsign`.
+/// Written as a multiplication: with rustc 1.95 in release builds,
+/// `if s < 0.0 { -v } else { v }` (or with `is_sign_negative`) came back
+/// with the caller's vector negated in two BSDFs; each time the test
+/// `weights_are_eval_cos_over_pdf` caught it. Keep this the one copy.
+#[inline]
+pub(crate) fn mulsign(v: Vec3, s: f32) -> Vec3 {
+    let k = if s < 0.0 { -1.0 } else { 1.0 };
+    Vec3::new(v.x * k, v.y * k, v.z * k)
+}
+
 #[derive(Debug, Clone, Copy)]
 pub struct BsdfSample {
     pub wi: Vec3,

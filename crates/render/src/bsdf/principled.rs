@@ -47,14 +47,7 @@ pub struct Principled {
     pub diffuse_srate: f32,
 }
 
-#[inline]
-pub(super) fn mulsign(v: Vec3, s: f32) -> Vec3 {
-    if s.is_sign_negative() {
-        -v
-    } else {
-        v
-    }
-}
+pub(super) use super::mulsign;
 
 /// (1 − cos)⁵ clamped, Mitsuba's `schlick_weight`.
 #[inline]

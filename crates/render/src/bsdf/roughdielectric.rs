@@ -7,7 +7,7 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{reflect_m, refract_m, Microfacet};
-use super::BsdfSample;
+use super::{mulsign, BsdfSample};
 use crate::math::Spectrum;
 use glam::{Vec2, Vec3};
 
@@ -18,16 +18,6 @@ pub struct RoughDielectric {
     pub eta: f32,
     pub specular_reflectance: Spectrum,
     pub specular_transmittance: Spectrum,
-}
-
-/// `v` with the sign of `s` (+ for s = 0), as Dr.Jit's `mulsign`.
-/// Written as a multiplication: with rustc 1.95, `if s < 0.0 { -v } else { v }`
-/// here was miscompiled in release builds (the caller's `wo` came back
-/// negated; caught by `weights_are_eval_cos_over_pdf`).
-#[inline]
-fn mulsign(v: Vec3, s: f32) -> Vec3 {
-    let k = if s < 0.0 { -1.0 } else { 1.0 };
-    Vec3::new(v.x * k, v.y * k, v.z * k)
 }
 
 impl RoughDielectric {

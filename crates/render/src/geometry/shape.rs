@@ -3,7 +3,7 @@
 //! hit, area and direction sampling); the BVH intersects its primitives.
 
 use super::{Aabb, Cylinder, Instance, Ray, SurfaceInteraction, TriangleMesh};
-use crate::math::{safe_sqrt, Frame, Mat3, Mat4, PI};
+use crate::math::{fast, safe_sqrt, Frame, Mat3, Mat4, PI};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
 
@@ -200,8 +200,8 @@ impl Shape {
                 let p = *center + n * *radius;
                 // Mitsuba's spherical coordinates in the sphere's local frame.
                 let l = rot.transpose() * n;
-                let theta = l.z.clamp(-1.0, 1.0).acos();
-                let mut phi = l.y.atan2(l.x);
+                let theta = fast::acos(l.z);
+                let mut phi = fast::atan2(l.y, l.x);
                 if phi < 0.0 {
                     phi += 2.0 * PI;
                 }
@@ -221,7 +221,7 @@ impl Shape {
                 let r2 = uv.length_squared();
                 let inv_r = if r2 != 0.0 { 1.0 / r2.sqrt() } else { 0.0 };
                 let r = r2 * inv_r;
-                let mut v = uv.y.atan2(uv.x) * (0.5 / PI);
+                let mut v = fast::atan2(uv.y, uv.x) * (0.5 / PI);
                 if v < 0.0 {
                     v += 1.0;
                 }

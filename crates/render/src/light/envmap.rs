@@ -28,7 +28,7 @@
 //! piecewise-constant one would not.)
 
 use super::LightSample;
-use crate::math::{luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
+use crate::math::{fast, luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
 use crate::sampling::Distribution2D;
 use glam::{Vec2, Vec3};
 
@@ -150,8 +150,8 @@ impl EnvMapLight {
     /// out towards the environment). Mitsuba's `eval` with `si.wi = -wi`.
     pub fn eval(&self, wi: Vec3) -> Spectrum {
         let d = self.light_from_world * wi;
-        let u = d.x.atan2(-d.z) * INV_2PI;
-        let v = d.y.clamp(-1.0, 1.0).acos() * INV_PI;
+        let u = fast::atan2(d.x, -d.z) * INV_2PI;
+        let v = fast::acos(d.y) * INV_PI;
         self.lookup(u, v) * self.scale
     }
 
@@ -198,8 +198,8 @@ impl EnvMapLight {
         let m = local.length();
         let d = local / m;
         let rows = self.height - 1;
-        let r = ((d.y.clamp(-1.0, 1.0).acos() * INV_PI * rows as f32) as usize).min(rows - 1);
-        let u = d.x.atan2(-d.z) * INV_2PI - 0.5 / self.width as f32;
+        let r = ((fast::acos(d.y) * INV_PI * rows as f32) as usize).min(rows - 1);
+        let u = fast::atan2(d.x, -d.z) * INV_2PI - 0.5 / self.width as f32;
         let pdf_uv = distribution.pdf(Vec2::new(u - u.floor(), (r as f32 + 0.5) / rows as f32));
         // |A d| = 1 / m for d = A⁻¹ wi / m.
         pdf_uv * self.inv_row_solid_angle[r] / (m * m * m * self.abs_det)

@@ -1,5 +1,6 @@
 //! Vector math (glam re-exports), constants, colour and small helpers.
 
+pub mod fast;
 pub mod frame;
 
 pub use frame::Frame;
