@@ -2,8 +2,9 @@
 //! belongs to one tile and accumulates its samples in index order, so the
 //! film is bitwise identical for any thread count or scheduling.
 
+use crate::aov;
 use crate::camera::Camera;
-use crate::film::{Film, Filter};
+use crate::film::{Film, FilmLayers, Filter};
 use crate::integrator::{Integrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -13,6 +14,8 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 const TILE: u32 = 16;
+/// High bit set in the x key of AOV sample streams.
+const AOV_STREAM: u32 = 1 << 31;
 
 /// Everything needed to render an image of a scene.
 #[derive(Debug, Clone)]
@@ -75,7 +78,25 @@ impl RenderJob {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Option<RenderStats> {
+        self.render_pass_masked(film, samples, None, progress, cancel)
+    }
+
+    /// As [`render_pass`](Self::render_pass), restricted to the pixels whose
+    /// entry of `active` (row-major, one per pixel) is true; the film's
+    /// layers (AOVs, variance moments) are accumulated as the film has them.
+    pub fn render_pass_masked(
+        &self,
+        film: &mut Film,
+        samples: Range<u32>,
+        active: Option<&[bool]>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Option<RenderStats> {
         assert_eq!((film.width, film.height), (self.width, self.height));
+        if let Some(a) = active {
+            assert_eq!(a.len(), film.weight.len());
+        }
+        let layers = film.layers();
         let tiles_x = self.width.div_ceil(TILE);
         let tiles_y = self.height.div_ceil(TILE);
         let results: Option<Vec<TileResult>> = (0..tiles_x * tiles_y)
@@ -84,7 +105,7 @@ impl RenderJob {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                let r = self.render_tile(t % tiles_x * TILE, t / tiles_x * TILE, samples.clone());
+                let r = self.render_tile(t % tiles_x * TILE, t / tiles_x * TILE, samples.clone(), &layers, active);
                 progress(r.stats.samples);
                 Some(r)
             })
@@ -99,10 +120,7 @@ impl RenderJob {
                 for x in 0..r.w {
                     let src = (y * r.w + x) as usize;
                     let dst = ((r.y0 + y) * self.width + r.x0 + x) as usize;
-                    for c in 0..3 {
-                        film.sum[dst][c] += r.film.sum[src][c];
-                    }
-                    film.weight[dst] += r.film.weight[src];
+                    film.add_pixel(dst, &r.film, src);
                 }
             }
             stats.add(&r.stats);
@@ -110,16 +128,27 @@ impl RenderJob {
         Some(stats)
     }
 
-    fn render_tile(&self, x0: u32, y0: u32, samples: Range<u32>) -> TileResult {
+    fn render_tile(
+        &self,
+        x0: u32,
+        y0: u32,
+        samples: Range<u32>,
+        layers: &FilmLayers,
+        active: Option<&[bool]>,
+    ) -> TileResult {
         let w = TILE.min(self.width - x0);
         let h = TILE.min(self.height - y0);
-        let mut film = Film::new(w, h);
+        let mut film = Film::with_layers(w, h, layers);
+        let mut aov_values = vec![0f32; film.aov_channels()];
         let mut stats = RenderStats::default();
         let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
         let origin = Vec2::new(self.crop_offset.0 as f32 + 0.5, self.crop_offset.1 as f32 + 0.5);
         for y in 0..h {
             for x in 0..w {
                 let (px, py) = (x0 + x, y0 + y);
+                if active.is_some_and(|a| !a[(py * self.width + px) as usize]) {
+                    continue;
+                }
                 for s in samples.clone() {
                     // Keyed by the pixel's position in the full film, so a
                     // crop window renders exactly its part of the full image.
@@ -131,6 +160,16 @@ impl RenderJob {
                     stats.samples += 1;
                     if l.is_finite() && weight.is_finite() {
                         film.add(x, y, l, weight);
+                        if !aov_values.is_empty() {
+                            // Its own random numbers (a stream of a pixel no
+                            // image has), so the beauty is the same with or
+                            // without AOVs.
+                            let key = (px + self.crop_offset.0 | AOV_STREAM, py + self.crop_offset.1);
+                            let mut aov_rng = self.sampler.stream(key, s);
+                            let a = aov::query(&self.scene, &self.integrator, &ray, &mut aov_rng);
+                            a.write(&film.aov_kinds, &mut aov_values);
+                            film.add_aov(x, y, &aov_values, weight);
+                        }
                     } else {
                         stats.non_finite += 1;
                     }
