@@ -27,7 +27,8 @@ pub fn denoise_rgb(
     let mut out = vec![0f32; color.len()];
     let albedo: Option<Vec<f32>> = albedo.map(|a| a.iter().map(|v| v.clamp(0.0, 1.0)).collect());
     let normal: Option<Vec<f32>> = normal.map(|n| n.iter().map(|v| v.clamp(-1.0, 1.0)).collect());
-    let mut filter = oidn::RayTracing::new(&device);
+    let mut filter = oidn::RayTracing::try_new(&device)
+        .map_err(|e| anyhow::anyhow!("Open Image Denoise: cannot create the RT filter: {e:?}"))?;
     filter.srgb(false).hdr(true).clean_aux(false).image_dimensions(width as usize, height as usize);
     match (&albedo, &normal) {
         (Some(a), Some(n)) => {
