@@ -108,8 +108,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "LIST")]
     pub aov: Option<String>,
     /// Stop once the image's estimated relMSE (against the converged image,
-    /// from per-pixel variances) is at most X, checked after each pass; the
-    /// spp target still caps the render.
+    /// from per-pixel variances) is at most X, checked after each pass once
+    /// every pixel has 16 samples; the spp target still caps the render.
     #[arg(long, value_name = "X")]
     pub noise_threshold: Option<f64>,
     /// With --noise-threshold: after 16 spp, passes render only the pixels

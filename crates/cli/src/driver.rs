@@ -117,7 +117,7 @@ pub fn run(
         };
         let mut active = None;
         if let Some(x) = budget.noise_threshold {
-            if state.spp > 0 && crate::adaptive::reached(&state.film, x) {
+            if crate::adaptive::reached(&state.film, state.spp, x) {
                 break Stop::NoiseReached;
             }
             if budget.adaptive {
@@ -148,7 +148,7 @@ pub fn run(
         state.seconds = base_seconds + start.elapsed().as_secs_f64();
         per_spp = Some(t0.elapsed().as_secs_f64() / n as f64);
         if pass_range(samples, max_pass_spp, state.passes).is_none()
-            || budget.noise_threshold.is_some_and(|x| crate::adaptive::reached(&state.film, x))
+            || budget.noise_threshold.is_some_and(|x| crate::adaptive::reached(&state.film, state.spp, x))
         {
             continue; // Complete: the caller writes the final image.
         }
