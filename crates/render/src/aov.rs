@@ -14,8 +14,9 @@
 //! non-delta hit, as Open Image Denoise recommends for its guides, and
 //! reports that surface's values unweighted (a perfect mirror shows the
 //! albedo of what it reflects). A ray that escapes reports zero.
-//! - `depth`: distance along the camera ray to the first hit (Mitsuba's
-//!   `depth`; 0 where the ray escapes).
+//! - `depth`: distance from the camera to the first hit (Mitsuba's `depth`:
+//!   from the pinhole or the lens point, not from the near clip plane where
+//!   rays start; from the near plane for orthographic cameras; 0 where the ray escapes).
 //! - `position`: world-space position of the first hit (0 where it escapes).
 //!
 //! The query uses its own random numbers (a stream keyed apart from the
@@ -25,6 +26,7 @@ use crate::geometry::Ray;
 use crate::integrator::{camera_hit, Integrator, RayStats};
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
+use glam::Vec3;
 
 /// Delta surfaces followed at most before giving up (reporting zero).
 const MAX_DELTA_CHAIN: u32 = 16;
@@ -104,14 +106,15 @@ fn hide_emitters(integrator: &Integrator) -> bool {
     }
 }
 
-/// The AOVs of camera ray `ray`, with random numbers from `rng`.
-pub fn query(scene: &Scene, integrator: &Integrator, ray: &Ray, rng: &mut SampleStream) -> AovSample {
+/// The AOVs of camera ray `ray` leaving the camera at `eye` (depth is
+/// measured from there), with random numbers from `rng`.
+pub fn query(scene: &Scene, integrator: &Integrator, ray: &Ray, eye: Vec3, rng: &mut SampleStream) -> AovSample {
     let mut out = AovSample::default();
     let mut stats = RayStats::default();
     let Some(mut si) = camera_hit(scene, ray, hide_emitters(integrator), &mut stats) else {
         return out;
     };
-    out.depth = si.t;
+    out.depth = (si.p - eye).length();
     out.position = si.p.to_array();
     for _ in 0..MAX_DELTA_CHAIN {
         let bsdf = scene.bsdf(&mut si);

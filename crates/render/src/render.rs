@@ -128,6 +128,21 @@ impl RenderJob {
         Some(stats)
     }
 
+    /// Where a camera ray leaves the camera: back along it to the lens plane
+    /// (z = 0 in camera space; rays start on the near clip plane), or its
+    /// origin for orthographic cameras.
+    fn eye(&self, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
+        if matches!(self.camera.projection, crate::camera::Projection::Orthographic { .. }) {
+            return ray.o;
+        }
+        let (o, d) = (camera_from_world.transform_point3(ray.o), camera_from_world.transform_vector3(ray.d));
+        if d.z.abs() > 0.0 {
+            ray.o - ray.d * (o.z / d.z)
+        } else {
+            ray.o
+        }
+    }
+
     fn render_tile(
         &self,
         x0: u32,
@@ -140,6 +155,7 @@ impl RenderJob {
         let h = TILE.min(self.height - y0);
         let mut film = Film::with_layers(w, h, layers);
         let mut aov_values = vec![0f32; film.aov_channels()];
+        let camera_from_world = self.camera.world_from_camera.inverse();
         let mut stats = RenderStats::default();
         let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
         let origin = Vec2::new(self.crop_offset.0 as f32 + 0.5, self.crop_offset.1 as f32 + 0.5);
@@ -166,7 +182,13 @@ impl RenderJob {
                             // without AOVs.
                             let key = (px + self.crop_offset.0 | AOV_STREAM, py + self.crop_offset.1);
                             let mut aov_rng = self.sampler.stream(key, s);
-                            let a = aov::query(&self.scene, &self.integrator, &ray, &mut aov_rng);
+                            let a = aov::query(
+                                &self.scene,
+                                &self.integrator,
+                                &ray,
+                                self.eye(&ray, &camera_from_world),
+                                &mut aov_rng,
+                            );
                             a.write(&film.aov_kinds, &mut aov_values);
                             film.add_aov(x, y, &aov_values, weight);
                         }
