@@ -32,6 +32,8 @@ pub fn parse(list: &str) -> Result<FilmLayers> {
             bail!("--aov: unknown AOV '{name}'; supported: albedo, normal, depth, position, variance");
         }
     }
+    // One canonical order, whatever order they were named in.
+    l.aovs.sort_by_key(|k| AovKind::ALL.iter().position(|a| a == k));
     Ok(l)
 }
 
@@ -153,12 +155,12 @@ mod tests {
     #[test]
     fn parts_round_trip_their_film() {
         let layers = parse("depth,variance,albedo").unwrap();
-        assert_eq!(describe(&layers), "depth,albedo,variance");
+        assert_eq!(describe(&layers), "albedo,depth,variance");
         assert!(parse("albedo,velocity").unwrap_err().to_string().contains("velocity"));
         let mut f = Film::with_layers(2, 1, &layers);
         for s in 0..5 {
             f.add(1, 0, Spectrum::new(0.1 * s as f32, 0.3, 1.0 / 3.0), 0.7 + 0.01 * s as f32);
-            f.add_aov(1, 0, &[2.5, 0.5, 0.25, 0.125], 0.7 + 0.01 * s as f32);
+            f.add_aov(1, 0, &[0.5, 0.25, 0.125, 2.5], 0.7 + 0.01 * s as f32);
         }
         let img = ExrImage {
             width: 2,

@@ -10,7 +10,6 @@ use crate::part::{self, Part};
 use crate::settings::{RenderIdentity, Settings, VERSION};
 use crate::signals::Signals;
 use anyhow::{anyhow, bail, Context, Result};
-use penumbra_render::aov::AovKind;
 use penumbra_render::film::{Film, FilmLayers};
 use penumbra_render::render::RenderJob;
 use penumbra_scene::image_io::{self, Format, RgbImage};
@@ -135,11 +134,8 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         if cfg!(not(feature = "denoise")) {
             bail!("--denoise: {}", crate::denoise::UNAVAILABLE);
         }
-        for k in [AovKind::Albedo, AovKind::Normal] {
-            if !layers.aovs.contains(&k) {
-                layers.aovs.push(k);
-            }
-        }
+        let list = format!("{},albedo,normal", crate::layers::describe(&layers));
+        layers = crate::layers::parse(&list)?;
     }
     if a.part.is_some() {
         for (on, name, why) in [
