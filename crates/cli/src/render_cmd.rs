@@ -124,6 +124,9 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         bail!("--checkpoint-every needs a number of seconds >= 0");
     }
     let mut layers = crate::layers::parse(a.aov.as_deref().unwrap_or(""))?;
+    if a.aov.is_some() && Format::from_path(&a.output).map_err(|e| anyhow!(e))? != Format::Exr {
+        bail!("--aov writes layers of a multi-layer EXR: name the output '*.exr', not '{}'", a.output.display());
+    }
     if let Some(x) = a.noise_threshold {
         if !(x > 0.0 && x.is_finite()) {
             bail!("--noise-threshold needs a relative error > 0 (e.g. 0.01)");
