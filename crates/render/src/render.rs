@@ -180,7 +180,7 @@ impl RenderJob {
                             // Its own random numbers (a stream of a pixel no
                             // image has), so the beauty is the same with or
                             // without AOVs.
-                            let key = (px + self.crop_offset.0 | AOV_STREAM, py + self.crop_offset.1);
+                            let key = ((px + self.crop_offset.0) | AOV_STREAM, py + self.crop_offset.1);
                             let mut aov_rng = self.sampler.stream(key, s);
                             let a = aov::query(
                                 &self.scene,
