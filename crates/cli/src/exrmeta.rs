@@ -129,7 +129,7 @@ pub fn read(path: &Path) -> Result<ExrImage> {
             .channel_data
             .list
             .iter()
-            .filter(|c| !["R", "G", "B", WEIGHT_CHANNEL].iter().any(|n| c.name.eq(*n)))
+            .filter(|c| !["R", "G", "B", WEIGHT_CHANNEL].iter().any(|n| c.name.eq(n)))
             .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
             .collect(),
         meta,

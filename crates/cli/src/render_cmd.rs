@@ -60,7 +60,7 @@ impl Output<'_> {
     fn write(&self, path: &Path, state: &State, complete: bool) -> Result<()> {
         let pixels = state.film.develop();
         let is_exr = Format::from_path(path).map_err(|e| anyhow!(e))? == Format::Exr;
-        if !is_exr && !(self.denoise && complete) {
+        if !(is_exr || (self.denoise && complete)) {
             let img = RgbImage { width: state.film.width, height: state.film.height, pixels };
             return image_io::write_image(path, &img).map_err(|e| anyhow!(e));
         }
