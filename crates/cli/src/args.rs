@@ -22,6 +22,9 @@ pub enum Command {
     /// Merge the EXRs of `render --part I/N` and/or `--crop` into one image:
     /// the image one machine would render with all samples (up to float rounding).
     Merge(MergeArgs),
+    /// Denoise an EXR rendered with `--aov albedo,normal` (Intel Open Image
+    /// Denoise; needs a build with `--features denoise`).
+    Denoise(DenoiseArgs),
     /// Compare an image with a reference: per-channel means, MSE and relMSE
     /// (mean of (a-b)²/(b²+0.01), B the reference), optionally a false-colour error image.
     Diff(DiffArgs),
@@ -104,6 +107,34 @@ pub struct RenderArgs {
     /// PENUMBRA_PREVIEW_HOLD=SECONDS keeps the window open after the last pass.
     #[arg(long)]
     pub preview: bool,
+    /// Extra EXR layers beside the beauty image, comma-separated: albedo,
+    /// normal (taken through specular surfaces), depth, position (of the
+    /// first hit), variance (of each pixel's mean).
+    #[arg(long, value_name = "LIST")]
+    pub aov: Option<String>,
+    /// Stop once the image's estimated relMSE (against the converged image,
+    /// from per-pixel variances) is at most X, checked after each pass once
+    /// every pixel has 16 samples; the spp target still caps the render.
+    #[arg(long, value_name = "X")]
+    pub noise_threshold: Option<f64>,
+    /// With --noise-threshold: after 16 spp, passes render only the pixels
+    /// (and their neighbours) whose estimated error is still above X.
+    #[arg(long, requires = "noise_threshold")]
+    pub adaptive: bool,
+    /// Denoise the result with Intel Open Image Denoise (albedo and normal
+    /// guides); the noisy image is kept as layer `noisy`. Needs a build with
+    /// `--features denoise`.
+    #[arg(long)]
+    pub denoise: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct DenoiseArgs {
+    /// EXR with the beauty image and, ideally, albedo and normal layers.
+    pub input: PathBuf,
+    /// The denoised EXR (the input's beauty kept as layer `noisy`).
+    #[arg(short, long)]
+    pub output: PathBuf,
 }
 
 #[derive(Debug, Args)]

@@ -7,18 +7,22 @@
 //! Layout (little-endian): magic `PNMBRCKP`, format version u32, then
 //! length-prefixed (u32) UTF-8 strings penumbra version and settings, seed
 //! u64, passes u32, spp reached u32, render seconds f64, width u32, height
-//! u32, per pixel R, G, B sums and the weight sum as f64, and a CRC-32 of
-//! everything before it.
+//! u32, the film's layers (string: AOV names, comma-separated; u8: 1 when
+//! variance moments follow), per pixel R, G, B sums and the weight sum as
+//! f64, then the AOV sums (f64, the AOVs' channels per pixel), then the
+//! moments (7 f64 per pixel), and a CRC-32 of everything before it.
+//! Format 1 (no layers) is refused with a message.
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
-use penumbra_render::film::Film;
+use penumbra_render::aov::AovKind;
+use penumbra_render::film::{Film, FilmLayers};
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
-const FORMAT: u32 = 1;
+const FORMAT: u32 = 2;
 
 /// A render's state after `passes` whole passes.
 #[derive(Debug, Clone)]
@@ -57,10 +61,16 @@ impl Checkpoint {
         out.extend_from_slice(&self.seconds.to_le_bytes());
         out.extend_from_slice(&self.film.width.to_le_bytes());
         out.extend_from_slice(&self.film.height.to_le_bytes());
+        let names: Vec<&str> = self.film.aov_kinds.iter().map(|k| k.name()).collect();
+        put_str(&mut out, &names.join(","));
+        out.push(self.film.has_variance() as u8);
         for (s, w) in self.film.sum.iter().zip(&self.film.weight) {
             for v in [s[0], s[1], s[2], *w] {
                 out.extend_from_slice(&v.to_le_bytes());
             }
+        }
+        for v in self.film.aov.iter().chain(self.film.moments.iter().flatten()) {
+            out.extend_from_slice(&v.to_le_bytes());
         }
         let crc = crc32fast::hash(&out);
         out.extend_from_slice(&crc.to_le_bytes());
@@ -91,15 +101,24 @@ impl Checkpoint {
         let seconds = f64::from_bits(r.u64()?);
         let (width, height) = (r.u32()?, r.u32()?);
         let n = width as usize * height as usize;
-        if r.b.len() - r.at != n * 32 {
+        let names = r.string()?;
+        let mut layers = FilmLayers { aovs: Vec::new(), variance: r.u8()? != 0 };
+        for name in names.split(',').filter(|s| !s.is_empty()) {
+            layers.aovs.push(AovKind::from_name(name).ok_or_else(|| corrupt(&format!("unknown AOV '{name}'")))?);
+        }
+        let mut film = Film::with_layers(width, height, &layers);
+        let values = n * 4 + film.aov.len() + film.moments.len() * 7;
+        if r.b.len() - r.at != values * 8 {
             return Err(corrupt("its size does not match its resolution"));
         }
-        let mut film = Film::new(width, height);
         for i in 0..n {
             for c in 0..3 {
                 film.sum[i][c] = f64::from_bits(r.u64()?);
             }
             film.weight[i] = f64::from_bits(r.u64()?);
+        }
+        for v in film.aov.iter_mut().chain(film.moments.iter_mut().flatten()) {
+            *v = f64::from_bits(r.u64()?);
         }
         Ok(Checkpoint { version, settings, seed, passes, spp, seconds, film })
     }
@@ -163,6 +182,9 @@ impl Reader<'_> {
         self.at += n;
         Ok(s)
     }
+    fn u8(&mut self) -> Result<u8> {
+        Ok(self.take(1)?[0])
+    }
     fn u32(&mut self) -> Result<u32> {
         Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
     }
@@ -181,15 +203,21 @@ mod tests {
 
     #[test]
     fn round_trips_and_detects_damage() {
-        let mut film = Film::new(3, 2);
+        let layers = FilmLayers { aovs: vec![AovKind::Depth, AovKind::Albedo], variance: true };
+        let mut film = Film::with_layers(3, 2, &layers);
         film.sum[4] = [1.5, 0.1 + 0.2, -0.0];
         film.weight[4] = 7.25;
+        film.aov[4 * 4 + 1] = 0.375;
+        film.moments[5][6] = 1e-300;
         let settings = Settings { entries: vec![("spp".into(), "8".into())] };
         let ck = Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film };
         let bytes = ck.encode();
         let back = Checkpoint::decode(&bytes, "x").unwrap();
         assert_eq!(back.film.sum, ck.film.sum);
         assert_eq!(back.film.weight, ck.film.weight);
+        assert_eq!(back.film.aov, ck.film.aov);
+        assert_eq!(back.film.moments, ck.film.moments);
+        assert_eq!(back.film.layers(), layers);
         assert_eq!((back.seed, back.passes, back.spp, back.seconds), (9, 3, 4, 1.5));
         assert_eq!(back.settings, ck.settings);
         let mut bad = bytes.clone();

@@ -54,6 +54,8 @@ pub enum Stop {
     TimeUp,
     /// `cancel` was set (a signal): the pass under way was discarded.
     Cancelled,
+    /// The estimated relative error fell below `--noise-threshold`.
+    NoiseReached,
 }
 
 /// Time limits, in seconds.
@@ -63,6 +65,11 @@ pub struct Budget {
     pub time: Option<f64>,
     pub checkpoint_every: Option<f64>,
     pub partial_every: Option<f64>,
+    /// Stop once the film's estimated relMSE is at most this (needs a film
+    /// with variance moments); see [`crate::adaptive`].
+    pub noise_threshold: Option<f64>,
+    /// With `noise_threshold`: later passes render only the pixels above it.
+    pub adaptive: bool,
 }
 
 /// What the loop did besides rendering.
@@ -110,6 +117,15 @@ pub fn run(
         let Some(range) = pass_range(samples, max_pass_spp, state.passes) else {
             break Stop::Complete;
         };
+        let mut active = None;
+        if let Some(x) = budget.noise_threshold {
+            if crate::adaptive::reached(&state.film, state.spp, x) {
+                break Stop::NoiseReached;
+            }
+            if budget.adaptive {
+                active = crate::adaptive::active_pixels(&state.film, state.spp, x);
+            }
+        }
         if let (Some(limit), Some(per)) = (budget.time, per_spp) {
             let n = (range.end - range.start) as f64;
             if start.elapsed().as_secs_f64() + per * n > limit {
@@ -121,7 +137,8 @@ pub fn run(
         }
         let t0 = Instant::now();
         let n = range.end - range.start;
-        let r = pool.install(|| job.render_pass(&mut state.film, range, &|k| progress.inc(k), cancel));
+        let active = active.as_deref();
+        let r = pool.install(|| job.render_pass_masked(&mut state.film, range, active, &|k| progress.inc(k), cancel));
         let Some(s) = r else {
             break Stop::Cancelled;
         };
@@ -135,7 +152,9 @@ pub fn run(
         if let Some(f) = hooks.after_pass.as_mut() {
             f(state);
         }
-        if pass_range(samples, max_pass_spp, state.passes).is_none() {
+        if pass_range(samples, max_pass_spp, state.passes).is_none()
+            || budget.noise_threshold.is_some_and(|x| crate::adaptive::reached(&state.film, state.spp, x))
+        {
             continue; // Complete: the caller writes the final image.
         }
         if budget.checkpoint_every.is_some_and(|e| last_checkpoint.elapsed().as_secs_f64() >= e) {

@@ -24,6 +24,9 @@ pub struct ExrImage {
     pub full_size: (u32, u32),
     pub rgb: Vec<[f32; 3]>,
     pub weight: Option<Vec<f32>>,
+    /// Further channels by full name (`albedo.R`, `depth.Z`, ...), one value
+    /// per pixel each: AOV layers beside the beauty image.
+    pub layers: Vec<(String, Vec<f32>)>,
     /// `penumbra:*` attributes, without the prefix.
     pub meta: BTreeMap<String, String>,
 }
@@ -49,6 +52,10 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
     if let Some(w) = &img.weight {
         assert_eq!(w.len(), n);
         channels.push(AnyChannel::new(WEIGHT_CHANNEL, FlatSamples::F32(w.clone())));
+    }
+    for (name, v) in &img.layers {
+        assert_eq!(v.len(), n, "{name}");
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(v.clone())));
     }
     let mut attrs = LayerAttributes {
         layer_position: Vec2(img.offset.0 as i32, img.offset.1 as i32),
@@ -118,6 +125,20 @@ pub fn read(path: &Path) -> Result<ExrImage> {
         full_size: (disp.size.0 as u32, disp.size.1 as u32),
         rgb,
         weight: values(WEIGHT_CHANNEL),
+        layers: layer
+            .channel_data
+            .list
+            .iter()
+            .filter(|c| !["R", "G", "B", WEIGHT_CHANNEL].iter().any(|n| c.name.eq(n)))
+            .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+            .collect(),
         meta,
     })
+}
+
+impl ExrImage {
+    /// The channel named `name` (a layer; not R, G, B or the weight).
+    pub fn layer(&self, name: &str) -> Option<&[f32]> {
+        self.layers.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice())
+    }
 }

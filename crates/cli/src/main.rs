@@ -1,13 +1,16 @@
 //! The `penumbra` command: `render` a scene, describe it (`info`), `bench`
 //! the bundled scenes, or `diff` an image against a reference.
 
+mod adaptive;
 mod args;
 mod bench;
 mod checkpoint;
+mod denoise;
 mod driver;
 mod exrmeta;
 mod imgtool;
 mod info;
+mod layers;
 mod merge;
 mod part;
 mod preview;
@@ -32,6 +35,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench::run(&a).map(|()| ExitCode::SUCCESS),
         Command::Diff(a) => imgtool::run(&a).map(|()| ExitCode::SUCCESS),
         Command::Merge(a) => merge::run(&a).map(|()| ExitCode::SUCCESS),
+        Command::Denoise(a) => denoise::run(&a).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

@@ -6,13 +6,17 @@
 //! parts must share N and none may be duplicated or missing.
 //!
 //! Pixel values: Σ(RGB·weight) / Σ weight over the parts in f64, i.e. the
-//! film's Σ w·L / Σ w up to f32 rounding of the stored RGB and weights.
+//! film's Σ w·L / Σ w up to f32 rounding of the stored RGB and weights; AOV
+//! layers the same way, and the variance from the parts' moment channels
+//! (layers.rs): each part becomes a film again, and the films add.
 
 use crate::args::MergeArgs;
 use crate::exrmeta::{self, ExrImage};
+use crate::layers;
 use crate::part;
 use crate::settings::Settings;
 use anyhow::{anyhow, bail, Result};
+use penumbra_render::film::Film;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -150,43 +154,51 @@ pub fn run(a: &MergeArgs) -> Result<()> {
 
     let n = (out_w.2 * out_w.3) as usize;
     let mut rgb = vec![[0f32; 3]; n];
+    let mut layers: Vec<(String, Vec<f32>)> = Vec::new();
     let mut spp_min = u32::MAX;
     let mut seconds = 0.0;
     let mut complete = missing_notes.is_empty();
     for (w, members) in &groups {
-        let m = (w.2 * w.3) as usize;
-        let mut sum = vec![[0f64; 3]; m];
-        let mut wsum = vec![0f64; m];
         let mut spp = 0;
         for i in members {
             spp += i.img.meta.get("spp").and_then(|s| s.parse::<u32>().ok()).unwrap_or(0);
             seconds += i.img.meta.get("renderTime").and_then(|s| s.parse::<f64>().ok()).unwrap_or(0.0);
             complete &= i.img.meta.get("complete").map(String::as_str) == Some("yes");
-            match &i.img.weight {
-                Some(wt) if i.part.is_some() => {
-                    for k in 0..m {
-                        let wk = wt[k] as f64;
-                        for (acc, v) in sum[k].iter_mut().zip(i.img.rgb[k]) {
-                            *acc += v as f64 * wk;
+        }
+        spp_min = spp_min.min(spp);
+        // The window's pixels and layers: a whole render as it is; parts
+        // added as films (Σ w·L, Σ w, AOV sums, moments) and developed.
+        let (win_rgb, win_layers) = if members[0].part.is_none() {
+            (members[0].img.rgb.clone(), members[0].img.layers.clone())
+        } else {
+            let mut film: Option<Film> = None;
+            for i in members {
+                let f = layers::film_of_part(&i.img, &i.path.display().to_string())?;
+                match &mut film {
+                    None => film = Some(f),
+                    Some(acc) => {
+                        if acc.layers() != f.layers() {
+                            bail!("'{}' has other layers than '{}'", i.path.display(), members[0].path.display());
                         }
-                        wsum[k] += wk;
-                    }
-                }
-                _ => {
-                    for k in 0..m {
-                        sum[k] = i.img.rgb[k].map(|v| v as f64);
-                        wsum[k] = 1.0;
+                        acc.merge(&f);
                     }
                 }
             }
+            let film = film.unwrap();
+            (film.develop(), layers::channels(&film, false))
+        };
+        for (name, _) in &win_layers {
+            if !layers.iter().any(|(n, _)| n == name) {
+                layers.push((name.clone(), vec![0f32; n]));
+            }
         }
-        spp_min = spp_min.min(spp);
         for y in 0..w.3 {
             for x in 0..w.2 {
                 let k = (y * w.2 + x) as usize;
                 let dst = ((w.1 - out_w.1 + y) * out_w.2 + (w.0 - out_w.0 + x)) as usize;
-                if wsum[k] > 0.0 {
-                    rgb[dst] = sum[k].map(|s| (s / wsum[k]) as f32);
+                rgb[dst] = win_rgb[k];
+                for (name, v) in &win_layers {
+                    layers.iter_mut().find(|(n, _)| n == name).unwrap().1[dst] = v[k];
                 }
             }
         }
@@ -226,6 +238,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
         full_size: full,
         rgb,
         weight: None,
+        layers,
         meta,
     };
     exrmeta::write(&a.output, &img)?;

@@ -10,7 +10,7 @@ use crate::part::{self, Part};
 use crate::settings::{RenderIdentity, Settings, VERSION};
 use crate::signals::Signals;
 use anyhow::{anyhow, bail, Context, Result};
-use penumbra_render::film::Film;
+use penumbra_render::film::{Film, FilmLayers};
 use penumbra_render::render::RenderJob;
 use penumbra_scene::image_io::{self, Format, RgbImage};
 use penumbra_scene::Overrides;
@@ -52,12 +52,15 @@ struct Output<'a> {
     part: Option<Part>,
     samples: Range<u32>,
     command: String,
+    /// Denoise the final image (--denoise).
+    denoise: bool,
 }
 
 impl Output<'_> {
     fn write(&self, path: &Path, state: &State, complete: bool) -> Result<()> {
         let pixels = state.film.develop();
-        if Format::from_path(path).map_err(|e| anyhow!(e))? != Format::Exr {
+        let is_exr = Format::from_path(path).map_err(|e| anyhow!(e))? == Format::Exr;
+        if !(is_exr || (self.denoise && complete)) {
             let img = RgbImage { width: state.film.width, height: state.film.height, pixels };
             return image_io::write_image(path, &img).map_err(|e| anyhow!(e));
         }
@@ -81,16 +84,27 @@ impl Output<'_> {
         put("settings", s.to_text());
         put("part", self.part.map_or("whole".into(), |p| p.to_string()));
         put("crop", s.get("crop").unwrap_or("full").to_string());
+        if let Some(e) = state.film.rel_error() {
+            put("relErrorEstimate", format!("{e:.6e}"));
+        }
         let weight = self.part.map(|_| state.film.weight.iter().map(|&w| w as f32).collect());
-        let img = ExrImage {
+        let mut img = ExrImage {
             width: state.film.width,
             height: state.film.height,
             offset: job.crop_offset,
             full_size: job.full_size,
             rgb: pixels,
             weight,
+            layers: crate::layers::channels(&state.film, self.part.is_some()),
             meta,
         };
+        if self.denoise && complete {
+            crate::denoise::denoise_image(&mut img)?;
+        }
+        if !is_exr {
+            let img = RgbImage { width: img.width, height: img.height, pixels: img.rgb };
+            return image_io::write_image(path, &img).map_err(|e| anyhow!(e));
+        }
         exrmeta::write(path, &img)
     }
 }
@@ -108,6 +122,33 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     }
     if !(a.checkpoint_every >= 0.0 && a.checkpoint_every.is_finite()) {
         bail!("--checkpoint-every needs a number of seconds >= 0");
+    }
+    let mut layers = crate::layers::parse(a.aov.as_deref().unwrap_or(""))?;
+    if a.aov.is_some() && Format::from_path(&a.output).map_err(|e| anyhow!(e))? != Format::Exr {
+        bail!("--aov writes layers of a multi-layer EXR: name the output '*.exr', not '{}'", a.output.display());
+    }
+    if let Some(x) = a.noise_threshold {
+        if !(x > 0.0 && x.is_finite()) {
+            bail!("--noise-threshold needs a relative error > 0 (e.g. 0.01)");
+        }
+        layers.variance = true;
+    }
+    if a.denoise {
+        if cfg!(not(feature = "denoise")) {
+            bail!("--denoise: {}", crate::denoise::UNAVAILABLE);
+        }
+        let list = format!("{},albedo,normal", crate::layers::describe(&layers));
+        layers = crate::layers::parse(&list)?;
+    }
+    if a.part.is_some() {
+        for (on, name, why) in [
+            (a.noise_threshold.is_some(), "--noise-threshold", "each part would stop on its own noise"),
+            (a.denoise, "--denoise", "denoise the merged image with `penumbra denoise`"),
+        ] {
+            if on {
+                bail!("{name} cannot be combined with --part: {why}");
+            }
+        }
     }
     let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
     let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone() };
@@ -135,14 +176,34 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         part,
         max_pass_spp: a.max_pass_spp.max(1),
     });
-    let out = Output { job: &job, settings: &settings, part, samples: samples.clone(), command: command_line() };
+    let mut settings = settings;
+    // Only when used, so that other renders keep their identity.
+    if layers != FilmLayers::default() {
+        settings.set("aov", &crate::layers::describe(&layers));
+    }
+    if let Some(x) = a.noise_threshold {
+        settings.set("noise_threshold", &x.to_string());
+        settings.set("adaptive", &a.adaptive.to_string());
+    }
+    let settings = settings;
+    let out = Output {
+        job: &job,
+        settings: &settings,
+        part,
+        samples: samples.clone(),
+        command: command_line(),
+        denoise: a.denoise,
+    };
 
-    let mut state = State { film: Film::new(job.width, job.height), passes: 0, spp: 0, seconds: 0.0 };
+    let mut state = State { film: Film::with_layers(job.width, job.height, &layers), passes: 0, spp: 0, seconds: 0.0 };
     if let Some(ck) = &a.checkpoint {
         if a.fresh {
             let _ = std::fs::remove_file(ck);
         } else if let Some(c) = Checkpoint::load_matching(ck, &settings)? {
             eprintln!("resuming from '{}': {} passes, {} spp, {:.2} s", ck.display(), c.passes, c.spp, c.seconds);
+            if c.film.layers() != layers || (c.film.width, c.film.height) != (job.width, job.height) {
+                bail!("checkpoint '{}' holds other image layers or another size; use --fresh", ck.display());
+            }
             state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds };
         }
     }
@@ -166,6 +227,8 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         time: a.time,
         checkpoint_every: a.checkpoint.as_ref().map(|_| a.checkpoint_every),
         partial_every: a.write_partial_images,
+        noise_threshold: a.noise_threshold,
+        adaptive: a.adaptive,
     };
     let mut ck_hook = |st: &State| save_checkpoint(st);
     let mut partial_hook = |st: &State| out.write(&a.output, st, false);
@@ -192,7 +255,7 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     let (stop, stats, extras) =
         driver::run(&job, &pool, &samples, a.max_pass_spp.max(1), &mut state, budget, hooks, &signals.cancel, a.quiet)?;
 
-    let complete = stop == Stop::Complete;
+    let complete = matches!(stop, Stop::Complete | Stop::NoiseReached);
     // Cancelled: resume from here; --time: the next run goes on from here;
     // complete: only if asked to keep it.
     if !complete || a.keep_checkpoint {
@@ -214,6 +277,11 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     let rays = stats.rays.rays + stats.rays.shadow_rays;
     let what = match stop {
         Stop::Complete => "rendered".to_string(),
+        Stop::NoiseReached => format!(
+            "noise threshold reached (estimated relMSE {:.3e}) at {} of {target} spp: rendered",
+            state.film.rel_error().unwrap_or(f64::NAN),
+            state.spp
+        ),
         Stop::TimeUp => format!("time budget reached: rendered {} of {target} spp to", state.spp),
         Stop::Cancelled => format!("interrupted: wrote {} of {target} spp to", state.spp),
     };

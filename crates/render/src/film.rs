@@ -10,6 +10,7 @@
 //! tiles render into films with a margin of the filter's reach and are added
 //! in a fixed order, so the image does not depend on the thread count.
 
+use crate::aov::{channel_count, AovKind};
 use crate::math::Spectrum;
 use glam::Vec2;
 
@@ -72,19 +73,65 @@ impl Filter {
 }
 
 /// Additive image accumulator: per pixel Σ w·L (f64, so sums of many samples
-/// stay exact enough to merge and resume) and Σ w.
+/// stay exact enough to merge and resume) and Σ w; optionally the AOV sums
+/// Σ w·a and the second moments the variance estimate needs. Every field is
+/// a sum over samples, so films of disjoint sample sets simply add.
 #[derive(Debug, Clone)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
     pub sum: Vec<[f64; 3]>,
     pub weight: Vec<f64>,
+    /// The AOVs accumulated, in channel order (empty: none).
+    pub aov_kinds: Vec<AovKind>,
+    /// Σ w·a per pixel, `aov_channels()` values per pixel.
+    pub aov: Vec<f64>,
+    /// Per pixel [Σ w², Σ w²·L (R, G, B), Σ w²·L² (R, G, B)] when the
+    /// variance is tracked (else empty).
+    pub moments: Vec<[f64; 7]>,
 }
+
+/// Which layers a film accumulates besides the beauty.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct FilmLayers {
+    pub aovs: Vec<AovKind>,
+    pub variance: bool,
+}
+
+/// ε of the relative error: relMSE = (a − b)² / (b² + ε), as `penumbra diff`.
+pub const REL_EPS: f64 = 0.01;
 
 impl Film {
     pub fn new(width: u32, height: u32) -> Film {
+        Film::with_layers(width, height, &FilmLayers::default())
+    }
+
+    pub fn with_layers(width: u32, height: u32, layers: &FilmLayers) -> Film {
         let n = (width * height) as usize;
-        Film { width, height, sum: vec![[0.0; 3]; n], weight: vec![0.0; n] }
+        Film {
+            width,
+            height,
+            sum: vec![[0.0; 3]; n],
+            weight: vec![0.0; n],
+            aov: vec![0.0; n * channel_count(&layers.aovs)],
+            aov_kinds: layers.aovs.clone(),
+            moments: if layers.variance { vec![[0.0; 7]; n] } else { Vec::new() },
+        }
+    }
+
+    pub fn layers(&self) -> FilmLayers {
+        FilmLayers { aovs: self.aov_kinds.clone(), variance: self.has_variance() }
+    }
+
+    /// AOV values per pixel.
+    #[inline]
+    pub fn aov_channels(&self) -> usize {
+        channel_count(&self.aov_kinds)
+    }
+
+    #[inline]
+    pub fn has_variance(&self) -> bool {
+        !self.moments.is_empty()
     }
 
     #[inline]
@@ -95,14 +142,52 @@ impl Film {
         s[1] += (l.y * w) as f64;
         s[2] += (l.z * w) as f64;
         self.weight[i] += w as f64;
+        if let Some(m) = self.moments.get_mut(i) {
+            let w2 = w as f64 * w as f64;
+            m[0] += w2;
+            for (c, v) in l.to_array().into_iter().enumerate() {
+                let v = v as f64;
+                m[1 + c] += w2 * v;
+                m[4 + c] += w2 * v * v;
+            }
+        }
+    }
+
+    /// Adds Σ w·a for a sample's AOV values `a` (`aov_channels()` of them).
+    #[inline]
+    pub fn add_aov(&mut self, x: u32, y: u32, a: &[f32], w: f32) {
+        let n = self.aov_channels();
+        let i = (y * self.width + x) as usize * n;
+        for (acc, v) in self.aov[i..i + n].iter_mut().zip(a) {
+            *acc += (v * w) as f64;
+        }
+    }
+
+    /// Adds pixel `src` of `other` (same layers) to pixel `dst` of this film.
+    #[inline]
+    pub fn add_pixel(&mut self, dst: usize, other: &Film, src: usize) {
+        for c in 0..3 {
+            self.sum[dst][c] += other.sum[src][c];
+        }
+        self.weight[dst] += other.weight[src];
+        let n = self.aov_channels();
+        for k in 0..n {
+            self.aov[dst * n + k] += other.aov[src * n + k];
+        }
+        if let Some(m) = self.moments.get_mut(dst) {
+            for (a, b) in m.iter_mut().zip(&other.moments[src]) {
+                *a += *b;
+            }
+        }
     }
 
     /// Splats a sample taken at offset `u` ∈ [0, 1)² within pixel (`px`,
     /// `py`) into every pixel of this film within the filter's radius. The
     /// weights depend only on `u` and pixel distances, not on where the
     /// film lies in the image, so tiles and crops weigh a sample alike.
+    /// `aov`: the sample's AOV values, splatted with the same weights.
     #[inline]
-    pub fn splat(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
+    pub fn splat(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, aov: Option<&[f32]>, filter: &Filter) {
         let m = filter.margin().min(MAX_MARGIN) as i32;
         let mut wx = [0.0f32; 2 * MAX_MARGIN as usize + 1];
         for k in 0..=(2 * m) {
@@ -125,6 +210,9 @@ impl Film {
                     continue;
                 }
                 self.add(x as u32, y as u32, l, w);
+                if let Some(a) = aov {
+                    self.add_aov(x as u32, y as u32, a, w);
+                }
             }
         }
     }
@@ -132,13 +220,9 @@ impl Film {
     /// Adds another film's sums (e.g. from another machine or pass).
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
-        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
-            for c in 0..3 {
-                a[c] += b[c];
-            }
-        }
-        for (a, b) in self.weight.iter_mut().zip(&other.weight) {
-            *a += *b;
+        assert_eq!(self.layers(), other.layers());
+        for i in 0..self.weight.len() {
+            self.add_pixel(i, other, i);
         }
     }
 
@@ -149,6 +233,92 @@ impl Film {
             .zip(&self.weight)
             .map(|(s, &w)| if w > 0.0 { [(s[0] / w) as f32, (s[1] / w) as f32, (s[2] / w) as f32] } else { [0.0; 3] })
             .collect()
+    }
+
+    /// One AOV's weighted means, `kind.channels().len()` values per pixel
+    /// (None when the film does not accumulate it).
+    pub fn develop_aov(&self, kind: AovKind) -> Option<Vec<f32>> {
+        let mut off = 0;
+        for k in &self.aov_kinds {
+            if *k == kind {
+                break;
+            }
+            off += k.channels().len();
+        }
+        if !self.aov_kinds.contains(&kind) {
+            return None;
+        }
+        let (n, m) = (self.aov_channels(), kind.channels().len());
+        let mut out = Vec::with_capacity(self.weight.len() * m);
+        for (i, &w) in self.weight.iter().enumerate() {
+            for c in 0..m {
+                out.push(if w > 0.0 { (self.aov[i * n + off + c] / w) as f32 } else { 0.0 });
+            }
+        }
+        Some(out)
+    }
+
+    /// Variance of pixel `i`'s mean, per channel (None without moments).
+    ///
+    /// The pixel value is the ratio estimator R = Σ wL / Σ w; its variance by
+    /// the delta method (the standard error of a weighted mean) is
+    /// Σ w² (L − R)² / (Σ w)², expanded into the stored moments, and scaled by
+    /// n/(n − 1) with the effective sample count n = (Σ w)² / Σ w² (Kish), which
+    /// makes it the unbiased s²/n for equal weights. Fewer than two effective
+    /// samples: infinite.
+    #[inline]
+    pub fn pixel_variance(&self, i: usize) -> Option<[f64; 3]> {
+        let m = self.moments.get(i)?;
+        let w = self.weight[i];
+        let n_eff = if m[0] > 0.0 { w * w / m[0] } else { 0.0 };
+        if n_eff < 1.5 {
+            return Some([f64::INFINITY; 3]);
+        }
+        let mut v = [0.0; 3];
+        for c in 0..3 {
+            let r = self.sum[i][c] / w;
+            let s = m[4 + c] - 2.0 * r * m[1 + c] + r * r * m[0];
+            v[c] = (s.max(0.0) / (w * w)) * n_eff / (n_eff - 1.0);
+        }
+        Some(v)
+    }
+
+    /// The variance of each pixel's mean (R, G, B), or None without moments.
+    pub fn develop_variance(&self) -> Option<Vec<[f32; 3]>> {
+        if !self.has_variance() {
+            return None;
+        }
+        Some(
+            (0..self.weight.len())
+                .map(|i| self.pixel_variance(i).unwrap().map(|v| if v.is_finite() { v as f32 } else { f32::MAX }))
+                .collect(),
+        )
+    }
+
+    /// Estimated relative error of pixel `i`: the mean over R, G, B of
+    /// Var[mean] / (mean² + ε), the expected relMSE of the pixel against the
+    /// converged image (`penumbra diff`'s relMSE, with the variance of the
+    /// mean standing in for the squared error).
+    #[inline]
+    pub fn pixel_rel_error(&self, i: usize) -> Option<f64> {
+        let v = self.pixel_variance(i)?;
+        let w = self.weight[i];
+        let mut e = 0.0;
+        for (c, vc) in v.iter().enumerate() {
+            let r = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
+            e += vc / (r * r + REL_EPS);
+        }
+        Some(e / 3.0)
+    }
+
+    /// The image's estimated relMSE: the mean of [`pixel_rel_error`](Self::pixel_rel_error)
+    /// over all pixels (infinite while a pixel has fewer than two samples).
+    pub fn rel_error(&self) -> Option<f64> {
+        if !self.has_variance() {
+            return None;
+        }
+        let n = self.weight.len().max(1) as f64;
+        Some((0..self.weight.len()).map(|i| self.pixel_rel_error(i).unwrap()).sum::<f64>() / n)
     }
 }
 
@@ -172,7 +342,7 @@ mod tests {
                     for i in 0..n * n {
                         let u = Vec2::new(((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32);
                         let p = Vec2::new(px as f32, py as f32) + u;
-                        film.splat(px as i32, py as i32, u, Spectrum::splat(g(p)), &filter);
+                        film.splat(px as i32, py as i32, u, Spectrum::splat(g(p)), None, &filter);
                     }
                 }
             }

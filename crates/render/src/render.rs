@@ -3,8 +3,9 @@
 //! own with the filter's margin, and the tile films are added in tile order,
 //! so the film is bitwise identical for any thread count or scheduling.
 
+use crate::aov;
 use crate::camera::Camera;
-use crate::film::{Film, Filter, MAX_MARGIN};
+use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
 use crate::integrator::{Integrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -14,6 +15,8 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 const TILE: u32 = 16;
+/// High bit set in the x key of AOV sample streams.
+const AOV_STREAM: u32 = 1 << 31;
 
 /// Everything needed to render an image of a scene.
 #[derive(Debug, Clone)]
@@ -76,7 +79,25 @@ impl RenderJob {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Option<RenderStats> {
+        self.render_pass_masked(film, samples, None, progress, cancel)
+    }
+
+    /// As [`render_pass`](Self::render_pass), restricted to the pixels whose
+    /// entry of `active` (row-major, one per pixel) is true; the film's
+    /// layers (AOVs, variance moments) are accumulated as the film has them.
+    pub fn render_pass_masked(
+        &self,
+        film: &mut Film,
+        samples: Range<u32>,
+        active: Option<&[bool]>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Option<RenderStats> {
         assert_eq!((film.width, film.height), (self.width, self.height));
+        if let Some(a) = active {
+            assert_eq!(a.len(), film.weight.len());
+        }
+        let layers = film.layers();
         // Samples are taken in the image and, for a crop window, in the ring
         // of pixels around it whose splats reach into it (so a crop holds
         // exactly the contributions the full frame gives those pixels).
@@ -92,7 +113,8 @@ impl RenderJob {
                 }
                 let (tx, ty) = (t % tiles_x * TILE, t / tiles_x * TILE);
                 let size = (TILE.min(gw - tx), TILE.min(gh - ty));
-                let r = self.render_tile(tx as i32 - left as i32, ty as i32 - top as i32, size, samples.clone());
+                let (x0, y0) = (tx as i32 - left as i32, ty as i32 - top as i32);
+                let r = self.render_tile(x0, y0, size, samples.clone(), &layers, active);
                 progress(r.stats.samples);
                 Some(r)
             })
@@ -116,10 +138,7 @@ impl RenderJob {
                     }
                     let src = (y * r.film.width + x) as usize;
                     let dst = (iy as u32 * self.width + ix as u32) as usize;
-                    for c in 0..3 {
-                        film.sum[dst][c] += r.film.sum[src][c];
-                    }
-                    film.weight[dst] += r.film.weight[src];
+                    film.add_pixel(dst, &r.film, src);
                 }
             }
             stats.add(&r.stats);
@@ -136,19 +155,53 @@ impl RenderJob {
         (m.min(cx), m.min(cy), m.min(self.full_size.0 - cx - self.width), m.min(self.full_size.1 - cy - self.height))
     }
 
+    /// Where a camera ray leaves the camera: back along it to the lens plane
+    /// (z = 0 in camera space; rays start on the near clip plane), or its
+    /// origin for orthographic cameras.
+    fn eye(&self, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
+        if matches!(self.camera.projection, crate::camera::Projection::Orthographic { .. }) {
+            return ray.o;
+        }
+        let (o, d) = (camera_from_world.transform_point3(ray.o), camera_from_world.transform_vector3(ray.d));
+        if d.z.abs() > 0.0 {
+            ray.o - ray.d * (o.z / d.z)
+        } else {
+            ray.o
+        }
+    }
+
     /// Renders the pixels [x0, x0+w) × [y0, y0+h) (image coordinates; may
-    /// start in the crop ring) into a film with the filter's margin.
-    fn render_tile(&self, x0: i32, y0: i32, (w, h): (u32, u32), samples: Range<u32>) -> TileResult {
+    /// start in the crop ring) into a film with the filter's margin. With
+    /// `active`, only pixels marked there take samples (ring pixels follow
+    /// the nearest image pixel).
+    fn render_tile(
+        &self,
+        x0: i32,
+        y0: i32,
+        (w, h): (u32, u32),
+        samples: Range<u32>,
+        layers: &FilmLayers,
+        active: Option<&[bool]>,
+    ) -> TileResult {
         let m = self.filter.margin().min(MAX_MARGIN);
-        let mut film = Film::new(w + 2 * m, h + 2 * m);
+        let mut film = Film::with_layers(w + 2 * m, h + 2 * m, layers);
+        let mut aov_values = vec![0f32; film.aov_channels()];
+        let camera_from_world = self.camera.world_from_camera.inverse();
         let mut stats = RenderStats::default();
         let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
         for y in 0..h {
             for x in 0..w {
+                let (ix, iy) = (x0 + x as i32, y0 + y as i32);
+                if let Some(a) = active {
+                    let (cx, cy) = (ix.clamp(0, self.width as i32 - 1), iy.clamp(0, self.height as i32 - 1));
+                    if !a[(cy as u32 * self.width + cx as u32) as usize] {
+                        continue;
+                    }
+                }
                 // The pixel in full-film coordinates: it keys the random
                 // streams, so a crop renders exactly its part of the full image.
-                let gx = (x0 + x as i32 + self.crop_offset.0 as i32) as u32;
-                let gy = (y0 + y as i32 + self.crop_offset.1 as i32) as u32;
+                let gx = (ix + self.crop_offset.0 as i32) as u32;
+                let gy = (iy + self.crop_offset.1 as i32) as u32;
                 for s in samples.clone() {
                     let mut rng = self.sampler.stream((gx, gy), s);
                     let u = rng.next_2d();
@@ -156,8 +209,25 @@ impl RenderJob {
                     let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays);
                     stats.samples += 1;
                     if l.is_finite() {
+                        let aov = if aov_values.is_empty() {
+                            None
+                        } else {
+                            // Its own random numbers (a stream of a pixel no
+                            // image has), so the beauty is the same with or
+                            // without AOVs.
+                            let mut aov_rng = self.sampler.stream((gx | AOV_STREAM, gy), s);
+                            let a = aov::query(
+                                &self.scene,
+                                &self.integrator,
+                                &ray,
+                                self.eye(&ray, &camera_from_world),
+                                &mut aov_rng,
+                            );
+                            a.write(&film.aov_kinds, &mut aov_values);
+                            Some(&aov_values[..])
+                        };
                         // The pixel's place in the tile film (margin included).
-                        film.splat((x + m) as i32, (y + m) as i32, u, l, &self.filter);
+                        film.splat((x + m) as i32, (y + m) as i32, u, l, aov, &self.filter);
                     } else {
                         stats.non_finite += 1;
                     }

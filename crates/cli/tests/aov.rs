@@ -1,0 +1,373 @@
+//! AOVs, variance, noise threshold, adaptive sampling and denoising, end to
+//! end through the `penumbra` binary on tiny images.
+
+use std::collections::HashMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+}
+
+fn cornell() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml")
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("penumbra-aov-{}-{name}", std::process::id()));
+    let _ = fs::remove_dir_all(&d);
+    fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> Command {
+    let mut c = bin();
+    c.arg("render").arg(scene).arg("-o").arg(out).arg("--quiet").args(extra);
+    c
+}
+
+fn ok(o: Output) -> Output {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+struct Exr {
+    channels: HashMap<String, Vec<f32>>,
+    meta: HashMap<String, String>,
+    size: (usize, usize),
+}
+
+impl Exr {
+    fn ch(&self, name: &str) -> &[f32] {
+        self.channels.get(name).unwrap_or_else(|| panic!("no channel {name}: {:?}", self.channels.keys()))
+    }
+}
+
+fn read_exr(path: &Path) -> Exr {
+    use exr::prelude::*;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let l = &img.layer_data;
+    let channels =
+        l.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
+    let mut meta = HashMap::new();
+    for (k, v) in &l.attributes.other {
+        if let (Some(k), AttributeValue::Text(t)) = (k.to_string().strip_prefix("penumbra:"), v) {
+            meta.insert(k.to_string(), t.to_string());
+        }
+    }
+    Exr { channels, meta, size: (l.size.0, l.size.1) }
+}
+
+/// relMSE of R, G, B against a reference, as `penumbra diff` (ε = 0.01).
+fn rel_mse(a: &Exr, b: &Exr) -> f64 {
+    let mut s = 0.0;
+    let mut n = 0;
+    for c in ["R", "G", "B"] {
+        for (x, y) in a.ch(c).iter().zip(b.ch(c)) {
+            s += ((x - y) as f64).powi(2) / ((*y as f64).powi(2) + 0.01);
+            n += 1;
+        }
+    }
+    s / n as f64
+}
+
+/// A camera at the origin looking down +z (fov 10°, 8x8 box-filtered
+/// pixels) at `body`, under a constant environment.
+fn scene_file(d: &Path, name: &str, body: &str) -> PathBuf {
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"/>
+    <sensor type="perspective">
+        <float name="fov" value="10"/>
+        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="8"/><integer name="height" value="8"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>
+    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    {body}
+</scene>"#
+    );
+    let p = d.join(name);
+    fs::write(&p, xml).unwrap();
+    p
+}
+
+/// A 20x20 square at z = `z`, facing the camera (normal −z).
+fn wall(z: f32, bsdf: &str) -> String {
+    format!(
+        r#"<shape type="rectangle">{bsdf}<transform name="to_world"><scale value="10"/>
+        <rotate y="1" angle="180"/><translate z="{z}"/></transform></shape>"#
+    )
+}
+
+#[test]
+fn aov_layers_report_depth_normal_position_and_albedo_also_through_a_mirror() {
+    let d = tmpdir("layers");
+    let diffuse = r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.8"/></bsdf>"#;
+    let plane = scene_file(&d, "plane.xml", &wall(3.0, diffuse));
+    let out = d.join("plane.exr");
+    ok(render(&plane, &out, &["--aov", "albedo,normal,depth,position,variance"]).output().unwrap());
+    let e = read_exr(&out);
+    assert_eq!(e.size, (8, 8));
+    for name in ["R", "albedo.R", "albedo.B", "normal.X", "normal.Z", "depth.Z", "position.Z", "variance.G"] {
+        assert!(e.channels.contains_key(name), "{name}");
+    }
+    let tan = (5f32.to_radians()).tan();
+    for i in 0..64 {
+        // Box filter: the samples spread over the pixel; depth = 3 / cos θ,
+        // between the pixel's nearest and farthest corners.
+        let (px, py) = ((i % 8) as f32, (i / 8) as f32);
+        let r = |x: f32, y: f32| ((x / 4.0 - 1.0) * tan).hypot((y / 4.0 - 1.0) * tan);
+        let (mut lo, mut hi) = (f32::MAX, 0f32);
+        for (x, y) in [(px, py), (px + 1.0, py), (px, py + 1.0), (px + 1.0, py + 1.0)] {
+            let dz = 3.0 * (1.0 + r(x, y).powi(2)).sqrt();
+            lo = lo.min(dz);
+            hi = hi.max(dz);
+        }
+        if (px - 3.5).abs() < 1.0 && (py - 3.5).abs() < 1.0 {
+            lo = 3.0; // the pixels around the axis contain the nearest point
+        }
+        let depth = e.ch("depth.Z")[i];
+        assert!(depth >= lo - 1e-4 && depth <= hi + 1e-4, "pixel {i}: depth {depth} not in [{lo}, {hi}]");
+        assert!((e.ch("position.Z")[i] - 3.0).abs() < 1e-5);
+        let n = [e.ch("normal.X")[i], e.ch("normal.Y")[i], e.ch("normal.Z")[i]];
+        assert!(n[0].abs() < 1e-6 && n[1].abs() < 1e-6 && (n[2] + 1.0).abs() < 1e-6, "{n:?}");
+        let a = [e.ch("albedo.R")[i], e.ch("albedo.G")[i], e.ch("albedo.B")[i]];
+        for (got, want) in a.iter().zip([0.2, 0.5, 0.8]) {
+            assert!((got - want).abs() < 1e-5, "albedo {a:?}");
+        }
+    }
+
+    // A perfect mirror at z = 3 shows a grey wall behind the camera (z = −1,
+    // facing +z): albedo and normal are the wall's, depth and position the mirror's.
+    let grey = r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf>"#;
+    let back = format!(
+        r#"<shape type="rectangle">{grey}<transform name="to_world"><scale value="100"/>
+        <translate z="-1"/></transform></shape>"#
+    );
+    let mirror = scene_file(&d, "mirror.xml", &format!("{}{back}", wall(3.0, r#"<bsdf type="conductor"/>"#)));
+    let out = d.join("mirror.exr");
+    ok(render(&mirror, &out, &["--aov", "albedo,normal,depth,position"]).output().unwrap());
+    let e = read_exr(&out);
+    for i in 0..64 {
+        assert!((e.ch("albedo.G")[i] - 0.3).abs() < 1e-5, "albedo through the mirror {}", e.ch("albedo.G")[i]);
+        assert!((e.ch("normal.Z")[i] - 1.0).abs() < 1e-6);
+        assert!((e.ch("position.Z")[i] - 3.0).abs() < 1e-5);
+        assert!(e.ch("depth.Z")[i] >= 3.0 - 1e-4 && e.ch("depth.Z")[i] < 3.03);
+    }
+    // AOVs do not change the beauty image.
+    let plain = d.join("plain.exr");
+    ok(render(&mirror, &plain, &[]).output().unwrap());
+    assert_eq!(read_exr(&plain).ch("G"), e.ch("G"));
+    // Unknown names are refused.
+    let o = render(&mirror, &plain, &["--aov", "albedo,motion"]).output().unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("unknown AOV 'motion'"));
+    fs::remove_dir_all(&d).ok();
+}
+
+/// The variance layer estimates the variance of each pixel's mean: over K
+/// seeds, the empirical variance of the pixel values must match the mean of
+/// the estimates. The tolerance is the ratio's standard error, from the
+/// spread of the per-seed terms (delta method), times 4.
+#[test]
+fn variance_layer_matches_the_empirical_variance_over_seeds() {
+    let d = tmpdir("variance");
+    const K: usize = 40;
+    let args = ["-D", "res=64", "--crop", "24,20,36,32", "--spp", "8", "--aov", "variance"];
+    let imgs: Vec<Exr> = (0..K)
+        .map(|k| {
+            let out = d.join(format!("s{k}.exr"));
+            ok(render(&cornell(), &out, &[&args[..], &["--seed", &k.to_string()]].concat()).output().unwrap());
+            read_exr(&out)
+        })
+        .collect();
+    for c in ["R", "G", "B"] {
+        let n = imgs[0].ch(c).len();
+        let mean: Vec<f64> = (0..n).map(|p| imgs.iter().map(|e| e.ch(c)[p] as f64).sum::<f64>() / K as f64).collect();
+        let vname = format!("variance.{c}");
+        // Per seed: a_k = Σ_p (x − x̄)² K/(K−1), b_k = Σ_p estimate.
+        let a: Vec<f64> = imgs
+            .iter()
+            .map(|e| (0..n).map(|p| (e.ch(c)[p] as f64 - mean[p]).powi(2)).sum::<f64>() * K as f64 / (K - 1) as f64)
+            .collect();
+        let b: Vec<f64> = imgs.iter().map(|e| e.ch(&vname).iter().map(|&v| v as f64).sum()).collect();
+        let (sa, sb): (f64, f64) = (a.iter().sum(), b.iter().sum());
+        let ratio = sa / sb;
+        let resid: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x - ratio * y).collect();
+        let sd = (resid.iter().map(|r| r * r).sum::<f64>() / (K - 1) as f64).sqrt();
+        let se = sd * (K as f64).sqrt() / sb;
+        eprintln!("{c}: empirical / estimated variance = {ratio:.3} ± {se:.3}");
+        assert!((ratio - 1.0).abs() < 4.0 * se && se < 0.25, "{c}: ratio {ratio}, standard error {se}");
+    }
+    fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn noise_threshold_stops_earlier_on_an_easier_scene() {
+    let d = tmpdir("threshold");
+    // Easy: a diffuse wall under a uniform sky (only the bounce direction varies).
+    let easy =
+        scene_file(&d, "easy.xml", &wall(3.0, r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>"#));
+    let spp_of = |scene: &Path, extra: &[&str]| {
+        let out = d.join("t.exr");
+        ok(render(scene, &out, &[&["--spp", "256", "--noise-threshold", "0.002"], extra].concat()).output().unwrap());
+        let e = read_exr(&out);
+        let est: f64 = e.meta["relErrorEstimate"].parse().unwrap();
+        (e.meta["spp"].parse::<u32>().unwrap(), est, e.meta["complete"].clone())
+    };
+    let (spp_easy, est_easy, done) = spp_of(&easy, &[]);
+    assert_eq!(done, "yes");
+    assert!(est_easy <= 0.002);
+    let (spp_hard, est_hard, _) = spp_of(&cornell(), &["-D", "res=16"]);
+    eprintln!(
+        "threshold 0.002: easy scene {spp_easy} spp ({est_easy:.2e}), Cornell box {spp_hard} spp ({est_hard:.2e})"
+    );
+    assert!(spp_easy >= 16 && spp_easy < spp_hard, "{spp_easy} vs {spp_hard}");
+    fs::remove_dir_all(&d).ok();
+}
+
+fn signal(pid: u32, sig: &str) {
+    let _ = Command::new("kill").arg(format!("-{sig}")).arg(pid.to_string()).status();
+}
+
+/// Adaptive decisions are a pure function of the film after the previous
+/// pass, which a checkpoint holds: killed and resumed, the render is bitwise
+/// the uninterrupted one, and it differs from the non-adaptive render.
+#[test]
+fn adaptive_render_killed_and_resumed_is_bitwise_the_uninterrupted_one() {
+    let d = tmpdir("adaptive");
+    let args = [
+        "-D",
+        "res=40",
+        "--spp",
+        "96",
+        "--seed",
+        "11",
+        "--max-pass-spp",
+        "2",
+        "--noise-threshold",
+        "0.01",
+        "--adaptive",
+        "--aov",
+        "albedo,variance",
+    ];
+    let reference = d.join("ref.exr");
+    let t0 = Instant::now();
+    ok(render(&cornell(), &reference, &args).output().unwrap());
+    let t_ref = t0.elapsed().as_secs_f64();
+    let want = read_exr(&reference);
+    let fixed = d.join("fixed.exr");
+    ok(render(&cornell(), &fixed, &args[..8]).output().unwrap());
+    assert_ne!(read_exr(&fixed).ch("G"), want.ch("G"), "adaptive sampling changed nothing");
+
+    let (out, ck) = (d.join("out.exr"), d.join("render.ck"));
+    let ck_args: Vec<&str> =
+        [&args[..], &["--checkpoint", ck.to_str().unwrap(), "--checkpoint-every", "0.01", "--keep-checkpoint"]]
+            .concat();
+    let mut x: u64 = 77;
+    let mut rnd = move || {
+        x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut interrupted = 0;
+    for round in 0..=12 {
+        let mut child = render(&cornell(), &out, &ck_args).stderr(Stdio::piped()).spawn().unwrap();
+        if round < 12 {
+            std::thread::sleep(Duration::from_secs_f64(rnd() * 0.3 * t_ref));
+            if rnd() < 0.5 {
+                signal(child.id(), "TERM");
+            } else {
+                child.kill().unwrap();
+            }
+        }
+        let o = child.wait_with_output().unwrap();
+        let _ = fs::remove_file(d.join("render.ck.tmp"));
+        interrupted += (!o.status.success()) as u32;
+    }
+    assert!(interrupted >= 4, "only {interrupted} runs interrupted");
+    let got = read_exr(&out);
+    for c in ["R", "G", "B", "albedo.R", "variance.G"] {
+        let bits = |e: &Exr| e.ch(c).iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert!(bits(&got) == bits(&want), "{c} differs after {interrupted} interruptions");
+    }
+    fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn parts_carry_aovs_and_variance_into_the_merge() {
+    let d = tmpdir("parts");
+    let args = ["-D", "res=24", "--spp", "12", "--seed", "5", "--aov", "albedo,depth,variance"];
+    let single = d.join("single.exr");
+    ok(render(&cornell(), &single, &args).output().unwrap());
+    let parts: Vec<PathBuf> = (0..3)
+        .map(|i| {
+            let p = d.join(format!("p{i}.exr"));
+            ok(render(&cornell(), &p, &[&args[..], &["--part", &format!("{i}/3")]].concat()).output().unwrap());
+            p
+        })
+        .collect();
+    let merged = d.join("merged.exr");
+    ok(bin().arg("merge").args(&parts).arg("-o").arg(&merged).output().unwrap());
+    let (m, s) = (read_exr(&merged), read_exr(&single));
+    for c in ["R", "albedo.G", "depth.Z", "variance.R", "variance.B"] {
+        let worst =
+            m.ch(c).iter().zip(s.ch(c)).map(|(a, b)| ((a - b).abs() / b.abs().max(1e-6)) as f64).fold(0.0, f64::max);
+        assert!(worst < 1e-4, "{c}: relative difference {worst}");
+    }
+    assert!(!m.channels.keys().any(|k| k.starts_with("penumbra.")), "merged image keeps part channels");
+    // Adaptive or noise-stopped parts would not add up: refused.
+    let o = render(&cornell(), &d.join("x.exr"), &[&args[..], &["--part", "0/2", "--noise-threshold", "0.1"]].concat())
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be combined with --part"));
+    fs::remove_dir_all(&d).ok();
+}
+
+#[cfg(not(feature = "denoise"))]
+#[test]
+fn denoise_without_the_feature_says_how_to_get_it() {
+    let d = tmpdir("nodenoise");
+    let o = render(&cornell(), &d.join("x.exr"), &["-D", "res=8", "--spp", "1", "--denoise"]).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--features denoise"));
+    fs::remove_dir_all(&d).ok();
+}
+
+/// Open Image Denoise with albedo and normal guides lowers the relMSE of a
+/// noisy 4 spp Cornell box against a 512 spp reference; `penumbra denoise`
+/// gives the same image as `render --denoise`, and keeps the noisy one.
+#[cfg(feature = "denoise")]
+#[test]
+fn denoising_lowers_the_error_of_a_noisy_cornell_box() {
+    let d = tmpdir("denoise");
+    let res = ["-D", "res=64", "--seed", "3"];
+    let reference = d.join("ref.exr");
+    ok(render(&cornell(), &reference, &[&res[..], &["--spp", "512"]].concat()).output().unwrap());
+    let noisy = d.join("noisy.exr");
+    ok(render(&cornell(), &noisy, &[&res[..], &["--spp", "4", "--aov", "albedo,normal"]].concat()).output().unwrap());
+    let den = d.join("den.exr");
+    ok(bin().arg("denoise").arg(&noisy).arg("-o").arg(&den).output().unwrap());
+    let direct = d.join("direct.exr");
+    ok(render(&cornell(), &direct, &[&res[..], &["--spp", "4", "--denoise"]].concat()).output().unwrap());
+    let (r, n, dn, dr) = (read_exr(&reference), read_exr(&noisy), read_exr(&den), read_exr(&direct));
+    let (e_noisy, e_den) = (rel_mse(&n, &r), rel_mse(&dn, &r));
+    eprintln!("relMSE 4 spp: noisy {e_noisy:.4}, denoised {e_den:.4}");
+    assert!(e_den < 0.5 * e_noisy, "{e_den} vs {e_noisy}");
+    assert_eq!(dn.ch("noisy.G"), n.ch("G"));
+    let diff = dr.ch("G").iter().zip(dn.ch("G")).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+    assert!(diff < 1e-3, "render --denoise and penumbra denoise differ by {diff}");
+    assert!(dr.meta["denoised"].contains("albedo+normal"));
+    fs::remove_dir_all(&d).ok();
+}

@@ -1,0 +1,143 @@
+//! Arbitrary output variables (AOVs): per-sample auxiliary values at a camera
+//! ray's hits, accumulated in the film beside the beauty image as additive
+//! weighted sums (Σ w·a), so passes, resume and parts treat them as the beauty.
+//!
+//! Names follow Mitsuba's `aov` integrator where it has them:
+//! - `albedo`: the directional albedo ∫ f |cos| dω of the first non-delta
+//!   surface, estimated with one BSDF sample (for a diffuse surface exactly
+//!   its reflectance; Mitsuba's `albedo` reports the diffuse reflectance).
+//! - `normal`: the world-space shading normal there (Mitsuba's `sh_normal`,
+//!   after normal and bump maps and `twosided`).
+//!
+//! Both are taken *through* delta (perfectly specular or null/masked)
+//! surfaces: the query follows the sampled delta lobe to the first
+//! non-delta hit, as Open Image Denoise recommends for its guides, and
+//! reports that surface's values unweighted (a perfect mirror shows the
+//! albedo of what it reflects). A ray that escapes reports zero.
+//! - `depth`: distance from the camera to the first hit (Mitsuba's `depth`:
+//!   from the pinhole or the lens point, not from the near clip plane where
+//!   rays start; from the near plane for orthographic cameras; 0 where the ray escapes).
+//! - `position`: world-space position of the first hit (0 where it escapes).
+//!
+//! The query uses its own random numbers (a stream keyed apart from the
+//! pixel's), so requesting AOVs never changes the beauty image.
+
+use crate::geometry::Ray;
+use crate::integrator::{camera_hit, Integrator, RayStats};
+use crate::sampling::SampleStream;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// Delta surfaces followed at most before giving up (reporting zero).
+const MAX_DELTA_CHAIN: u32 = 16;
+
+/// One kind of AOV and its channels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum AovKind {
+    Albedo,
+    Normal,
+    Depth,
+    Position,
+}
+
+impl AovKind {
+    pub const ALL: [AovKind; 4] = [AovKind::Albedo, AovKind::Normal, AovKind::Depth, AovKind::Position];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            AovKind::Albedo => "albedo",
+            AovKind::Normal => "normal",
+            AovKind::Depth => "depth",
+            AovKind::Position => "position",
+        }
+    }
+
+    pub fn from_name(s: &str) -> Option<AovKind> {
+        AovKind::ALL.into_iter().find(|k| k.name() == s)
+    }
+
+    /// EXR channel suffixes (the layer is the name): `albedo.R`, `normal.X`, `depth.Z`.
+    pub fn channels(self) -> &'static [&'static str] {
+        match self {
+            AovKind::Albedo => &["R", "G", "B"],
+            AovKind::Normal | AovKind::Position => &["X", "Y", "Z"],
+            AovKind::Depth => &["Z"],
+        }
+    }
+}
+
+/// The values of every AOV kind for one camera ray.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AovSample {
+    pub albedo: [f32; 3],
+    pub normal: [f32; 3],
+    pub depth: f32,
+    pub position: [f32; 3],
+}
+
+impl AovSample {
+    /// Appends the values of `kinds` in order.
+    #[inline]
+    pub fn write(&self, kinds: &[AovKind], out: &mut [f32]) {
+        let mut i = 0;
+        for k in kinds {
+            let v: &[f32] = match k {
+                AovKind::Albedo => &self.albedo,
+                AovKind::Normal => &self.normal,
+                AovKind::Depth => std::slice::from_ref(&self.depth),
+                AovKind::Position => &self.position,
+            };
+            out[i..i + v.len()].copy_from_slice(v);
+            i += v.len();
+        }
+    }
+}
+
+/// Total channels of `kinds`.
+pub fn channel_count(kinds: &[AovKind]) -> usize {
+    kinds.iter().map(|k| k.channels().len()).sum()
+}
+
+fn hide_emitters(integrator: &Integrator) -> bool {
+    match integrator {
+        Integrator::Path(p) => p.hide_emitters,
+        Integrator::Direct(d) => d.hide_emitters,
+        Integrator::BruteForce(b) => b.hide_emitters,
+    }
+}
+
+/// The AOVs of camera ray `ray` leaving the camera at `eye` (depth is
+/// measured from there), with random numbers from `rng`.
+pub fn query(scene: &Scene, integrator: &Integrator, ray: &Ray, eye: Vec3, rng: &mut SampleStream) -> AovSample {
+    let mut out = AovSample::default();
+    let mut stats = RayStats::default();
+    let Some(mut si) = camera_hit(scene, ray, hide_emitters(integrator), &mut stats) else {
+        return out;
+    };
+    out.depth = (si.p - eye).length();
+    out.position = si.p.to_array();
+    for _ in 0..MAX_DELTA_CHAIN {
+        let bsdf = scene.bsdf(&mut si);
+        let wo = si.to_local(si.wo);
+        let (u, u2) = (rng.next_1d(), rng.next_2d());
+        if bsdf.has_smooth() {
+            out.normal = si.sh_frame.n.to_array();
+            if let Some(bs) = bsdf.sample(wo, u, u2) {
+                // A delta lobe of a mixed BSDF (plastic's specular coat,
+                // a mask's pass-through) is part of the surface's albedo.
+                if bs.weight.is_finite() {
+                    out.albedo = bs.weight.to_array();
+                }
+            }
+            return out;
+        }
+        // Purely delta: follow the sampled lobe.
+        let Some(bs) = bsdf.sample(wo, u, u2) else { return out };
+        let next = scene.spawn_ray(&si, si.to_world(bs.wi));
+        match scene.intersect(&next) {
+            Some(s) => si = s,
+            None => return out,
+        }
+    }
+    out
+}
