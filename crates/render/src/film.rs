@@ -35,7 +35,16 @@ pub const MAX_MARGIN: u32 = 16;
 pub struct Filter {
     pub kind: FilterKind,
     pub radius: f32,
+    /// The Gaussian tabulated on [0, radius] (`TABLE` intervals), for
+    /// splatting: ten profile evaluations per sample are otherwise ten
+    /// `exp` calls, a third of a sample's time in light scenes.
+    table: Vec<f32>,
+    inv_step: f32,
 }
+
+/// Intervals of the tabulated profile; linear interpolation between them
+/// is within 2e-6 of the Gaussian (relative to its peak).
+const TABLE: usize = 1024;
 
 impl Filter {
     pub fn new(kind: FilterKind) -> Filter {
@@ -44,7 +53,28 @@ impl Filter {
             FilterKind::Tent { radius } => radius,
             FilterKind::Gaussian { stddev } => 4.0 * stddev,
         };
-        Filter { kind, radius }
+        let mut f = Filter { kind, radius, table: Vec::new(), inv_step: TABLE as f32 / radius };
+        if let FilterKind::Gaussian { .. } = kind {
+            f.table = (0..=TABLE).map(|i| f.eval(radius * i as f32 / TABLE as f32)).collect();
+            f.table.push(0.0);
+        }
+        f
+    }
+
+    /// The profile as splatting uses it: exact for box and tent, the
+    /// interpolated table for the Gaussian.
+    #[inline]
+    pub fn weight(&self, x: f32) -> f32 {
+        if self.table.is_empty() {
+            return self.eval(x);
+        }
+        let t = x.abs() * self.inv_step;
+        let i = t as usize;
+        if i >= TABLE {
+            return 0.0;
+        }
+        let f = t - i as f32;
+        self.table[i] + f * (self.table[i + 1] - self.table[i])
     }
 
     /// How many pixels beyond its own a sample can reach: ceil(radius - 1/2).
@@ -192,14 +222,14 @@ impl Film {
         let mut wx = [0.0f32; 2 * MAX_MARGIN as usize + 1];
         for k in 0..=(2 * m) {
             // Distance from the sample to the centre of pixel px - m + k.
-            wx[k as usize] = filter.eval(u.x + (m - k) as f32 - 0.5);
+            wx[k as usize] = filter.weight(u.x + (m - k) as f32 - 0.5);
         }
         for ky in 0..=(2 * m) {
             let y = py - m + ky;
             if y < 0 || y >= self.height as i32 {
                 continue;
             }
-            let wy = filter.eval(u.y + (m - ky) as f32 - 0.5);
+            let wy = filter.weight(u.y + (m - ky) as f32 - 0.5);
             if wy == 0.0 {
                 continue;
             }
@@ -325,6 +355,18 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The tabulated Gaussian is within 2e-6 of the profile everywhere.
+    #[test]
+    fn tabulated_profile_matches() {
+        for stddev in [0.5f32, 0.3, 1.7] {
+            let f = Filter::new(FilterKind::Gaussian { stddev });
+            for i in 0..=100_000 {
+                let x = -1.1 * f.radius + 2.2 * f.radius * i as f32 / 100_000.0;
+                assert!((f.weight(x) - f.eval(x)).abs() < 2e-6, "σ {stddev} x {x}: {} vs {}", f.weight(x), f.eval(x));
+            }
+        }
+    }
 
     /// Splatting uniformly placed samples of a function g converges to the
     /// filtered image: at each pixel ∫ f(p - c) g(p) dp / ∫ f(p - c) dp
