@@ -347,7 +347,8 @@ fn denoise_without_the_feature_says_how_to_get_it() {
 
 /// Open Image Denoise with albedo and normal guides lowers the relMSE of a
 /// noisy 4 spp Cornell box against a 512 spp reference; `penumbra denoise`
-/// gives the same image as `render --denoise`, and keeps the noisy one.
+/// of a box-filtered render gives the same image as `render --denoise`
+/// (which uses the box filter), and keeps the noisy one.
 #[cfg(feature = "denoise")]
 #[test]
 fn denoising_lowers_the_error_of_a_noisy_cornell_box() {
@@ -355,8 +356,15 @@ fn denoising_lowers_the_error_of_a_noisy_cornell_box() {
     let res = ["-D", "res=64", "--seed", "3"];
     let reference = d.join("ref.exr");
     ok(render(&cornell(), &reference, &[&res[..], &["--spp", "512"]].concat()).output().unwrap());
+    // The same scene with the box filter (the bundled one has no rfilter,
+    // i.e. Mitsuba's Gaussian; it refers to no other files, so it can move).
+    let boxed = d.join("box.xml");
+    let xml = fs::read_to_string(cornell()).unwrap();
+    let with_box = xml.replace("<film type=\"hdrfilm\">", "<film type=\"hdrfilm\">\n<rfilter type=\"box\"/>");
+    assert_ne!(xml, with_box);
+    fs::write(&boxed, with_box).unwrap();
     let noisy = d.join("noisy.exr");
-    ok(render(&cornell(), &noisy, &[&res[..], &["--spp", "4", "--aov", "albedo,normal"]].concat()).output().unwrap());
+    ok(render(&boxed, &noisy, &[&res[..], &["--spp", "4", "--aov", "albedo,normal"]].concat()).output().unwrap());
     let den = d.join("den.exr");
     ok(bin().arg("denoise").arg(&noisy).arg("-o").arg(&den).output().unwrap());
     let direct = d.join("direct.exr");
