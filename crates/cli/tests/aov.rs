@@ -68,6 +68,7 @@ fn read_exr(path: &Path) -> Exr {
 }
 
 /// relMSE of R, G, B against a reference, as `penumbra diff` (ε = 0.01).
+#[cfg(feature = "denoise")]
 fn rel_mse(a: &Exr, b: &Exr) -> f64 {
     let mut s = 0.0;
     let mut n = 0;
