@@ -1,70 +1,26 @@
 //! AOVs, variance, noise threshold, adaptive sampling and denoising, end to
 //! end through the `penumbra` binary on tiny images.
 
-use std::collections::HashMap;
+mod common;
+
+use common::{bin, ok, read_exr, Exr};
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_penumbra"))
-}
-
 fn cornell() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml")
+    common::cornell()
 }
 
 fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("penumbra-aov-{}-{name}", std::process::id()));
-    let _ = fs::remove_dir_all(&d);
-    fs::create_dir_all(&d).unwrap();
-    d
+    common::tmpdir("aov", name)
 }
 
 fn render(scene: &Path, out: &Path, extra: &[&str]) -> Command {
     let mut c = bin();
     c.arg("render").arg(scene).arg("-o").arg(out).arg("--quiet").args(extra);
     c
-}
-
-fn ok(o: Output) -> Output {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    o
-}
-
-struct Exr {
-    channels: HashMap<String, Vec<f32>>,
-    meta: HashMap<String, String>,
-    size: (usize, usize),
-}
-
-impl Exr {
-    fn ch(&self, name: &str) -> &[f32] {
-        self.channels.get(name).unwrap_or_else(|| panic!("no channel {name}: {:?}", self.channels.keys()))
-    }
-}
-
-fn read_exr(path: &Path) -> Exr {
-    use exr::prelude::*;
-    let img = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let l = &img.layer_data;
-    let channels =
-        l.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
-    let mut meta = HashMap::new();
-    for (k, v) in &l.attributes.other {
-        if let (Some(k), AttributeValue::Text(t)) = (k.to_string().strip_prefix("penumbra:"), v) {
-            meta.insert(k.to_string(), t.to_string());
-        }
-    }
-    Exr { channels, meta, size: (l.size.0, l.size.1) }
 }
 
 /// relMSE of R, G, B against a reference, as `penumbra diff` (ε = 0.01).

@@ -3,25 +3,20 @@
 //! budgets, partial images, signals, parts and crops merged into the single
 //! render, and the metadata that `merge` relies on.
 
-use std::collections::HashMap;
+mod common;
+
+use common::{bin, ok, read_exr, Exr};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_penumbra"))
-}
-
 fn scene() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml")
+    common::cornell()
 }
 
 fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("penumbra-prod-{}-{name}", std::process::id()));
-    let _ = fs::remove_dir_all(&d);
-    fs::create_dir_all(&d).unwrap();
-    d
+    common::tmpdir("prod", name)
 }
 
 fn render_cmd(out: &Path, extra: &[&str]) -> Command {
@@ -30,43 +25,9 @@ fn render_cmd(out: &Path, extra: &[&str]) -> Command {
     c
 }
 
-fn ok(o: Output) -> Output {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    o
-}
-
 fn fails(o: Output) -> String {
     assert!(!o.status.success(), "should fail: {}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// The channels (name → values) and `penumbra:*` attributes of an EXR.
-struct Exr {
-    channels: HashMap<String, Vec<f32>>,
-    meta: HashMap<String, String>,
-    size: (usize, usize),
-}
-
-fn read_exr(path: &Path) -> Exr {
-    use exr::prelude::*;
-    let img = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let l = &img.layer_data;
-    let channels =
-        l.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
-    let mut meta = HashMap::new();
-    for (k, v) in &l.attributes.other {
-        if let (Some(k), AttributeValue::Text(t)) = (k.to_string().strip_prefix("penumbra:"), v) {
-            meta.insert(k.to_string(), t.to_string());
-        }
-    }
-    Exr { channels, meta, size: (l.size.0, l.size.1) }
 }
 
 /// Bit patterns of R, G, B.
