@@ -525,7 +525,8 @@ fn other_fields(kind: &str, el: &Element, reserved: &[&str]) -> (Vec<MeshAttribu
             i += 1;
             continue;
         }
-        let Some(pos) = name.rfind('_') else {
+        // A run member is `<prefix>_<one character>`; anything else ends the run.
+        let Some(pos) = name.rfind('_').filter(|&p| name[p + 1..].len() == 1) else {
             if reading {
                 flush(
                     &mut prefix,
@@ -542,22 +543,6 @@ fn other_fields(kind: &str, el: &Element, reserved: &[&str]) -> (Vec<MeshAttribu
             continue;
         };
         let postfix = &name[pos + 1..];
-        if postfix.len() != 1 {
-            if reading {
-                flush(
-                    &mut prefix,
-                    &mut index,
-                    &mut level,
-                    &mut reading,
-                    &mut specs,
-                    &mut slots,
-                    &mut encountered,
-                    &names,
-                );
-            }
-            i += 1;
-            continue;
-        }
         let this_prefix = &name[..pos];
         if reading && this_prefix != prefix {
             flush(&mut prefix, &mut index, &mut level, &mut reading, &mut specs, &mut slots, &mut encountered, &names);
