@@ -130,18 +130,20 @@ fn timed<R: Send>(rays: &[BenchRay], f: impl Fn(&[BenchRay]) -> R + Sync, sum: i
     (rays.len() as f64 / secs / 1e6, sum(parts))
 }
 
-/// Penumbra's BVH on the mesh and rays.
-pub fn trace_penumbra(mesh: &TriangleMesh, bounce: &[BenchRay], shadow: &[BenchRay]) -> TraceResult {
+/// Penumbra's BVH on the mesh and rays; `report` prints the tree's statistics.
+pub fn trace_penumbra(mesh: &TriangleMesh, bounce: &[BenchRay], shadow: &[BenchRay], report: bool) -> TraceResult {
     let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
     let start = Instant::now();
     let accel = Accel::build(&shapes);
     let build_s = start.elapsed().as_secs_f64();
     let (nodes, blocks, fill) = accel.stats();
-    eprintln!(
+    if report {
+        eprintln!(
         "penumbra BVH: {nodes} nodes ({fill:.2} children each), {blocks} triangle blocks ({:.2} triangles each), {:.1} bytes/triangle",
         accel.triangle_count() as f64 / blocks as f64,
         accel.memory_bytes() as f64 / accel.triangle_count() as f64
-    );
+        );
+    }
     let closest = |c: &[BenchRay]| {
         let (mut n, mut ts) = (0u64, 0f64);
         for r in c {
@@ -171,12 +173,26 @@ pub fn trace_embree(_: &TriangleMesh, _: &[BenchRay], _: &[BenchRay]) -> Option<
     None
 }
 
+/// Each timing's median over rounds (the hit statistics are the same in every round).
+fn median_result(mut rounds: Vec<TraceResult>) -> TraceResult {
+    let median = |f: fn(&TraceResult) -> f64, rounds: &[TraceResult]| {
+        let mut v: Vec<f64> = rounds.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let build_s = median(|r| r.build_s, &rounds);
+    let closest_mrays = median(|r| r.closest_mrays, &rounds);
+    let any_mrays = median(|r| r.any_mrays, &rounds);
+    let first = rounds.swap_remove(0);
+    TraceResult { build_s, closest_mrays, any_mrays, ..first }
+}
+
 /// Prints the ray-traversal table.
 pub fn table(pool: &rayon::ThreadPool, triangles: usize, rays: usize) {
     let mesh = cave_mesh(triangles);
     let (bounce, shadow) = pool.install(|| incoherent_rays(&mesh, rays));
     println!(
-        "\nray traversal: {} triangles (displaced sphere seen from inside), {} diffuse-bounce rays (closest hit), {} shadow segments (any hit)",
+        "\nray traversal: {} triangles (displaced sphere seen from inside), {} diffuse-bounce rays (closest hit), {} shadow segments (any hit); medians of 3 alternating rounds",
         mesh.indices.len(),
         bounce.len(),
         shadow.len()
@@ -195,9 +211,17 @@ pub fn table(pool: &rayon::ThreadPool, triangles: usize, rays: usize) {
             r.t_sum / r.hits.max(1) as f64
         );
     };
-    let ours = pool.install(|| trace_penumbra(&mesh, &bounce, &shadow));
+    // The machines are noisy: alternate the engines for a few rounds and
+    // report each figure's median.
+    const ROUNDS: usize = 3;
+    let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+    for round in 0..ROUNDS {
+        ours.push(pool.install(|| trace_penumbra(&mesh, &bounce, &shadow, round == 0)));
+        theirs.extend(pool.install(|| trace_embree(&mesh, &bounce, &shadow)));
+    }
+    let ours = median_result(ours);
     row("penumbra", &ours);
-    match pool.install(|| trace_embree(&mesh, &bounce, &shadow)) {
+    match (!theirs.is_empty()).then(|| median_result(theirs)) {
         Some(e) => {
             row("embree", &e);
             println!(

@@ -5,6 +5,7 @@
 //! subtrees that begin beyond the closest hit found so far.
 
 use super::build::{build_binary, wide_children, BNode, Item, ItemKind};
+use super::memory::HugeArray;
 use super::tri4::{intersect4, RayLanes, Tri4};
 #[cfg(test)]
 use crate::geometry::triangle::intersect_triangle;
@@ -63,10 +64,10 @@ pub struct Hit {
 
 #[derive(Debug, Clone, Default)]
 pub struct Accel {
-    nodes: Vec<Node4>,
-    tris: Vec<Tri4>,
+    nodes: HugeArray<Node4>,
+    tris: HugeArray<Tri4>,
     /// (shape, triangle index) of each lane of `tris`.
-    tri_ids: Vec<[[u32; 2]; 4]>,
+    tri_ids: HugeArray<[[u32; 2]; 4]>,
     pub prims: Vec<Prim>,
     /// The root slot, `None` when there is nothing to hit.
     root: Option<(u32, u32)>,
@@ -75,55 +76,16 @@ pub struct Accel {
 
 const STACK: usize = 192;
 
-impl Accel {
-    /// Builds the BVH over every primitive of every shape.
-    pub fn build(shapes: &[Shape]) -> Accel {
-        let mut items = Vec::new();
-        for (si, shape) in shapes.iter().enumerate() {
-            let other =
-                |b: Aabb| Item { bounds: b, centroid: b.center(), kind: ItemKind::Other, shape: si as u32, index: 0 };
-            match shape {
-                Shape::Mesh(m) => {
-                    items.reserve(m.mesh.indices.len());
-                    for i in 0..m.mesh.indices.len() {
-                        let v = m.vertices(i);
-                        // Degenerate triangles can never be hit; leave them out.
-                        if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() == 0.0 {
-                            continue;
-                        }
-                        let b = Aabb::from_points(&v);
-                        items.push(Item {
-                            bounds: b,
-                            centroid: b.center(),
-                            kind: ItemKind::Triangle,
-                            shape: si as u32,
-                            index: i as u32,
-                        });
-                    }
-                }
-                Shape::GroupMember => {}
-                Shape::Instance(i) => {
-                    let b = i.bounds();
-                    if b.min.x <= b.max.x {
-                        items.push(other(b));
-                    }
-                }
-                _ => items.push(other(shape.prim_bounds(0))),
-            }
-        }
-        let mut accel = Accel::default();
-        if items.is_empty() {
-            return accel;
-        }
-        let tree = build_binary(&mut items);
-        accel.bounds = tree.bounds();
-        let n_tris = items.iter().filter(|p| p.kind == ItemKind::Triangle).count();
-        accel.tris.reserve(n_tris / 3);
-        accel.tri_ids.reserve(n_tris / 3);
-        accel.root = Some(accel.emit(&tree, &items, shapes));
-        accel
-    }
+/// The arrays of a tree being written out, before they move into an [`Accel`].
+#[derive(Default)]
+struct Emitter {
+    nodes: Vec<Node4>,
+    tris: Vec<Tri4>,
+    tri_ids: Vec<[[u32; 2]; 4]>,
+    prims: Vec<Prim>,
+}
 
+impl Emitter {
     /// Appends `node` in wide form; returns its slot (child, info).
     fn emit(&mut self, node: &BNode, items: &[Item], shapes: &[Shape]) -> (u32, u32) {
         match node {
@@ -178,6 +140,63 @@ impl Accel {
                 self.nodes[idx] = Node4 { b: lanes.map(Vec4::from_array), child, info };
                 (idx as u32, 0)
             }
+        }
+    }
+}
+
+impl Accel {
+    /// Builds the BVH over every primitive of every shape.
+    pub fn build(shapes: &[Shape]) -> Accel {
+        let mut items = Vec::new();
+        for (si, shape) in shapes.iter().enumerate() {
+            let other =
+                |b: Aabb| Item { bounds: b, centroid: b.center(), kind: ItemKind::Other, shape: si as u32, index: 0 };
+            match shape {
+                Shape::Mesh(m) => {
+                    items.reserve(m.mesh.indices.len());
+                    for i in 0..m.mesh.indices.len() {
+                        let v = m.vertices(i);
+                        // Degenerate triangles can never be hit; leave them out.
+                        if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() == 0.0 {
+                            continue;
+                        }
+                        let b = Aabb::from_points(&v);
+                        items.push(Item {
+                            bounds: b,
+                            centroid: b.center(),
+                            kind: ItemKind::Triangle,
+                            shape: si as u32,
+                            index: i as u32,
+                        });
+                    }
+                }
+                Shape::GroupMember => {}
+                Shape::Instance(i) => {
+                    let b = i.bounds();
+                    if b.min.x <= b.max.x {
+                        items.push(other(b));
+                    }
+                }
+                _ => items.push(other(shape.prim_bounds(0))),
+            }
+        }
+        if items.is_empty() {
+            return Accel::default();
+        }
+        let tree = build_binary(&mut items);
+        let n_tris = items.iter().filter(|p| p.kind == ItemKind::Triangle).count();
+        let mut out = Emitter::default();
+        out.tris.reserve(n_tris / 3);
+        out.tri_ids.reserve(n_tris / 3);
+        let root = out.emit(&tree, &items, shapes);
+        drop(items);
+        Accel {
+            nodes: HugeArray::from_slice(&std::mem::take(&mut out.nodes)),
+            tris: HugeArray::from_slice(&std::mem::take(&mut out.tris)),
+            tri_ids: HugeArray::from_slice(&std::mem::take(&mut out.tri_ids)),
+            prims: out.prims,
+            root: Some(root),
+            bounds: tree.bounds(),
         }
     }
 
@@ -446,9 +465,9 @@ impl Accel {
 
     /// Bytes held by the hierarchy (nodes, triangle blocks, ids, primitives).
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node4>()
-            + self.tris.capacity() * std::mem::size_of::<Tri4>()
-            + self.tri_ids.capacity() * std::mem::size_of::<[[u32; 2]; 4]>()
+        std::mem::size_of_val(&self.nodes[..])
+            + std::mem::size_of_val(&self.tris[..])
+            + std::mem::size_of_val(&self.tri_ids[..])
             + self.prims.capacity() * std::mem::size_of::<Prim>()
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod build;
 pub mod bvh;
+pub mod memory;
 pub mod tri4;
 
 pub use bvh::{Accel, Hit, Prim};
