@@ -199,12 +199,12 @@ fn partition<T>(items: &mut [T], pred: impl Fn(&T) -> bool) -> usize {
     i
 }
 
-/// Up to four children for a wide node: starting from `node`'s two, the
+/// Up to `width` children for a wide node: starting from `node`'s two, the
 /// inner child of largest area is replaced by its own two children.
-pub fn wide_children(node: &BNode) -> Vec<&BNode> {
+pub fn wide_children(node: &BNode, width: usize) -> Vec<&BNode> {
     let BNode::Inner { children, .. } = node else { return vec![node] };
     let mut out: Vec<&BNode> = vec![&children[0], &children[1]];
-    while out.len() < 4 {
+    while out.len() < width {
         let best = out
             .iter()
             .enumerate()

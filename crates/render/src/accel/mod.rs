@@ -1,4 +1,4 @@
-//! Ray-query acceleration: a 4-wide BVH over all primitives of the scene.
+//! Ray-query acceleration: an 8-wide BVH over all primitives of the scene.
 //!
 //! API: [`Accel::intersect`] (closest hit) and [`Accel::occluded`] (any hit).
 //! `build` makes the tree, `tri4` tests four triangles at once, `bvh` holds
@@ -6,6 +6,7 @@
 
 pub mod build;
 pub mod bvh;
+pub mod lanes8;
 pub mod memory;
 pub mod tri4;
 
