@@ -2,15 +2,44 @@
 //! ray-traversal benchmark's triangles and rays: the reference for BVH
 //! build time and traversal speed. Compiled only with the `embree` feature.
 
-use super::rays::{BenchRay, TraceResult};
-use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit};
+use super::rays::{BenchRay, Tracer};
+use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene};
 use penumbra_render::geometry::TriangleMesh;
-use rayon::prelude::*;
 use std::time::Instant;
 
-/// Builds Embree's BVH (default, medium quality) over the mesh and traces
-/// the same rays with `rtcIntersect1` / `rtcOccluded1`, incoherent context.
-pub fn trace_embree(mesh: &TriangleMesh, bounce: &[BenchRay], shadow: &[BenchRay]) -> Option<TraceResult> {
+/// Embree's scene as a benchmark [`Tracer`].
+struct EmbreeTracer<'s, 'd>(&'s Scene<'d>);
+
+impl Tracer for EmbreeTracer<'_, '_> {
+    /// `rtcIntersect1` with an incoherent context.
+    fn closest(&self, rays: &[BenchRay]) -> (u64, f64) {
+        let mut ctx = IntersectContext::incoherent();
+        let (mut n, mut ts) = (0u64, 0f64);
+        for r in rays {
+            let mut rh = RayHit::from_ray(Ray::segment(r.o.to_array(), r.d.to_array(), 0.0, r.t_max));
+            self.0.intersect(&mut ctx, &mut rh);
+            if rh.hit.is_valid() {
+                n += 1;
+                ts += rh.ray.tfar as f64;
+            }
+        }
+        (n, ts)
+    }
+    /// `rtcOccluded1` with an incoherent context.
+    fn occluded(&self, rays: &[BenchRay]) -> u64 {
+        let mut ctx = IntersectContext::incoherent();
+        rays.iter()
+            .filter(|r| {
+                let mut ray = Ray::segment(r.o.to_array(), r.d.to_array(), 0.0, r.t_max);
+                self.0.occluded(&mut ctx, &mut ray)
+            })
+            .count() as u64
+    }
+}
+
+/// Builds Embree's BVH (default, medium quality) over the mesh and runs `f`
+/// with it and the build time in seconds.
+pub fn with_embree<R>(mesh: &TriangleMesh, f: impl FnOnce(&dyn Tracer, f64) -> R) -> Option<R> {
     let device = match Device::new() {
         Ok(d) => d,
         Err(e) => {
@@ -31,37 +60,6 @@ pub fn trace_embree(mesh: &TriangleMesh, bounce: &[BenchRay], shadow: &[BenchRay
     scene.attach_geometry(&geom);
     scene.commit();
     let build_s = start.elapsed().as_secs_f64();
-
-    let closest = |c: &[BenchRay]| {
-        let mut ctx = IntersectContext::incoherent();
-        let (mut n, mut ts) = (0u64, 0f64);
-        for r in c {
-            let mut rh = RayHit::from_ray(Ray::segment(r.o.to_array(), r.d.to_array(), 0.0, r.t_max));
-            scene.intersect(&mut ctx, &mut rh);
-            if rh.hit.is_valid() {
-                n += 1;
-                ts += rh.ray.tfar as f64;
-            }
-        }
-        (n, ts)
-    };
-    closest(&bounce[..bounce.len().min(20_000)]);
-    let start = Instant::now();
-    let parts: Vec<(u64, f64)> = bounce.par_chunks(4096).map(closest).collect();
-    let closest_mrays = bounce.len() as f64 / start.elapsed().as_secs_f64() / 1e6;
-    let (hits, t_sum) = parts.into_iter().fold((0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-
-    let any = |c: &[BenchRay]| {
-        let mut ctx = IntersectContext::incoherent();
-        c.iter()
-            .filter(|r| {
-                let mut ray = Ray::segment(r.o.to_array(), r.d.to_array(), 0.0, r.t_max);
-                scene.occluded(&mut ctx, &mut ray)
-            })
-            .count() as u64
-    };
-    let start = Instant::now();
-    let occluded: u64 = shadow.par_chunks(4096).map(any).sum();
-    let any_mrays = shadow.len() as f64 / start.elapsed().as_secs_f64() / 1e6;
-    Some(TraceResult { build_s, closest_mrays, any_mrays, hits, t_sum, occluded })
+    let result = f(&EmbreeTracer(&scene), build_s);
+    Some(result)
 }

@@ -110,19 +110,61 @@ pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<BenchRay>, Vec<Be
     (bounce, shadow)
 }
 
-/// Results of one engine on the benchmark.
-pub struct TraceResult {
-    pub build_s: f64,
-    pub closest_mrays: f64,
-    pub any_mrays: f64,
-    /// Closest hits found and their summed distances, and occluded segments:
-    /// the engines must agree on these (a check, not a timing).
-    pub hits: u64,
-    pub t_sum: f64,
-    pub occluded: u64,
+/// One engine's ray queries over a slice of rays (run on one thread; the
+/// benchmark splits the rays into chunks across the pool).
+pub trait Tracer: Sync {
+    /// Closest hits found and the sum of their distances.
+    fn closest(&self, rays: &[BenchRay]) -> (u64, f64);
+    /// Segments found occluded.
+    fn occluded(&self, rays: &[BenchRay]) -> u64;
 }
 
-/// Times `f` over all rays in parallel chunks; returns (Mrays/s, result).
+/// Penumbra's BVH over the benchmark mesh.
+pub struct PenumbraTracer {
+    shapes: Vec<Shape>,
+    accel: Accel,
+}
+
+impl PenumbraTracer {
+    /// Builds the BVH; returns it and the build time in seconds.
+    pub fn build(mesh: &TriangleMesh) -> (PenumbraTracer, f64) {
+        let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
+        let start = Instant::now();
+        let accel = Accel::build(&shapes);
+        let secs = start.elapsed().as_secs_f64();
+        (PenumbraTracer { shapes, accel }, secs)
+    }
+}
+
+impl Tracer for PenumbraTracer {
+    fn closest(&self, rays: &[BenchRay]) -> (u64, f64) {
+        let (mut n, mut ts) = (0u64, 0f64);
+        for r in rays {
+            if let Some(h) = self.accel.intersect(&Ray::new(r.o, r.d, r.t_max), &self.shapes) {
+                n += 1;
+                ts += h.t as f64;
+            }
+        }
+        (n, ts)
+    }
+    fn occluded(&self, rays: &[BenchRay]) -> u64 {
+        rays.iter().filter(|r| self.accel.occluded(&Ray::new(r.o, r.d, r.t_max), &self.shapes)).count() as u64
+    }
+}
+
+/// Runs `f` with Embree's BVH over the mesh and its build time, or returns
+/// `None` when Embree is not compiled in (or its device fails).
+#[cfg(feature = "embree")]
+pub use super::embree::with_embree;
+
+/// Embree is not compiled in: no column.
+#[cfg(not(feature = "embree"))]
+pub fn with_embree<R>(_: &TriangleMesh, _: impl FnOnce(&dyn Tracer, f64) -> R) -> Option<R> {
+    None
+}
+
+/// Times one pass of a query over all rays in parallel chunks; returns
+/// (Mrays/s, result).
 fn timed<R: Send>(rays: &[BenchRay], f: impl Fn(&[BenchRay]) -> R + Sync, sum: impl Fn(Vec<R>) -> R) -> (f64, R) {
     let start = Instant::now();
     let parts: Vec<R> = rays.par_chunks(4096).map(&f).collect();
@@ -130,114 +172,118 @@ fn timed<R: Send>(rays: &[BenchRay], f: impl Fn(&[BenchRay]) -> R + Sync, sum: i
     (rays.len() as f64 / secs / 1e6, sum(parts))
 }
 
-/// Penumbra's BVH on the mesh and rays; `report` prints the tree's statistics.
-pub fn trace_penumbra(mesh: &TriangleMesh, bounce: &[BenchRay], shadow: &[BenchRay], report: bool) -> TraceResult {
-    let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
-    let start = Instant::now();
-    let accel = Accel::build(&shapes);
-    let build_s = start.elapsed().as_secs_f64();
-    let (nodes, blocks, fill) = accel.stats();
-    if report {
-        eprintln!(
-        "penumbra BVH: {nodes} nodes ({fill:.2} children each), {blocks} triangle blocks ({:.2} triangles each), {:.1} bytes/triangle",
-        accel.triangle_count() as f64 / blocks as f64,
-        accel.memory_bytes() as f64 / accel.triangle_count() as f64
-        );
-    }
-    let closest = |c: &[BenchRay]| {
-        let (mut n, mut ts) = (0u64, 0f64);
-        for r in c {
-            if let Some(h) = accel.intersect(&Ray::new(r.o, r.d, r.t_max), &shapes) {
-                n += 1;
-                ts += h.t as f64;
-            }
-        }
-        (n, ts)
-    };
-    // Warm-up: touch the whole tree once, untimed.
-    closest(&bounce[..bounce.len().min(20_000)]);
-    let (closest_mrays, (hits, t_sum)) =
-        timed(bounce, closest, |v| v.into_iter().fold((0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1)));
-    let any =
-        |c: &[BenchRay]| c.iter().filter(|r| accel.occluded(&Ray::new(r.o, r.d, r.t_max), &shapes)).count() as u64;
-    let (any_mrays, occluded) = timed(shadow, any, |v| v.into_iter().sum());
-    TraceResult { build_s, closest_mrays, any_mrays, hits, t_sum, occluded }
+/// One engine's figures: medians over the rounds, and the hit statistics
+/// (the same in every round; the engines must agree on them).
+#[derive(Default)]
+struct Figures {
+    build_s: Vec<f64>,
+    closest: Vec<f64>,
+    any: Vec<f64>,
+    hits: u64,
+    t_sum: f64,
+    occluded: u64,
 }
 
-#[cfg(feature = "embree")]
-pub use super::embree::trace_embree;
-
-/// Embree is not compiled in: no column.
-#[cfg(not(feature = "embree"))]
-pub fn trace_embree(_: &TriangleMesh, _: &[BenchRay], _: &[BenchRay]) -> Option<TraceResult> {
-    None
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
-/// Each timing's median over rounds (the hit statistics are the same in every round).
-fn median_result(mut rounds: Vec<TraceResult>) -> TraceResult {
-    let median = |f: fn(&TraceResult) -> f64, rounds: &[TraceResult]| {
-        let mut v: Vec<f64> = rounds.iter().map(f).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let build_s = median(|r| r.build_s, &rounds);
-    let closest_mrays = median(|r| r.closest_mrays, &rounds);
-    let any_mrays = median(|r| r.any_mrays, &rounds);
-    let first = rounds.swap_remove(0);
-    TraceResult { build_s, closest_mrays, any_mrays, ..first }
+/// One timed pass of each query.
+fn pass(t: &dyn Tracer, bounce: &[BenchRay], shadow: &[BenchRay], f: &mut Figures) {
+    let (mrays, (hits, t_sum)) =
+        timed(bounce, |c| t.closest(c), |v| v.into_iter().fold((0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1)));
+    f.closest.push(mrays);
+    (f.hits, f.t_sum) = (hits, t_sum);
+    let (mrays, occluded) = timed(shadow, |c| t.occluded(c), |v| v.into_iter().sum());
+    f.any.push(mrays);
+    f.occluded = occluded;
 }
+
+/// Alternating timed rounds of the two engines: the machines are noisy, and
+/// interleaving exposes both to the same load.
+const ROUNDS: usize = 5;
 
 /// Prints the ray-traversal table.
 pub fn table(pool: &rayon::ThreadPool, triangles: usize, rays: usize) {
     let mesh = cave_mesh(triangles);
     let (bounce, shadow) = pool.install(|| incoherent_rays(&mesh, rays));
     println!(
-        "\nray traversal: {} triangles (displaced sphere seen from inside), {} diffuse-bounce rays (closest hit), {} shadow segments (any hit); medians of 3 alternating rounds",
+        "\nray traversal: {} triangles (displaced sphere seen from inside), {} diffuse-bounce rays (closest hit), {} shadow segments (any hit); medians of {ROUNDS} alternating rounds",
         mesh.indices.len(),
         bounce.len(),
         shadow.len()
     );
+    let (mut ours, mut theirs) = (Figures::default(), Figures::default());
+    let mut ratios = (Vec::new(), Vec::new());
+    pool.install(|| {
+        let mut tracer = None;
+        for _ in 0..3 {
+            let (t, secs) = PenumbraTracer::build(&mesh);
+            ours.build_s.push(secs);
+            tracer = Some(t);
+        }
+        let pen = tracer.expect("built");
+        let (nodes, blocks, fill) = pen.accel.stats();
+        eprintln!(
+            "penumbra BVH: {nodes} nodes ({fill:.2} children each), {blocks} triangle blocks ({:.2} triangles each), {:.1} bytes/triangle",
+            pen.accel.triangle_count() as f64 / blocks as f64,
+            pen.accel.memory_bytes() as f64 / pen.accel.triangle_count() as f64
+        );
+        let warm = &bounce[..bounce.len().min(20_000)];
+        pen.closest(warm);
+        for _ in 0..2 {
+            if let Some(secs) = with_embree(&mesh, |_, secs| secs) {
+                theirs.build_s.push(secs);
+            }
+        }
+        let embree = with_embree(&mesh, |emb, secs| {
+            theirs.build_s.push(secs);
+            emb.closest(warm);
+            for _ in 0..ROUNDS {
+                pass(&pen, &bounce, &shadow, &mut ours);
+                pass(emb, &bounce, &shadow, &mut theirs);
+                let (o, t) = (ours.closest.len() - 1, theirs.closest.len() - 1);
+                ratios.0.push(ours.closest[o] / theirs.closest[t]);
+                ratios.1.push(ours.any[o] / theirs.any[t]);
+            }
+        });
+        if embree.is_none() {
+            for _ in 0..ROUNDS {
+                pass(&pen, &bounce, &shadow, &mut ours);
+            }
+        }
+    });
     println!(
         "{:<10} {:>9} {:>15} {:>15} {:>12} {:>10}",
         "engine", "build s", "closest Mrays/s", "any-hit Mrays/s", "hits", "mean t"
     );
-    let row = |name: &str, r: &TraceResult| {
+    let row = |name: &str, r: &Figures| {
         println!(
             "{name:<10} {:>9.2} {:>15.3} {:>15.3} {:>12} {:>10.5}",
-            r.build_s,
-            r.closest_mrays,
-            r.any_mrays,
+            median(&r.build_s),
+            median(&r.closest),
+            median(&r.any),
             r.hits,
             r.t_sum / r.hits.max(1) as f64
         );
     };
-    // The machines are noisy: alternate the engines for a few rounds and
-    // report each figure's median.
-    const ROUNDS: usize = 3;
-    let (mut ours, mut theirs) = (Vec::new(), Vec::new());
-    for round in 0..ROUNDS {
-        ours.push(pool.install(|| trace_penumbra(&mesh, &bounce, &shadow, round == 0)));
-        theirs.extend(pool.install(|| trace_embree(&mesh, &bounce, &shadow)));
-    }
-    let ours = median_result(ours);
     row("penumbra", &ours);
-    match (!theirs.is_empty()).then(|| median_result(theirs)) {
-        Some(e) => {
-            row("embree", &e);
-            println!(
-                "penumbra / embree throughput: closest {:.2}x, any hit {:.2}x (1.0 = equal; target >= 0.80, i.e. within 1.25x)",
-                ours.closest_mrays / e.closest_mrays,
-                ours.any_mrays / e.any_mrays
-            );
-            if ours.hits != e.hits || ours.occluded != e.occluded {
-                println!(
-                    "note: hit counts differ (penumbra {}/{} vs embree {}/{} closest/occluded): grazing rays",
-                    ours.hits, ours.occluded, e.hits, e.occluded
-                );
-            }
-        }
-        None => println!(
-            "(Embree column: build with `cargo build --release --features embree`; needs Debian's libembree-dev)"
-        ),
+    if theirs.closest.is_empty() {
+        println!("(Embree column: build with `cargo build --release --features embree`; needs Debian's libembree-dev)");
+        return;
+    }
+    row("embree", &theirs);
+    println!(
+        "penumbra / embree throughput (median of per-round ratios): closest {:.2}x, any hit {:.2}x (1.0 = equal; target >= 0.80, i.e. within 1.25x)",
+        median(&ratios.0),
+        median(&ratios.1)
+    );
+    if ours.hits != theirs.hits || ours.occluded != theirs.occluded {
+        println!(
+            "note: hit counts differ (penumbra {}/{} vs embree {}/{} closest/occluded): grazing rays",
+            ours.hits, ours.occluded, theirs.hits, theirs.occluded
+        );
     }
 }

@@ -381,7 +381,11 @@ impl Accel {
             let (p, len) = if info == 0 {
                 (self.nodes.as_ptr().wrapping_add(child as usize) as *const i8, std::mem::size_of::<Node>())
             } else if info & OTHER == 0 {
-                (self.tris.as_ptr().wrapping_add(child as usize) as *const i8, std::mem::size_of::<Tri4>())
+                // Every block of the leaf: they are all tested.
+                (
+                    self.tris.as_ptr().wrapping_add(child as usize) as *const i8,
+                    info as usize * std::mem::size_of::<Tri4>(),
+                )
             } else {
                 return;
             };
