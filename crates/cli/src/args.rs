@@ -54,6 +54,12 @@ pub struct RenderArgs {
     /// max_depth, rr_depth and hide_emitters carry over unless given.
     #[arg(long, value_name = "NAME[:key=value,...]")]
     pub integrator: Option<String>,
+    /// Replace the scene's sampler type, keeping its sample count and seed:
+    /// a Mitsuba sampler (independent, stratified, multijitter, orthogonal,
+    /// ldsampler) or `sobol`, Owen-scrambled Sobol' (Burley 2020), which
+    /// stratifies at any sample count and so suits --time and progressive renders.
+    #[arg(long, value_name = "NAME", value_parser = clap::builder::PossibleValuesParser::new(penumbra_scene::build::SAMPLER_OVERRIDES))]
+    pub sampler: Option<String>,
     /// Never show the progress bar.
     #[arg(long)]
     pub quiet: bool,

@@ -151,7 +151,7 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         }
     }
     let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
-    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone() };
+    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone(), sampler: a.sampler.clone() };
     let mut job = penumbra_scene::load_scene(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
     if let Some(c) = a.crop {
         apply_crop(&mut job, c)?;
@@ -187,6 +187,9 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     // Only when used, so that other renders keep their identity.
     if layers != FilmLayers::default() {
         settings.set("aov", &crate::layers::describe(&layers));
+    }
+    if let Some(sampler) = &a.sampler {
+        settings.set("sampler", sampler);
     }
     if a.denoise {
         settings.set("filter", "box (--denoise)");

@@ -60,8 +60,8 @@ pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) 
         "\nequal-time error: {budget} s of rendering each, relMSE against Mitsuba at {REFERENCE_SPP} spp ({variant})"
     );
     println!(
-        "{:<22} {:>9} {:>9} {:>13} {:>9} {:>13} {:>10}",
-        "scene", "size", "mi spp", "mi relMSE", "pen spp", "pen relMSE", "mi / pen"
+        "(pen: the scene's sampler, as Mitsuba; sobol: Penumbra with --sampler sobol)\n{:<22} {:>9} {:>9} {:>13} {:>9} {:>13} {:>10} {:>9} {:>13} {:>10}",
+        "scene", "size", "mi spp", "mi relMSE", "pen spp", "pen relMSE", "mi / pen", "sobol spp", "sobol relMSE", "mi / sobol"
     );
     for (scene, defines) in SCENES {
         let stem = Path::new(scene).file_stem().unwrap().to_string_lossy().into_owned();
@@ -94,31 +94,41 @@ pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) 
         let mi_spp = field(&text, "mitsuba_budget", "spp=").unwrap_or(f64::NAN);
         let mi_secs = field(&text, "mitsuba_budget", "seconds=").unwrap_or(f64::NAN);
 
-        let pen_out = tmp.join(format!("{stem}-penumbra.exr"));
-        let mut cmd = Command::new(std::env::current_exe()?);
-        cmd.args(["render", "--quiet", "--spp", "1000000", "--seed", "1000", "--threads", &threads.to_string()])
-            .args(["--time", &budget.to_string(), "-o"])
-            .arg(&pen_out)
-            .arg(scene);
-        for (k, v) in *defines {
-            cmd.arg("-D").arg(format!("{k}={v}"));
-        }
-        let run = cmd.output()?;
-        let err = String::from_utf8_lossy(&run.stderr);
-        if !run.status.success() {
-            return Err(anyhow!("penumbra failed on {scene}: {err}"));
-        }
-        // "... rendered N of 1000000 spp to ..."
-        let pen_spp: f64 = err
-            .split_once("rendered ")
-            .and_then(|(_, r)| r.split_whitespace().next())
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(f64::NAN);
-        let (mi_err, pen_err) = (rel_mse(&mi_out, &reference)?, rel_mse(&pen_out, &reference)?);
+        // Penumbra with the scene's sampler, then with `--sampler sobol`.
+        let penumbra = |sampler: Option<&str>| -> Result<(f64, f64)> {
+            let out = tmp.join(format!("{stem}-penumbra-{}.exr", sampler.unwrap_or("scene")));
+            let mut cmd = Command::new(std::env::current_exe()?);
+            cmd.args(["render", "--quiet", "--spp", "1000000", "--seed", "1000", "--threads", &threads.to_string()])
+                .args(["--time", &budget.to_string(), "-o"])
+                .arg(&out)
+                .arg(scene);
+            if let Some(s) = sampler {
+                cmd.args(["--sampler", s]);
+            }
+            for (k, v) in *defines {
+                cmd.arg("-D").arg(format!("{k}={v}"));
+            }
+            let run = cmd.output()?;
+            let err = String::from_utf8_lossy(&run.stderr);
+            if !run.status.success() {
+                return Err(anyhow!("penumbra failed on {scene}: {err}"));
+            }
+            // "... rendered N of 1000000 spp to ..."
+            let spp: f64 = err
+                .split_once("rendered ")
+                .and_then(|(_, r)| r.split_whitespace().next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(f64::NAN);
+            Ok((spp, rel_mse(&out, &reference)?))
+        };
+        let (pen_spp, pen_err) = penumbra(None)?;
+        let (sobol_spp, sobol_err) = penumbra(Some("sobol"))?;
+        let mi_err = rel_mse(&mi_out, &reference)?;
         let size = read_exr(&reference).map(|i| format!("{}x{}", i.width, i.height)).unwrap_or_default();
         println!(
-            "{stem:<22} {size:>9} {mi_spp:>9.0} {mi_err:>13.4e} {pen_spp:>9.0} {pen_err:>13.4e} {:>9.2}x",
-            mi_err / pen_err
+            "{stem:<22} {size:>9} {mi_spp:>9.0} {mi_err:>13.4e} {pen_spp:>9.0} {pen_err:>13.4e} {:>9.2}x {sobol_spp:>9.0} {sobol_err:>13.4e} {:>9.2}x",
+            mi_err / pen_err,
+            mi_err / sobol_err
         );
         if (mi_secs - budget).abs() > 0.25 * budget {
             println!("  (Mitsuba's budget render took {mi_secs:.2} s, not {budget} s: its time per spp varied)");

@@ -157,8 +157,8 @@ fn light_selection_table(pool: &rayon::ThreadPool) -> Result<()> {
     for strategy in ["uniform", "power", "bvh"] {
         let ov = Overrides {
             spp: Some(SELECTION_SPP),
-            seed: None,
             integrator: Some(format!("path:light_selection={strategy}")),
+            ..Default::default()
         };
         let job = match penumbra_scene::load_scene(Path::new(SELECTION_SCENE), &[], &ov) {
             Ok(j) => j,

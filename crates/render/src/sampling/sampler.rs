@@ -29,6 +29,14 @@ pub enum SamplerKind {
     /// Sobol') with sample indices shuffled per dimension; `spp` is a power of
     /// two and a square.
     LowDiscrepancy,
+    /// Owen-scrambled Sobol' (Burley 2020, "Practical hash-based Owen
+    /// scrambling"), through the `sobol_burley` crate. Not a Mitsuba plugin:
+    /// chosen with `--sampler sobol`. Dimensions are taken in sets of four,
+    /// each set a differently seeded (so independently shuffled and
+    /// scrambled) copy of Sobol's first four dimensions, which Burley calls
+    /// padding by shuffling; a 2D draw uses one set's pair (0, 1) or (2, 3).
+    /// Any sample count works; powers of two stratify best.
+    Sobol,
 }
 
 impl SamplerKind {
@@ -37,7 +45,7 @@ impl SamplerKind {
     pub fn round_sample_count(self, spp: u32) -> u32 {
         let spp = spp.max(1);
         match self {
-            SamplerKind::Independent => spp,
+            SamplerKind::Independent | SamplerKind::Sobol => spp,
             SamplerKind::Stratified => {
                 let r = (spp as f64).sqrt().ceil() as u32;
                 r.saturating_mul(r)
@@ -83,7 +91,7 @@ impl Sampler {
     /// as Mitsuba does (see [`SamplerKind::round_sample_count`]).
     pub fn new(kind: SamplerKind, seed: u64, spp: u32) -> Sampler {
         let spp = match kind {
-            SamplerKind::Independent | SamplerKind::Stratified => spp.max(1),
+            SamplerKind::Independent | SamplerKind::Stratified | SamplerKind::Sobol => spp.max(1),
             _ => kind.round_sample_count(spp),
         };
         let res = match kind {
@@ -153,7 +161,21 @@ impl SampleStream {
                 let scramble = (self.sequence_key(0x48bc48eb) >> 32) as u32;
                 sequences::radical_inverse_2(permute(i, self.sampler.spp, seed), scramble)
             }
+            SamplerKind::Sobol => {
+                let d = self.dim - 1;
+                let (i, seed) = self.sobol_index_and_seed(d / 4);
+                sobol_burley::sample(i, d % 4, seed)
+            }
         }
+    }
+
+    /// The index within a block of 2^16 samples (the most `sobol_burley`
+    /// stratifies) and a seed unique to (seed, pixel, block, dimension set).
+    #[inline]
+    fn sobol_index_and_seed(&self, set: u32) -> (u32, u32) {
+        let block = (self.index >> 16) as u64;
+        let h = mix64(self.pixel_key ^ mix64((block << 32) | set as u64));
+        (self.index & 0xffff, (h >> 32) as u32)
     }
 
     /// The sample index within its pass and a permutation seed unique to
@@ -218,6 +240,14 @@ impl SampleStream {
                 sequences::multijitter_2d(i, self.sampler.res, seed, j)
             }
             SamplerKind::Orthogonal { .. } => Vec2::new(self.next_1d(), self.next_1d()),
+            SamplerKind::Sobol => {
+                // Start on an even dimension, so the pair is (0, 1) or (2, 3)
+                // of one set: Sobol's first two dimensions form a (0, 2)-net.
+                let d = (self.dim + 1) & !1;
+                self.dim = d + 2;
+                let (i, seed) = self.sobol_index_and_seed(d / 4);
+                Vec2::new(sobol_burley::sample(i, d % 4, seed), sobol_burley::sample(i, d % 4 + 1, seed))
+            }
             SamplerKind::LowDiscrepancy => {
                 self.dim += 1;
                 let (i, seed) = self.index_and_seed();
@@ -249,6 +279,47 @@ mod tests {
         assert_eq!(a, b);
         let c = s.stream((4, 3), 5).next_1d();
         assert_ne!(a[0], c);
+    }
+
+    /// Owen-scrambled Sobol' keeps the net properties: the first 16 samples
+    /// of every 2D pair fill each elementary interval of area 1/16 once
+    /// (a (0, 4, 2)-net), and every 1D projection has one sample per 1/16.
+    #[test]
+    fn sobol_pairs_are_0_2_nets_and_1d_projections_stratify() {
+        let s = Sampler::new(SamplerKind::Sobol, 3, 16);
+        for pixel in [(0, 0), (5, 9)] {
+            // Draw pattern: 1D, 2D (skips to dimension 2), 2D, 1D, 2D (skips to 8).
+            let draws: Vec<(f32, Vec2, Vec2, f32, Vec2)> = (0..16)
+                .map(|i| {
+                    let mut st = s.stream(pixel, i);
+                    (st.next_1d(), st.next_2d(), st.next_2d(), st.next_1d(), st.next_2d())
+                })
+                .collect();
+            for pair in 0..3 {
+                let pts: Vec<Vec2> = draws.iter().map(|d| [d.1, d.2, d.4][pair]).collect();
+                for log_x in 0..=4 {
+                    let (nx, ny) = (1usize << log_x, 1usize << (4 - log_x));
+                    let mut seen = vec![false; 16];
+                    for p in &pts {
+                        let cell = (p.x * nx as f32) as usize + nx * (p.y * ny as f32) as usize;
+                        assert!(!seen[cell], "pixel {pixel:?} pair {pair}: {nx}x{ny} cell {cell} twice");
+                        seen[cell] = true;
+                    }
+                }
+            }
+            for dim in [0usize, 1] {
+                let mut seen = vec![false; 16];
+                for d in &draws {
+                    let k = ([d.0, d.3][dim] * 16.0) as usize;
+                    assert!(!seen[k], "1D draw {dim}: stratum {k} twice");
+                    seen[k] = true;
+                }
+            }
+        }
+        // Past 2^16 samples a new, independently scrambled block starts.
+        let a = s.stream((1, 1), 3).next_2d();
+        let b = s.stream((1, 1), 3 + (1 << 16)).next_2d();
+        assert!(a != b && b.x < 1.0 && b.y < 1.0);
     }
 
     #[test]
@@ -394,7 +465,7 @@ mod tests {
         let f8 = |u: &[Vec2]| {
             u.iter().map(|p| (0.5 + p.x as f64) * (1.0 + 0.5 * (std::f64::consts::TAU * p.y as f64).cos())).product()
         };
-        for kind in NEW_KINDS {
+        for kind in NEW_KINDS.into_iter().chain([SamplerKind::Sobol]) {
             let spp = kind.round_sample_count(16);
             let i2 = rmse(SamplerKind::Independent, spp, 1, &f2, exact2);
             let s2 = rmse(kind, spp, 1, &f2, exact2);

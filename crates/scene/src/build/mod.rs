@@ -39,7 +39,14 @@ pub struct Overrides {
     pub seed: Option<u64>,
     /// `--integrator NAME[:key=value,...]`, replacing the scene's integrator.
     pub integrator: Option<String>,
+    /// `--sampler NAME`, replacing the scene's sampler type (its sample count
+    /// and seed stay): a Mitsuba sampler or `sobol`.
+    pub sampler: Option<String>,
 }
+
+/// Sampler names `--sampler` accepts.
+pub const SAMPLER_OVERRIDES: &[&str] =
+    &["independent", "stratified", "multijitter", "orthogonal", "ldsampler", "sobol"];
 
 const SHAPES: &[&str] =
     &["rectangle", "cube", "sphere", "disk", "cylinder", "obj", "ply", "serialized", "shapegroup", "instance"];
@@ -838,6 +845,21 @@ fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
             }
             s.check_all_used(&[])?;
             (kind, spp as u32, seed as u64)
+        }
+    };
+    let kind = match ov.sampler.as_deref() {
+        None => kind,
+        Some("independent") => SamplerKind::Independent,
+        Some("stratified") => SamplerKind::Stratified,
+        Some("multijitter") => SamplerKind::Multijitter { jitter: true },
+        Some("orthogonal") => SamplerKind::Orthogonal { jitter: true },
+        Some("ldsampler") => SamplerKind::LowDiscrepancy,
+        Some("sobol") => SamplerKind::Sobol,
+        Some(other) => {
+            return Err(LoadError::new(
+                None,
+                format!("--sampler {other}: unknown sampler; use one of {}", SAMPLER_OVERRIDES.join(", ")),
+            ))
         }
     };
     if let Some(o) = ov.spp {

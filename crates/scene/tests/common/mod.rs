@@ -23,7 +23,7 @@ pub struct Estimate {
 /// Estimates to be compared with each other must use different seeds, or
 /// their errors are correlated and the comparison proves little.
 pub fn render_with_variance(scene: &Path, spp: u32, batches: u32, integrator: Option<&str>, seed: u64) -> Estimate {
-    let ov = Overrides { spp: Some(spp), seed: Some(seed), integrator: integrator.map(str::to_string) };
+    let ov = Overrides { spp: Some(spp), seed: Some(seed), integrator: integrator.map(str::to_string), sampler: None };
     let job = load_scene(scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
     let per = spp / batches;
     let imgs: Vec<Vec<[f32; 3]>> = (0..batches)
