@@ -196,3 +196,27 @@ fn bench_prints_its_table() {
     // Mitsuba could not be run: its column is empty and a note says why.
     assert!(String::from_utf8_lossy(&o.stderr).contains("Mitsuba timing skipped"));
 }
+
+#[test]
+fn sampler_override_is_deterministic_and_validated() {
+    let d = tmpdir("sampler");
+    let scene = root().join("scenes/cornell-box.xml");
+    let small = ["--spp", "4", "-D", "res=24", "--sampler", "sobol"];
+    let outs: Vec<Vec<u8>> = ["1", "2"]
+        .iter()
+        .map(|t| {
+            let out = d.join(format!("sobol{t}.pfm"));
+            let o = render(&scene, &out, &[&small[..], &["--threads", t]].concat());
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            fs::read(&out).unwrap()
+        })
+        .collect();
+    assert_eq!(outs[0], outs[1], "sobol: 1 and 2 threads must give identical images");
+    let indep = d.join("indep.pfm");
+    assert!(render(&scene, &indep, &small[..4]).status.success());
+    assert_ne!(fs::read(&indep).unwrap(), outs[0], "--sampler must change the samples");
+    let bad = render(&scene, &d.join("bad.pfm"), &["--sampler", "halton"]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("halton") && err.contains("sobol"), "{err}");
+}

@@ -23,7 +23,12 @@ pub struct Estimate {
 /// Estimates to be compared with each other must use different seeds, or
 /// their errors are correlated and the comparison proves little.
 pub fn render_with_variance(scene: &Path, spp: u32, batches: u32, integrator: Option<&str>, seed: u64) -> Estimate {
-    let ov = Overrides { spp: Some(spp), seed: Some(seed), integrator: integrator.map(str::to_string), sampler: None };
+    let ov = Overrides {
+        spp: Some(spp),
+        seed: Some(seed),
+        integrator: integrator.map(str::to_string),
+        ..Default::default()
+    };
     let job = load_scene(scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
     let per = spp / batches;
     let imgs: Vec<Vec<[f32; 3]>> = (0..batches)
@@ -33,8 +38,37 @@ pub fn render_with_variance(scene: &Path, spp: u32, batches: u32, integrator: Op
             film.develop()
         })
         .collect();
+    estimate(job.width, job.height, &imgs)
+}
+
+/// As [`render_with_variance`] with another sampler (`--sampler NAME`):
+/// each batch is its own seed's first `spp / batches` samples. Batches of one
+/// low-discrepancy sequence are correlated, so their spread would misjudge
+/// the variance; independently scrambled batches are independent.
+pub fn render_with_sampler(scene: &Path, spp: u32, batches: u32, sampler: &str, seed: u64) -> Estimate {
+    let per = spp / batches;
+    let imgs: Vec<Vec<[f32; 3]>> = (0..batches as u64)
+        .map(|b| {
+            let ov = Overrides {
+                spp: Some(per),
+                seed: Some(seed + b),
+                sampler: Some(sampler.to_string()),
+                ..Default::default()
+            };
+            let job = load_scene(scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
+            let mut film = Film::new(job.width, job.height);
+            job.render_into(&mut film, 0..per, &|_| {});
+            film.develop()
+        })
+        .collect();
+    let job = load_scene(scene, &[], &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    estimate(job.width, job.height, &imgs)
+}
+
+/// Per-pixel mean of equally weighted, independent images and the variance of that mean.
+fn estimate(width: u32, height: u32, imgs: &[Vec<[f32; 3]>]) -> Estimate {
     let n = imgs[0].len();
-    let k = batches as f64;
+    let k = imgs.len() as f64;
     let mut mean = vec![[0.0; 3]; n];
     let mut var = vec![[0.0; 3]; n];
     for i in 0..n {
@@ -45,7 +79,7 @@ pub fn render_with_variance(scene: &Path, spp: u32, batches: u32, integrator: Op
             var[i][c] = v / k;
         }
     }
-    Estimate { width: job.width, height: job.height, mean, var }
+    Estimate { width, height, mean, var }
 }
 
 /// Checks that two estimates of the same image agree: per-channel image
