@@ -163,8 +163,9 @@ impl EnvMapLight {
         let x0 = x.floor();
         let i0 = (y as usize).min(h - 2);
         let (fx, fy) = (x - x0, y - i0 as f32);
-        let j0 = (x0 as isize).rem_euclid(w as isize) as usize;
-        let j1 = (j0 + 1) % w;
+        // x0 ∈ [-1, W - 1]: wrap without integer division.
+        let j0 = if x0 < 0.0 { w - 1 } else { (x0 as usize).min(w - 1) };
+        let j1 = if j0 + 1 == w { 0 } else { j0 + 1 };
         let t = |i: usize, j: usize| self.texels[i * w + j];
         let top = (1.0 - fx) * t(i0, j0) + fx * t(i0, j1);
         let bottom = (1.0 - fx) * t(i0 + 1, j0) + fx * t(i0 + 1, j1);
@@ -191,15 +192,32 @@ impl EnvMapLight {
         Some(LightSample { wi, dist: f32::INFINITY, pdf, li: self.eval(wi), delta: false })
     }
 
+    /// `(eval(wi), pdf(wi))`, sharing the change of frame and the atan2 /
+    /// acos: a ray that escapes the scene needs both (for MIS).
+    pub fn eval_pdf(&self, wi: Vec3) -> (Spectrum, f32) {
+        let d = self.light_from_world * wi;
+        let u = fast::atan2(d.x, -d.z) * INV_2PI;
+        let theta = fast::acos(d.y);
+        (self.lookup(u, theta * INV_PI) * self.scale, self.pdf_local(d, u, theta))
+    }
+
     /// Solid-angle density with which `sample_li` produces the unit direction `wi`.
     pub fn pdf(&self, wi: Vec3) -> f32 {
+        let d = self.light_from_world * wi;
+        self.pdf_local(d, fast::atan2(d.x, -d.z) * INV_2PI, fast::acos(d.y))
+    }
+
+    /// [`Self::pdf`] for the light-space direction `d = A⁻¹ wi`, given
+    /// u = atan2(d.x, -d.z) / 2π and θ = acos(d.y) (of d as it is, not normalised).
+    #[inline]
+    fn pdf_local(&self, d: Vec3, u: f32, theta: f32) -> f32 {
         let Some(distribution) = &self.distribution else { return 0.0 };
-        let local = self.light_from_world * wi;
-        let m = local.length();
-        let d = local / m;
+        let m = d.length();
+        // The cell row is that of the unit direction (m = 1 for most rotations).
+        let theta = if m == 1.0 { theta } else { fast::acos(d.y / m) };
         let rows = self.height - 1;
-        let r = ((fast::acos(d.y) * INV_PI * rows as f32) as usize).min(rows - 1);
-        let u = fast::atan2(d.x, -d.z) * INV_2PI - 0.5 / self.width as f32;
+        let r = ((theta * INV_PI * rows as f32) as usize).min(rows - 1);
+        let u = u - 0.5 / self.width as f32;
         let pdf_uv = distribution.pdf(Vec2::new(u - u.floor(), (r as f32 + 0.5) / rows as f32));
         // |A d| = 1 / m for d = A⁻¹ wi / m.
         pdf_uv * self.inv_row_solid_angle[r] / (m * m * m * self.abs_det)
@@ -423,6 +441,7 @@ mod tests {
                 assert!((s.wi.length() - 1.0).abs() < 1e-5 && s.dist == f32::INFINITY && !s.delta);
                 assert_eq!(s.li, light.eval(s.wi));
                 let pdf = light.pdf(s.wi);
+                assert_eq!(light.eval_pdf(s.wi), (s.li, pdf));
                 assert!((s.pdf - pdf).abs() <= 1e-3 * pdf, "u {u}: sampled pdf {} vs pdf() {pdf}", s.pdf);
                 in_sun += (s.li.x > 100.0) as usize;
             }

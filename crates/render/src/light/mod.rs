@@ -74,7 +74,7 @@ impl Light {
     pub fn environment(&self, wi: Vec3) -> (Spectrum, f32) {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
-            Light::EnvMap(e) => (e.eval(wi), e.pdf(wi)),
+            Light::EnvMap(e) => e.eval_pdf(wi),
             _ => (Spectrum::ZERO, 0.0),
         }
     }

@@ -1,14 +1,22 @@
-//! Piecewise-constant 1D distribution over [0, 1) or over n discrete items.
+//! Discrete distribution over n items (or piecewise-constant over [0, 1)),
+//! sampled in O(1) with Walker's alias method (Vose's construction, "A
+//! linear algorithm for generating random numbers with a given
+//! distribution", 1991): one table lookup and one comparison instead of a
+//! binary search over a CDF. Mesh emitters pick a triangle and the envmap a
+//! row and a column with it on every light sample.
 
-/// A discrete / piecewise-constant distribution built from non-negative weights.
+/// A discrete distribution built from non-negative weights.
 #[derive(Debug, Clone)]
 pub struct Distribution1D {
     /// Unnormalised weights.
     pub func: Vec<f32>,
-    /// Normalised CDF with `func.len() + 1` entries, cdf[0] = 0, cdf[n] = 1.
-    pub cdf: Vec<f32>,
     /// Sum of the weights.
     pub total: f64,
+    /// Probability of each item (weight / total).
+    pmf: Vec<f32>,
+    /// Per bucket i of [i/n, (i+1)/n): the share of the bucket that keeps
+    /// item i, and the item that takes the rest.
+    alias: Vec<(f32, u32)>,
 }
 
 impl Distribution1D {
@@ -17,21 +25,36 @@ impl Distribution1D {
         if weights.iter().any(|w| !w.is_finite() || *w < 0.0) {
             return None;
         }
-        let mut cdf = Vec::with_capacity(weights.len() + 1);
-        let mut acc = 0.0f64;
-        cdf.push(0.0);
-        for &w in weights {
-            acc += w as f64;
-            cdf.push(acc as f32);
-        }
-        if acc <= 0.0 {
+        let total: f64 = weights.iter().map(|&w| w as f64).sum();
+        if !(total > 0.0) {
             return None;
         }
-        for c in &mut cdf {
-            *c = (*c as f64 / acc) as f32;
+        let n = weights.len();
+        // Vose: weights scaled to mean 1; each under-full bucket is topped up
+        // by an over-full item, which then joins the list it now belongs to.
+        let mut scaled: Vec<f64> = weights.iter().map(|&w| w as f64 * n as f64 / total).collect();
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
+        let mut alias = vec![(1.0f32, 0u32); n];
+        for (i, a) in alias.iter_mut().enumerate() {
+            a.1 = i as u32;
         }
-        *cdf.last_mut().unwrap() = 1.0;
-        Some(Distribution1D { func: weights.to_vec(), cdf, total: acc })
+        while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+            small.pop();
+            alias[s] = (scaled[s] as f32, l as u32);
+            scaled[l] -= 1.0 - scaled[s];
+            if scaled[l] < 1.0 {
+                large.pop();
+                small.push(l);
+            }
+        }
+        // Leftovers are full up to rounding; one of zero weight (rounding
+        // emptied `large` first) must never be picked: give its bucket away.
+        let positive = weights.iter().position(|&w| w > 0.0).unwrap() as u32;
+        for i in small.into_iter().chain(large) {
+            alias[i] = if weights[i] > 0.0 { (1.0, i as u32) } else { (0.0, positive) };
+        }
+        let pmf = weights.iter().map(|&w| (w as f64 / total) as f32).collect();
+        Some(Distribution1D { func: weights.to_vec(), total, pmf, alias })
     }
 
     pub fn len(&self) -> usize {
@@ -45,31 +68,20 @@ impl Distribution1D {
     /// Probability of item `i`.
     #[inline]
     pub fn pmf(&self, i: usize) -> f32 {
-        self.cdf[i + 1] - self.cdf[i]
+        self.pmf[i]
     }
 
     /// Picks an item with probability proportional to its weight. Returns
-    /// the item, its probability and `u` remapped to [0, 1) within the item,
-    /// so the same number can be reused for a further choice.
+    /// the item, its probability and `u` remapped to [0, 1) within the
+    /// choice made, so the same number can be reused for a further choice.
     #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32, f32) {
-        // First index whose upper CDF bound exceeds u.
-        let i = self.cdf[1..].partition_point(|&c| c <= u).min(self.len() - 1);
-        let i = self.skip_empty(i);
-        let pmf = self.pmf(i);
-        let u_re = ((u - self.cdf[i]) / pmf).clamp(0.0, 1.0 - f32::EPSILON / 2.0);
-        (i, pmf, u_re)
-    }
-
-    /// Rounding can land on a zero-probability item; move to a valid one.
-    fn skip_empty(&self, mut i: usize) -> usize {
-        while self.pmf(i) <= 0.0 && i > 0 {
-            i -= 1;
-        }
-        while self.pmf(i) <= 0.0 && i + 1 < self.len() {
-            i += 1;
-        }
-        i
+        let x = u * self.alias.len() as f32;
+        let bucket = (x as usize).min(self.alias.len() - 1);
+        let f = x - bucket as f32;
+        let (keep, other) = self.alias[bucket];
+        let (i, u_re) = if f < keep { (bucket, f / keep) } else { (other as usize, (f - keep) / (1.0 - keep)) };
+        (i, self.pmf[i], u_re.clamp(0.0, 1.0 - f32::EPSILON / 2.0))
     }
 }
 
@@ -101,5 +113,41 @@ mod tests {
         assert!(Distribution1D::new(&[0.0, 0.0]).is_none());
         assert!(Distribution1D::new(&[1.0, f32::NAN]).is_none());
         assert!(Distribution1D::new(&[]).is_none());
+    }
+
+    /// The remapped number is uniform within each item (so reusing it is
+    /// unbiased): per item, its histogram over 8 bins is flat.
+    #[test]
+    fn remapped_numbers_are_uniform_per_item() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0, 4.0, 0.5]).unwrap();
+        let n = 160_000;
+        let mut bins = [[0usize; 8]; 5];
+        for k in 0..n {
+            let (i, _, ur) = d.sample_discrete((k as f32 + 0.5) / n as f32);
+            bins[i][(ur * 8.0) as usize] += 1;
+        }
+        for (i, b) in bins.iter().enumerate() {
+            let expected = n as f32 * d.pmf(i) / 8.0;
+            for &c in b {
+                assert!((c as f32 - expected).abs() <= 2.0 + 1e-3 * expected, "item {i}: {b:?}");
+            }
+        }
+    }
+
+    /// Items of zero weight are never picked, even next to tiny weights
+    /// where rounding leaves buckets over.
+    #[test]
+    fn zero_weights_are_never_picked() {
+        let mut w = vec![0.0f32; 1000];
+        for (i, x) in w.iter_mut().enumerate().step_by(7) {
+            *x = 1e-3 + (i % 13) as f32;
+        }
+        let d = Distribution1D::new(&w).unwrap();
+        for k in 0..100_000 {
+            let (i, p, _) = d.sample_discrete(k as f32 / 100_000.0);
+            assert!(w[i] > 0.0 && p > 0.0, "picked item {i} of weight 0");
+        }
+        let sum: f64 = (0..w.len()).map(|i| d.pmf(i) as f64).sum();
+        assert!((sum - 1.0).abs() < 1e-5);
     }
 }
