@@ -11,7 +11,7 @@
 //! in a fixed order, so the image does not depend on the thread count.
 
 use crate::aov::{channel_count, AovKind};
-use crate::math::Spectrum;
+use crate::math::{fast, Spectrum};
 use glam::Vec2;
 
 /// Mitsuba's reconstruction filters (`rfilter`), as 1D profiles applied
@@ -69,7 +69,7 @@ impl Filter {
             return self.eval(x);
         }
         let t = x.abs() * self.inv_step;
-        let i = t as usize;
+        let i = fast::index(t);
         if i >= TABLE {
             return 0.0;
         }

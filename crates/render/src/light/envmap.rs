@@ -161,10 +161,10 @@ impl EnvMapLight {
         let x = (u - u.floor()) * w as f32 - 0.5;
         let y = v.clamp(0.0, 1.0) * (h - 1) as f32;
         let x0 = x.floor();
-        let i0 = (y as usize).min(h - 2);
+        let i0 = fast::index(y).min(h - 2);
         let (fx, fy) = (x - x0, y - i0 as f32);
         // x0 ∈ [-1, W - 1]: wrap without integer division.
-        let j0 = if x0 < 0.0 { w - 1 } else { (x0 as usize).min(w - 1) };
+        let j0 = if x0 < 0.0 { w - 1 } else { fast::index(x0).min(w - 1) };
         let j1 = if j0 + 1 == w { 0 } else { j0 + 1 };
         let t = |i: usize, j: usize| self.texels[i * w + j];
         let top = (1.0 - fx) * t(i0, j0) + fx * t(i0, j1);
@@ -178,7 +178,7 @@ impl EnvMapLight {
         let (p, pdf_uv) = self.distribution.as_ref()?.sample(u2);
         let rows = self.height - 1;
         let y = p.y * rows as f32;
-        let r = (y as usize).min(rows - 1);
+        let r = fast::index(y).min(rows - 1);
         let (c0, c1) = (self.cos_theta[r], self.cos_theta[r + 1]);
         let cos_t = (c0 + (y - r as f32) * (c1 - c0)).clamp(-1.0, 1.0);
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
@@ -216,7 +216,7 @@ impl EnvMapLight {
         // The cell row is that of the unit direction (m = 1 for most rotations).
         let theta = if m == 1.0 { theta } else { fast::acos(d.y / m) };
         let rows = self.height - 1;
-        let r = ((theta * INV_PI * rows as f32) as usize).min(rows - 1);
+        let r = fast::index(theta * INV_PI * rows as f32).min(rows - 1);
         let u = u - 0.5 / self.width as f32;
         let pdf_uv = distribution.pdf(Vec2::new(u - u.floor(), (r as f32 + 0.5) / rows as f32));
         // |A d| = 1 / m for d = A⁻¹ wi / m.

@@ -50,6 +50,15 @@ pub fn acos(x: f32) -> f32 {
     }
 }
 
+/// ⌊x⌋ as an index for x in [0, 2³¹); 0 for negative x and NaN, i32::MAX
+/// above. `x as usize` is exact for more values but costs about twice the
+/// instructions (a 64-bit unsigned saturating conversion); every caller
+/// clamps to a table's size anyway.
+#[inline(always)]
+pub fn index(x: f32) -> usize {
+    (x as i32).max(0) as usize
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

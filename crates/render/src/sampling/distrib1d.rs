@@ -5,6 +5,8 @@
 //! binary search over a CDF. Mesh emitters pick a triangle and the envmap a
 //! row and a column with it on every light sample.
 
+use crate::math::fast;
+
 /// A discrete distribution built from non-negative weights.
 #[derive(Debug, Clone)]
 pub struct Distribution1D {
@@ -77,7 +79,7 @@ impl Distribution1D {
     #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32, f32) {
         let x = u * self.alias.len() as f32;
-        let bucket = (x as usize).min(self.alias.len() - 1);
+        let bucket = fast::index(x).min(self.alias.len() - 1);
         let f = x - bucket as f32;
         let (keep, other) = self.alias[bucket];
         let (i, u_re) = if f < keep { (bucket, f / keep) } else { (other as usize, (f - keep) / (1.0 - keep)) };

@@ -3,6 +3,7 @@
 //! distribution over the columns of the chosen row.
 
 use super::Distribution1D;
+use crate::math::fast;
 use glam::Vec2;
 
 /// Density proportional to a `width` × `height` grid of non-negative cell
@@ -53,8 +54,8 @@ impl Distribution2D {
         if !(0.0..=1.0).contains(&p.x) || !(0.0..=1.0).contains(&p.y) {
             return 0.0;
         }
-        let col = ((p.x * self.width as f32) as usize).min(self.width - 1);
-        let row = ((p.y * self.height as f32) as usize).min(self.height - 1);
+        let col = fast::index(p.x * self.width as f32).min(self.width - 1);
+        let row = fast::index(p.y * self.height as f32).min(self.height - 1);
         self.conditional[row].as_ref().map_or(0.0, |c| c.func[col] * self.inv_mean)
     }
 }
@@ -62,7 +63,7 @@ impl Distribution2D {
 /// (i + t) / n, nudged by rounding steps so that it maps back to cell i
 /// (as `pdf` computes cells), and so stays below 1.
 fn point_in_cell(i: usize, t: f32, n: usize) -> f32 {
-    let cell = |x: f32| (x * n as f32) as usize;
+    let cell = |x: f32| fast::index(x * n as f32);
     let mut x = (i as f32 + t) / n as f32;
     while cell(x) > i {
         x = f32::from_bits(x.to_bits() - 1);
