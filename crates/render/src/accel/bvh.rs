@@ -83,13 +83,27 @@ pub struct Accel {
 
 const STACK: usize = 192;
 
-/// The arrays of a tree being written out, before they move into an [`Accel`].
-#[derive(Default)]
+/// The arrays of a tree being written out in place, sized beforehand by
+/// [`count_wide`], with how many of each are written so far.
 struct Emitter {
-    nodes: Vec<Node>,
-    tris: Vec<Tri4>,
-    tri_ids: Vec<[[u32; 2]; 4]>,
+    nodes: HugeArray<Node>,
+    tris: HugeArray<Tri4>,
+    tri_ids: HugeArray<[[u32; 2]; 4]>,
     prims: Vec<Prim>,
+    n_nodes: usize,
+    n_blocks: usize,
+}
+
+/// (wide nodes, triangle blocks) the tree below `node` emits.
+fn count_wide(node: &BNode, items: &[Item]) -> (usize, usize) {
+    match node {
+        BNode::Leaf { first, count, .. } if items[*first].kind == ItemKind::Triangle => (0, count.div_ceil(4)),
+        BNode::Leaf { .. } => (0, 0),
+        BNode::Inner { .. } => wide_children(node, WIDTH).iter().fold((1, 0), |(n, b), k| {
+            let (kn, kb) = count_wide(k, items);
+            (n + kn, b + kb)
+        }),
+    }
 }
 
 impl Emitter {
@@ -99,23 +113,22 @@ impl Emitter {
             BNode::Leaf { first, count, .. } => {
                 let leaf = &items[*first..*first + *count];
                 if leaf[0].kind == ItemKind::Triangle {
-                    let start = self.tris.len() as u32;
+                    let start = self.n_blocks as u32;
                     for block in leaf.chunks(4) {
-                        let verts: Vec<[Vec3; 3]> = block
-                            .iter()
-                            .map(|p| match &shapes[p.shape as usize] {
-                                Shape::Mesh(m) => m.vertices(p.index as usize),
-                                _ => unreachable!("triangle items come from meshes"),
-                            })
-                            .collect();
-                        self.tris.push(Tri4::new(&verts));
+                        let mut verts = [[Vec3::ZERO; 3]; 4];
                         let mut ids = [[u32::MAX; 2]; 4];
                         for (l, p) in block.iter().enumerate() {
+                            let Shape::Mesh(m) = &shapes[p.shape as usize] else {
+                                unreachable!("triangle items come from meshes")
+                            };
+                            verts[l] = m.vertices(p.index as usize);
                             ids[l] = [p.shape, p.index];
                         }
-                        self.tri_ids.push(ids);
+                        self.tris[self.n_blocks] = Tri4::new(&verts[..block.len()]);
+                        self.tri_ids[self.n_blocks] = ids;
+                        self.n_blocks += 1;
                     }
-                    (start, self.tris.len() as u32 - start)
+                    (start, self.n_blocks as u32 - start)
                 } else {
                     let start = self.prims.len() as u32;
                     for p in leaf {
@@ -129,9 +142,9 @@ impl Emitter {
             }
             BNode::Inner { .. } => {
                 let kids = wide_children(node, WIDTH);
-                let idx = self.nodes.len();
+                let idx = self.n_nodes;
+                self.n_nodes += 1;
                 let empty = Aabb::EMPTY;
-                self.nodes.push(Node { b: [F8::splat(0.0); 6], child: [0; WIDTH], info: [0; WIDTH] });
                 let mut lanes = [[0.0f32; WIDTH]; 6];
                 let (mut child, mut info) = ([0u32; WIDTH], [0u32; WIDTH]);
                 for l in 0..WIDTH {
@@ -191,16 +204,24 @@ impl Accel {
             return Accel::default();
         }
         let tree = build_binary(&mut items);
-        let n_tris = items.iter().filter(|p| p.kind == ItemKind::Triangle).count();
-        let mut out = Emitter::default();
-        out.tris.reserve(n_tris / 3);
-        out.tri_ids.reserve(n_tris / 3);
+        let (n_nodes, n_blocks) = count_wide(&tree, &items);
+        // SAFETY: nodes, triangle blocks and ids are plain floats and integers.
+        let mut out = unsafe {
+            Emitter {
+                nodes: HugeArray::zeroed(n_nodes),
+                tris: HugeArray::zeroed(n_blocks),
+                tri_ids: HugeArray::zeroed(n_blocks),
+                prims: Vec::new(),
+                n_nodes: 0,
+                n_blocks: 0,
+            }
+        };
         let root = out.emit(&tree, &items, shapes);
-        drop(items);
+        debug_assert_eq!((out.n_nodes, out.n_blocks), (n_nodes, n_blocks));
         Accel {
-            nodes: HugeArray::from_slice(&std::mem::take(&mut out.nodes)),
-            tris: HugeArray::from_slice(&std::mem::take(&mut out.tris)),
-            tri_ids: HugeArray::from_slice(&std::mem::take(&mut out.tri_ids)),
+            nodes: out.nodes,
+            tris: out.tris,
+            tri_ids: out.tri_ids,
             prims: out.prims,
             root: Some(root),
             bounds: tree.bounds(),
@@ -276,32 +297,31 @@ impl Accel {
                         cur = Entry { child: node.child[l], info: node.info[l], t: tn[l] };
                         continue;
                     }
-                    // Several children: stack them far to near, visit the nearest.
-                    let mut hits = [Entry { child: 0, info: 0, t: 0.0 }; WIDTH];
-                    let mut n = 0;
+                    // Several children: push them, sorted in place far to
+                    // near (insertion among the new entries), then pop the
+                    // nearest to visit it.
+                    let base = sp;
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
                         let e = Entry { child: node.child[l], info: node.info[l], t: tn[l] };
-                        // Insertion into descending order of entry distance.
-                        let mut k = n;
-                        while !ANY && k > 0 && hits[k - 1].t < e.t {
-                            hits[k] = hits[k - 1];
+                        if sp == STACK {
+                            debug_assert!(false, "BVH traversal stack overflow");
+                            break;
+                        }
+                        let mut k = sp;
+                        // SAFETY: stack[base..sp] were written in this loop.
+                        while !ANY && k > base && unsafe { stack[k - 1].assume_init() }.t < e.t {
+                            stack[k] = stack[k - 1];
                             k -= 1;
                         }
-                        hits[k] = e;
-                        n += 1;
+                        stack[k].write(e);
+                        sp += 1;
                     }
-                    for e in &hits[..n - 1] {
-                        if sp < STACK {
-                            stack[sp].write(*e);
-                            sp += 1;
-                        } else {
-                            debug_assert!(false, "BVH traversal stack overflow");
-                        }
-                    }
-                    let next = hits[n - 1];
-                    cur = next;
+                    sp -= 1;
+                    // SAFETY: stack[..sp] are written (entries pushed above, or
+                    // older ones if the stack was full).
+                    cur = unsafe { stack[sp].assume_init() };
                     continue;
                 }
             } else if cur.info & OTHER == 0 {
