@@ -248,6 +248,24 @@ impl Film {
         // 25 pixels without a test per pixel.
         let xs = nonzero_taps(&wx[..taps], px - m, self.width);
         let ys = nonzero_taps(&wy[..taps], py - m, self.height);
+        if aov.is_none() && self.moments.is_empty() {
+            // The common case, without tests per pixel: beauty and weight only.
+            let (x0, n) = ((px - m + xs.start as i32) as usize, xs.len());
+            for ky in ys {
+                let row = (py - m + ky as i32) as usize * self.width as usize + x0;
+                let wy = wy[ky];
+                let sums = &mut self.sum[row..row + n];
+                let weights = &mut self.weight[row..row + n];
+                for ((s, wsum), &wx) in sums.iter_mut().zip(weights).zip(&wx[xs.clone()]) {
+                    let w = wx * wy;
+                    s[0] += (l.x * w) as f64;
+                    s[1] += (l.y * w) as f64;
+                    s[2] += (l.z * w) as f64;
+                    *wsum += w as f64;
+                }
+            }
+            return;
+        }
         for ky in ys {
             let y = (py - m + ky as i32) as u32;
             for kx in xs.clone() {
