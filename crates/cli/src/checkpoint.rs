@@ -49,7 +49,7 @@ fn put_str(out: &mut Vec<u8>, s: &str) {
 
 impl Checkpoint {
     pub fn encode(&self) -> Vec<u8> {
-        let n = self.film.weight.len();
+        let n = self.film.acc.len();
         let mut out = Vec::with_capacity(128 + n * 32);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&FORMAT.to_le_bytes());
@@ -64,8 +64,8 @@ impl Checkpoint {
         let names: Vec<&str> = self.film.aov_kinds.iter().map(|k| k.name()).collect();
         put_str(&mut out, &names.join(","));
         out.push(self.film.has_variance() as u8);
-        for (s, w) in self.film.sum.iter().zip(&self.film.weight) {
-            for v in [s[0], s[1], s[2], *w] {
+        for a in &self.film.acc {
+            for v in a {
                 out.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -113,9 +113,9 @@ impl Checkpoint {
         }
         for i in 0..n {
             for c in 0..3 {
-                film.sum[i][c] = f64::from_bits(r.u64()?);
+                film.acc[i][c] = f64::from_bits(r.u64()?);
             }
-            film.weight[i] = f64::from_bits(r.u64()?);
+            film.acc[i][3] = f64::from_bits(r.u64()?);
         }
         for v in film.aov.iter_mut().chain(film.moments.iter_mut().flatten()) {
             *v = f64::from_bits(r.u64()?);
@@ -205,16 +205,14 @@ mod tests {
     fn round_trips_and_detects_damage() {
         let layers = FilmLayers { aovs: vec![AovKind::Depth, AovKind::Albedo], variance: true };
         let mut film = Film::with_layers(3, 2, &layers);
-        film.sum[4] = [1.5, 0.1 + 0.2, -0.0];
-        film.weight[4] = 7.25;
+        film.acc[4] = [1.5, 0.1 + 0.2, -0.0, 7.25];
         film.aov[4 * 4 + 1] = 0.375;
         film.moments[5][6] = 1e-300;
         let settings = Settings { entries: vec![("spp".into(), "8".into())] };
         let ck = Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film };
         let bytes = ck.encode();
         let back = Checkpoint::decode(&bytes, "x").unwrap();
-        assert_eq!(back.film.sum, ck.film.sum);
-        assert_eq!(back.film.weight, ck.film.weight);
+        assert_eq!(back.film.acc, ck.film.acc);
         assert_eq!(back.film.aov, ck.film.aov);
         assert_eq!(back.film.moments, ck.film.moments);
         assert_eq!(back.film.layers(), layers);

@@ -110,8 +110,8 @@ pub fn film_of_part(img: &ExrImage, what: &str) -> Result<Film> {
     let n = film.aov_channels();
     for (i, &w) in weight.iter().enumerate() {
         let w = w as f64;
-        film.weight[i] = w;
-        film.sum[i] = img.rgb[i].map(|v| v as f64 * w);
+        let [r, g, b] = img.rgb[i].map(|v| v as f64 * w);
+        film.acc[i] = [r, g, b, w];
     }
     let mut off = 0;
     for k in &aovs {
@@ -119,7 +119,7 @@ pub fn film_of_part(img: &ExrImage, what: &str) -> Result<Film> {
             let name = format!("{}.{suffix}", k.name());
             let Some(v) = img.layer(&name) else { bail!("'{what}' has no channel {name}") };
             for (i, &a) in v.iter().enumerate() {
-                film.aov[i * n + off] = a as f64 * film.weight[i];
+                film.aov[i * n + off] = a as f64 * film.acc[i][3];
             }
             off += 1;
         }
@@ -168,7 +168,7 @@ mod tests {
             offset: (0, 0),
             full_size: (2, 1),
             rgb: f.develop(),
-            weight: Some(f.weight.iter().map(|&w| w as f32).collect()),
+            weight: Some(f.acc.iter().map(|a| a[3] as f32).collect()),
             layers: channels(&f, true),
             meta: Default::default(),
         };

@@ -87,7 +87,7 @@ impl Output<'_> {
         if let Some(e) = state.film.rel_error() {
             put("relErrorEstimate", format!("{e:.6e}"));
         }
-        let weight = self.part.map(|_| state.film.weight.iter().map(|&w| w as f32).collect());
+        let weight = self.part.map(|_| state.film.acc.iter().map(|a| a[3] as f32).collect());
         let mut img = ExrImage {
             width: state.film.width,
             height: state.film.height,

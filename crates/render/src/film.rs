@@ -126,8 +126,9 @@ fn nonzero_taps(w: &[f32], first: i32, size: u32) -> std::ops::Range<usize> {
 pub struct Film {
     pub width: u32,
     pub height: u32,
-    pub sum: Vec<[f64; 3]>,
-    pub weight: Vec<f64>,
+    /// Per pixel [Σ w·R, Σ w·G, Σ w·B, Σ w], interleaved so that a splat
+    /// adds one 4-wide vector per pixel.
+    pub acc: Vec<[f64; 4]>,
     /// The AOVs accumulated, in channel order (empty: none).
     pub aov_kinds: Vec<AovKind>,
     /// Σ w·a per pixel, `aov_channels()` values per pixel.
@@ -157,8 +158,7 @@ impl Film {
         Film {
             width,
             height,
-            sum: vec![[0.0; 3]; n],
-            weight: vec![0.0; n],
+            acc: vec![[0.0; 4]; n],
             aov: vec![0.0; n * channel_count(&layers.aovs)],
             aov_kinds: layers.aovs.clone(),
             moments: if layers.variance { vec![[0.0; 7]; n] } else { Vec::new() },
@@ -183,11 +183,11 @@ impl Film {
     #[inline]
     pub fn add(&mut self, x: u32, y: u32, l: Spectrum, w: f32) {
         let i = (y * self.width + x) as usize;
-        let s = &mut self.sum[i];
+        let s = &mut self.acc[i];
         s[0] += (l.x * w) as f64;
         s[1] += (l.y * w) as f64;
         s[2] += (l.z * w) as f64;
-        self.weight[i] += w as f64;
+        s[3] += w as f64;
         if let Some(m) = self.moments.get_mut(i) {
             let w2 = w as f64 * w as f64;
             m[0] += w2;
@@ -213,9 +213,9 @@ impl Film {
     #[inline]
     pub fn add_pixel(&mut self, dst: usize, other: &Film, src: usize) {
         for c in 0..3 {
-            self.sum[dst][c] += other.sum[src][c];
+            self.acc[dst][c] += other.acc[src][c];
         }
-        self.weight[dst] += other.weight[src];
+        self.acc[dst][3] += other.acc[src][3];
         let n = self.aov_channels();
         for k in 0..n {
             self.aov[dst * n + k] += other.aov[src * n + k];
@@ -254,14 +254,12 @@ impl Film {
             for ky in ys {
                 let row = (py - m + ky as i32) as usize * self.width as usize + x0;
                 let wy = wy[ky];
-                let sums = &mut self.sum[row..row + n];
-                let weights = &mut self.weight[row..row + n];
-                for ((s, wsum), &wx) in sums.iter_mut().zip(weights).zip(&wx[xs.clone()]) {
-                    let w = wx * wy;
-                    s[0] += (l.x * w) as f64;
-                    s[1] += (l.y * w) as f64;
-                    s[2] += (l.z * w) as f64;
-                    *wsum += w as f64;
+                let lw = l.extend(1.0);
+                for (a, &wx) in self.acc[row..row + n].iter_mut().zip(&wx[xs.clone()]) {
+                    let v = (lw * (wx * wy)).to_array();
+                    for c in 0..4 {
+                        a[c] += v[c] as f64;
+                    }
                 }
             }
             return;
@@ -286,17 +284,16 @@ impl Film {
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
         assert_eq!(self.layers(), other.layers());
-        for i in 0..self.weight.len() {
+        for i in 0..self.acc.len() {
             self.add_pixel(i, other, i);
         }
     }
 
     /// The image: linear RGB, row-major, top row first.
     pub fn develop(&self) -> Vec<[f32; 3]> {
-        self.sum
+        self.acc
             .iter()
-            .zip(&self.weight)
-            .map(|(s, &w)| if w > 0.0 { [(s[0] / w) as f32, (s[1] / w) as f32, (s[2] / w) as f32] } else { [0.0; 3] })
+            .map(|&[r, g, b, w]| if w > 0.0 { [(r / w) as f32, (g / w) as f32, (b / w) as f32] } else { [0.0; 3] })
             .collect()
     }
 
@@ -314,8 +311,8 @@ impl Film {
             return None;
         }
         let (n, m) = (self.aov_channels(), kind.channels().len());
-        let mut out = Vec::with_capacity(self.weight.len() * m);
-        for (i, &w) in self.weight.iter().enumerate() {
+        let mut out = Vec::with_capacity(self.acc.len() * m);
+        for (i, &[.., w]) in self.acc.iter().enumerate() {
             for c in 0..m {
                 out.push(if w > 0.0 { (self.aov[i * n + off + c] / w) as f32 } else { 0.0 });
             }
@@ -334,14 +331,14 @@ impl Film {
     #[inline]
     pub fn pixel_variance(&self, i: usize) -> Option<[f64; 3]> {
         let m = self.moments.get(i)?;
-        let w = self.weight[i];
+        let w = self.acc[i][3];
         let n_eff = if m[0] > 0.0 { w * w / m[0] } else { 0.0 };
         if n_eff < 1.5 {
             return Some([f64::INFINITY; 3]);
         }
         let mut v = [0.0; 3];
         for c in 0..3 {
-            let r = self.sum[i][c] / w;
+            let r = self.acc[i][c] / w;
             let s = m[4 + c] - 2.0 * r * m[1 + c] + r * r * m[0];
             v[c] = (s.max(0.0) / (w * w)) * n_eff / (n_eff - 1.0);
         }
@@ -354,7 +351,7 @@ impl Film {
             return None;
         }
         Some(
-            (0..self.weight.len())
+            (0..self.acc.len())
                 .map(|i| self.pixel_variance(i).unwrap().map(|v| if v.is_finite() { v as f32 } else { f32::MAX }))
                 .collect(),
         )
@@ -367,10 +364,10 @@ impl Film {
     #[inline]
     pub fn pixel_rel_error(&self, i: usize) -> Option<f64> {
         let v = self.pixel_variance(i)?;
-        let w = self.weight[i];
+        let w = self.acc[i][3];
         let mut e = 0.0;
         for (c, vc) in v.iter().enumerate() {
-            let r = if w > 0.0 { self.sum[i][c] / w } else { 0.0 };
+            let r = if w > 0.0 { self.acc[i][c] / w } else { 0.0 };
             e += vc / (r * r + REL_EPS);
         }
         Some(e / 3.0)
@@ -382,8 +379,8 @@ impl Film {
         if !self.has_variance() {
             return None;
         }
-        let n = self.weight.len().max(1) as f64;
-        Some((0..self.weight.len()).map(|i| self.pixel_rel_error(i).unwrap()).sum::<f64>() / n)
+        let n = self.acc.len().max(1) as f64;
+        Some((0..self.acc.len()).map(|i| self.pixel_rel_error(i).unwrap()).sum::<f64>() / n)
     }
 }
 

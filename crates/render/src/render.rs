@@ -95,7 +95,7 @@ impl RenderJob {
     ) -> Option<RenderStats> {
         assert_eq!((film.width, film.height), (self.width, self.height));
         if let Some(a) = active {
-            assert_eq!(a.len(), film.weight.len());
+            assert_eq!(a.len(), film.acc.len());
         }
         let layers = film.layers();
         // Samples are taken in the image and, for a crop window, in the ring
