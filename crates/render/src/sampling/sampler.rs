@@ -115,6 +115,8 @@ impl Sampler {
             dim: 0,
             index: sample_index,
             sampler: *self,
+            sobol_set: u32::MAX,
+            sobol: [0.0; 4],
         }
     }
 }
@@ -127,6 +129,10 @@ pub struct SampleStream {
     dim: u32,
     index: u32,
     sampler: Sampler,
+    /// `Sobol`: the dimension set whose four values `sobol` holds (computed
+    /// together, in SIMD, on the set's first use).
+    sobol_set: u32,
+    sobol: [f32; 4],
 }
 
 impl SampleStream {
@@ -163,10 +169,20 @@ impl SampleStream {
             }
             SamplerKind::Sobol => {
                 let d = self.dim - 1;
-                let (i, seed) = self.sobol_index_and_seed(d / 4);
-                sobol_burley::sample(i, d % 4, seed)
+                self.sobol_set(d / 4)[(d % 4) as usize]
             }
         }
+    }
+
+    /// The four values of a dimension set (see [`SamplerKind::Sobol`]).
+    #[inline]
+    fn sobol_set(&mut self, set: u32) -> [f32; 4] {
+        if self.sobol_set != set {
+            let (i, seed) = self.sobol_index_and_seed(set);
+            self.sobol = sobol_burley::sample_4d(i, 0, seed);
+            self.sobol_set = set;
+        }
+        self.sobol
     }
 
     /// The index within a block of 2^16 samples (the most `sobol_burley`
@@ -245,8 +261,9 @@ impl SampleStream {
                 // of one set: Sobol's first two dimensions form a (0, 2)-net.
                 let d = (self.dim + 1) & !1;
                 self.dim = d + 2;
-                let (i, seed) = self.sobol_index_and_seed(d / 4);
-                Vec2::new(sobol_burley::sample(i, d % 4, seed), sobol_burley::sample(i, d % 4 + 1, seed))
+                let v = self.sobol_set(d / 4);
+                let c = (d % 4) as usize;
+                Vec2::new(v[c], v[c + 1])
             }
             SamplerKind::LowDiscrepancy => {
                 self.dim += 1;
