@@ -70,8 +70,8 @@ impl Bins {
 }
 
 #[inline]
-fn bin_of(c: f32, min: f32, scale: f32) -> usize {
-    (((c - min) * scale) as usize).min(BINS - 1)
+fn bin_of(c: f32, min: f32, scale: f32, bins: usize) -> usize {
+    (((c - min) * scale) as usize).min(bins - 1)
 }
 
 /// SAH cost of a primitive count: blocks of four.
@@ -100,17 +100,20 @@ fn build_rec(items: &mut [Item], first: usize) -> BNode {
     if n == 1 {
         return leaf(items);
     }
+    // Fewer bins for small nodes, as Embree does: there are many of them,
+    // and sweeping 32 mostly empty bins costs more than the binning.
+    let nb = BINS.min(4 + n / 20);
     let ext = cb.extent();
     let scale = Vec3A::from(Vec3::new(
-        if ext.x > 0.0 { BINS as f32 / ext.x } else { 0.0 },
-        if ext.y > 0.0 { BINS as f32 / ext.y } else { 0.0 },
-        if ext.z > 0.0 { BINS as f32 / ext.z } else { 0.0 },
+        if ext.x > 0.0 { nb as f32 / ext.x } else { 0.0 },
+        if ext.y > 0.0 { nb as f32 / ext.y } else { 0.0 },
+        if ext.z > 0.0 { nb as f32 / ext.z } else { 0.0 },
     ));
     let cmin = Vec3A::from(cb.min);
     let fill = |chunk: &[Item]| {
         let mut bins = Bins::empty();
         for p in chunk {
-            let i = ((Vec3A::from(p.centroid) - cmin) * scale).as_uvec3().min(UVec3::splat(BINS as u32 - 1));
+            let i = ((Vec3A::from(p.centroid) - cmin) * scale).as_uvec3().min(UVec3::splat(nb as u32 - 1));
             for a in 0..3 {
                 let k = i[a] as usize;
                 bins.b[a][k] = bins.b[a][k].union(p.bounds);
@@ -130,13 +133,13 @@ fn build_rec(items: &mut [Item], first: usize) -> BNode {
         }
         let mut right = [(0.0f32, 0u32); BINS];
         let (mut acc_b, mut acc_n) = (Aabb::EMPTY, 0);
-        for i in (1..BINS).rev() {
+        for i in (1..nb).rev() {
             acc_b = acc_b.union(bins.b[a][i]);
             acc_n += bins.n[a][i];
             right[i] = (acc_b.area(), acc_n);
         }
         let (mut left_b, mut left_n) = (Aabb::EMPTY, 0);
-        for i in 0..BINS - 1 {
+        for i in 0..nb - 1 {
             left_b = left_b.union(bins.b[a][i]);
             left_n += bins.n[a][i];
             let (ra, rn) = right[i + 1];
@@ -154,7 +157,7 @@ fn build_rec(items: &mut [Item], first: usize) -> BNode {
     let split_cost = TRAVERSAL_COST + BLOCK_COST * best.0 / bounds.area().max(f32::MIN_POSITIVE);
     let mid = if best.0.is_finite() && (split_cost < leaf_cost || n > MAX_LEAF) {
         let (a, split) = (best.1, best.2);
-        partition(items, |p| bin_of(p.centroid[a], cb.min[a], scale[a]) < split)
+        partition(items, |p| bin_of(p.centroid[a], cb.min[a], scale[a], nb) < split)
     } else if n > MAX_LEAF {
         // All centroids coincide: split by count.
         n / 2
