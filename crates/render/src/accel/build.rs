@@ -15,14 +15,22 @@ pub enum ItemKind {
     Other,
 }
 
-/// A primitive to build over: its box, centroid and reference.
+/// A primitive to build over: its box and reference (36 bytes; the
+/// centroid is recomputed from the box, which is cheaper than storing it
+/// for ten million primitives).
 #[derive(Debug, Clone, Copy)]
 pub struct Item {
     pub bounds: Aabb,
-    pub centroid: Vec3,
     pub kind: ItemKind,
     pub shape: u32,
     pub index: u32,
+}
+
+impl Item {
+    #[inline(always)]
+    pub fn centroid(&self) -> Vec3 {
+        self.bounds.center()
+    }
 }
 
 /// A node of the binary tree; leaves hold a range of the item array, all of one kind.
@@ -89,7 +97,7 @@ fn build_rec(items: &mut [Item], first: usize) -> BNode {
     let n = items.len();
     // Primitive bounds and centroid bounds in one pass.
     let both =
-        |c: &[Item]| c.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, cb), p| (b.union(p.bounds), cb.grow(p.centroid)));
+        |c: &[Item]| c.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, cb), p| (b.union(p.bounds), cb.grow(p.centroid())));
     let join = |a: (Aabb, Aabb), b: (Aabb, Aabb)| (a.0.union(b.0), a.1.union(b.1));
     let (bounds, cb) = if n >= PARALLEL {
         items.par_chunks(4096).map(both).reduce(|| (Aabb::EMPTY, Aabb::EMPTY), join)
@@ -113,7 +121,7 @@ fn build_rec(items: &mut [Item], first: usize) -> BNode {
     let fill = |chunk: &[Item]| {
         let mut bins = Bins::empty();
         for p in chunk {
-            let i = ((Vec3A::from(p.centroid) - cmin) * scale).as_uvec3().min(UVec3::splat(nb as u32 - 1));
+            let i = ((Vec3A::from(p.centroid()) - cmin) * scale).as_uvec3().min(UVec3::splat(nb as u32 - 1));
             for a in 0..3 {
                 let k = i[a] as usize;
                 bins.b[a][k] = bins.b[a][k].union(p.bounds);
@@ -157,7 +165,7 @@ fn build_rec(items: &mut [Item], first: usize) -> BNode {
     let split_cost = TRAVERSAL_COST + BLOCK_COST * best.0 / bounds.area().max(f32::MIN_POSITIVE);
     let mid = if best.0.is_finite() && (split_cost < leaf_cost || n > MAX_LEAF) {
         let (a, split) = (best.1, best.2);
-        partition(items, |p| bin_of(p.centroid[a], cb.min[a], scale[a], nb) < split)
+        partition(items, |p| bin_of(p.centroid()[a], cb.min[a], scale[a], nb) < split)
     } else if n > MAX_LEAF {
         // All centroids coincide: split by count.
         n / 2

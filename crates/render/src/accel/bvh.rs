@@ -169,8 +169,7 @@ impl Accel {
     pub fn build(shapes: &[Shape]) -> Accel {
         let mut items = Vec::new();
         for (si, shape) in shapes.iter().enumerate() {
-            let other =
-                |b: Aabb| Item { bounds: b, centroid: b.center(), kind: ItemKind::Other, shape: si as u32, index: 0 };
+            let other = |b: Aabb| Item { bounds: b, kind: ItemKind::Other, shape: si as u32, index: 0 };
             match shape {
                 Shape::Mesh(m) => {
                     items.reserve(m.mesh.indices.len());
@@ -181,13 +180,7 @@ impl Accel {
                             continue;
                         }
                         let b = Aabb::from_points(&v);
-                        items.push(Item {
-                            bounds: b,
-                            centroid: b.center(),
-                            kind: ItemKind::Triangle,
-                            shape: si as u32,
-                            index: i as u32,
-                        });
+                        items.push(Item { bounds: b, kind: ItemKind::Triangle, shape: si as u32, index: i as u32 });
                     }
                 }
                 Shape::GroupMember => {}
