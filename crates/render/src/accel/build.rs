@@ -1,6 +1,6 @@
 //! BVH construction: a binary tree by binned SAH (Wald 2007, "On fast
 //! construction of SAH-based bounding volume hierarchies"), built in
-//! parallel, then collapsed into 4-wide nodes by repeatedly opening the
+//! parallel, then collapsed into wide (8-child) nodes by repeatedly opening the
 //! child of largest surface area (as Embree and pbrt's wide BVHs do).
 
 use crate::geometry::Aabb;
