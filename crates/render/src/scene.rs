@@ -47,6 +47,9 @@ pub struct Scene {
     /// no light has positive power).
     power_distrib: Option<Distribution1D>,
     light_bvh: Option<LightBvh>,
+    /// [`Material::reads_uv`] per material: hits on the others skip the
+    /// surface parameterisation.
+    reads_uv: Vec<bool>,
 }
 
 impl Scene {
@@ -55,6 +58,7 @@ impl Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
+        let reads_uv = materials.iter().map(Material::reads_uv).collect();
         Scene {
             shapes,
             shape_info,
@@ -65,6 +69,7 @@ impl Scene {
             light_selection: LightSelection::Uniform,
             power_distrib: None,
             light_bvh: None,
+            reads_uv,
         }
     }
 
@@ -91,7 +96,11 @@ impl Scene {
         let hit = self.accel.intersect(ray, &self.shapes)?;
         Some(match &self.shapes[hit.shape as usize] {
             Shape::Instance(i) => i.interaction(hit.member as usize, hit.index as usize, ray, hit.t, hit.uv),
-            s => s.interaction(hit.shape, hit.index as usize, ray, hit.t, hit.uv),
+            s => {
+                let material = self.shape_info[hit.shape as usize].material as usize;
+                let param = self.reads_uv.get(material).copied().unwrap_or(true);
+                s.interaction_with(hit.shape, hit.index as usize, ray, hit.t, hit.uv, param)
+            }
         })
     }
 
