@@ -94,13 +94,15 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(ray, &self.shapes)?;
+        let (m, i, t, uv) = (hit.member as usize, hit.index as usize, hit.t, hit.uv);
+        // Instances and their flattened geometry take the same path (the same frames).
+        let param = |id: u32| {
+            let material = self.shape_info[id as usize].material as usize;
+            self.reads_uv.get(material).copied().unwrap_or(true)
+        };
         Some(match &self.shapes[hit.shape as usize] {
-            Shape::Instance(i) => i.interaction(hit.member as usize, hit.index as usize, ray, hit.t, hit.uv),
-            s => {
-                let material = self.shape_info[hit.shape as usize].material as usize;
-                let param = self.reads_uv.get(material).copied().unwrap_or(true);
-                s.interaction_with(hit.shape, hit.index as usize, ray, hit.t, hit.uv, param)
-            }
+            Shape::Instance(inst) => inst.interaction_with(m, i, ray, t, uv, param(inst.group.ids[m])),
+            s => s.interaction_with(hit.shape, i, ray, t, uv, param(hit.shape)),
         })
     }
 
