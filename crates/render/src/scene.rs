@@ -47,6 +47,9 @@ pub struct Scene {
     /// no light has positive power).
     power_distrib: Option<Distribution1D>,
     light_bvh: Option<LightBvh>,
+    /// [`Material::reads_uv`] per material: hits on the others skip the
+    /// surface parameterisation.
+    reads_uv: Vec<bool>,
 }
 
 impl Scene {
@@ -55,6 +58,7 @@ impl Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
+        let reads_uv = materials.iter().map(Material::reads_uv).collect();
         Scene {
             shapes,
             shape_info,
@@ -65,6 +69,7 @@ impl Scene {
             light_selection: LightSelection::Uniform,
             power_distrib: None,
             light_bvh: None,
+            reads_uv,
         }
     }
 
@@ -89,9 +94,15 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(ray, &self.shapes)?;
+        let (m, i, t, uv) = (hit.member as usize, hit.index as usize, hit.t, hit.uv);
+        // Instances and their flattened geometry take the same path (the same frames).
+        let param = |id: u32| {
+            let material = self.shape_info[id as usize].material as usize;
+            self.reads_uv.get(material).copied().unwrap_or(true)
+        };
         Some(match &self.shapes[hit.shape as usize] {
-            Shape::Instance(i) => i.interaction(hit.member as usize, hit.index as usize, ray, hit.t, hit.uv),
-            s => s.interaction(hit.shape, hit.index as usize, ray, hit.t, hit.uv),
+            Shape::Instance(inst) => inst.interaction_with(m, i, ray, t, uv, param(inst.group.ids[m])),
+            s => s.interaction_with(hit.shape, i, ray, t, uv, param(hit.shape)),
         })
     }
 

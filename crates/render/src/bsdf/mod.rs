@@ -190,6 +190,33 @@ impl Bsdf<'_> {
         }
     }
 
+    /// `(eval, pdf)` with one dispatch, for MIS of a light sample.
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Spectrum, f32) {
+        let (f, p) = match &self.kind {
+            BsdfKind::Diffuse(d) => (d.eval(wo, wi), d.pdf(wo, wi)),
+            BsdfKind::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::RoughDielectric(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::Principled(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::PrincipledThin(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::Blend(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
+                (Spectrum::ZERO, 0.0)
+            }
+        };
+        // As `eval` and `pdf` apply them.
+        let (scale, p) = match self.perturbation {
+            Some(q) => {
+                let k = q.factor(wi);
+                (self.opacity * k, if k == 0.0 { 0.0 } else { p })
+            }
+            None => (self.opacity, p),
+        };
+        (f * scale, p * self.opacity)
+    }
+
     /// Samples `wi` given `wo`; `u` picks a lobe, `u2` the direction.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {

@@ -91,8 +91,21 @@ impl Instance {
     /// The interaction at a hit on triangle `index` of group member
     /// `member`, in world space; `si.shape` is the member's scene-wide id.
     pub fn interaction(&self, member: usize, index: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
+        self.interaction_with(member, index, ray, t, uv, true)
+    }
+
+    /// [`Instance::interaction`], with `param` as in [`Shape::interaction_with`].
+    pub fn interaction_with(
+        &self,
+        member: usize,
+        index: usize,
+        ray: &Ray,
+        t: f32,
+        uv: Vec2,
+        param: bool,
+    ) -> SurfaceInteraction {
         let r = self.object_ray(ray);
-        let mut si = self.group.shapes[member].interaction(0, index, &r, t, uv);
+        let mut si = self.group.shapes[member].interaction_with(0, index, &r, t, uv, param);
         let m = &self.world_from_object;
         si.p = m.transform_point3(si.p);
         si.n = (self.normal_m * si.n).normalize();

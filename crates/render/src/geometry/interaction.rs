@@ -23,6 +23,8 @@ pub struct SurfaceInteraction {
     /// (φ/2π, θ/π), the disk's (r, φ/2π), per-face uv on rectangle and cube.
     pub uv: Vec2,
     /// World-space derivatives of the position with respect to u and v.
+    /// Hits on materials that read none of `uv`, `dpdu`, `dpdv` skip them
+    /// (`Shape::interaction_with`): `dpdu` is then only a tangent.
     pub dpdu: Vec3,
     pub dpdv: Vec3,
     /// Index of the hit shape in the scene.

@@ -20,7 +20,9 @@ pub struct ShapeSample {
 #[derive(Debug, Clone)]
 pub struct Mesh {
     pub mesh: TriangleMesh,
-    /// Ignore vertex normals and shade with the flat face normal.
+    /// Ignore vertex normals and shade with the flat face normal (also set
+    /// when the vertex normals are the face normals, e.g. `rectangle` and
+    /// `cube`: the same shading without interpolating them per hit).
     pub face_normals: bool,
     area_distrib: Option<Distribution1D>,
 }
@@ -28,6 +30,7 @@ pub struct Mesh {
 impl Mesh {
     pub fn new(mesh: TriangleMesh, face_normals: bool) -> Mesh {
         let areas: Vec<f32> = (0..mesh.indices.len()).map(|i| tri_area(&mesh, i)).collect();
+        let face_normals = face_normals || normals_are_flat(&mesh);
         Mesh { area_distrib: Distribution1D::new(&areas), mesh, face_normals }
     }
     #[inline]
@@ -35,6 +38,17 @@ impl Mesh {
         let t = self.mesh.indices[i];
         [self.mesh.positions[t[0] as usize], self.mesh.positions[t[1] as usize], self.mesh.positions[t[2] as usize]]
     }
+}
+
+/// Whether every triangle's vertex normals equal its face normal (to well
+/// below a shading difference: 1e-5 rad); false without normals.
+fn normals_are_flat(m: &TriangleMesh) -> bool {
+    !m.normals.is_empty()
+        && m.indices.iter().all(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            t.iter().all(|&i| (m.normals[i as usize] - n).length_squared() < 1e-10)
+        })
 }
 
 fn tri_area(m: &TriangleMesh, i: usize) -> f32 {
@@ -156,6 +170,24 @@ impl Shape {
     /// For an instance, `prim` indexes its group's BVH primitives, and
     /// `shape` in the result is the hit member's scene-wide id.
     pub fn interaction(&self, shape_id: u32, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
+        self.interaction_with(shape_id, prim, ray, t, uv, true)
+    }
+
+    /// [`Shape::interaction`]; with `param` false (for materials where
+    /// [`Material::reads_uv`](crate::material::Material::reads_uv) is false)
+    /// it skips Mitsuba's uv and dp/dv: `uv` and `dpdv` are then meaningless,
+    /// and `dpdu` is a cheap tangent that only orients `sh_frame` about the
+    /// normal, which such materials do not see.
+    #[inline]
+    pub fn interaction_with(
+        &self,
+        shape_id: u32,
+        prim: usize,
+        ray: &Ray,
+        t: f32,
+        uv: Vec2,
+        param: bool,
+    ) -> SurfaceInteraction {
         let wo = -ray.d.normalize();
         let (p, n, sh_n, tex, dpdu, dpdv) = match self {
             Shape::Mesh(m) => {
@@ -176,7 +208,7 @@ impl Shape {
                 }
                 // Without texture coordinates the parameterisation is barycentric.
                 let (mut tex, mut dpdu, mut dpdv) = (Vec2::new(b1, b2), dp0, dp1);
-                if !m.mesh.uvs.is_empty() {
+                if param && !m.mesh.uvs.is_empty() {
                     let u = &m.mesh.uvs;
                     let (uv0, uv1, uv2) = (u[t_idx[0] as usize], u[t_idx[1] as usize], u[t_idx[2] as usize]);
                     tex = b0 * uv0 + b1 * uv1 + b2 * uv2;
@@ -198,18 +230,23 @@ impl Shape {
                 let mut n = (ray.at(t) - *center).normalize();
                 // Re-project onto the surface to limit floating-point drift.
                 let p = *center + n * *radius;
-                // Mitsuba's spherical coordinates in the sphere's local frame.
-                let l = rot.transpose() * n;
-                let theta = fast::acos(l.z);
-                let mut phi = fast::atan2(l.y, l.x);
-                if phi < 0.0 {
-                    phi += 2.0 * PI;
-                }
-                let tex = Vec2::new(phi * (0.5 / PI), theta * (1.0 / PI));
-                let rd = (l.x * l.x + l.y * l.y).sqrt();
-                let dpdv_l = if rd == 0.0 { Vec3::X } else { Vec3::new(l.z * l.x / rd, l.z * l.y / rd, -rd) };
-                let dpdu = *rot * Vec3::new(-l.y, l.x, 0.0) * (*radius * 2.0 * PI);
-                let dpdv = *rot * dpdv_l * (*radius * PI);
+                let (tex, dpdu, dpdv) = if param {
+                    // Mitsuba's spherical coordinates in the sphere's local frame.
+                    let l = rot.transpose() * n;
+                    let theta = fast::acos(l.z);
+                    let mut phi = fast::atan2(l.y, l.x);
+                    if phi < 0.0 {
+                        phi += 2.0 * PI;
+                    }
+                    let tex = Vec2::new(phi * (0.5 / PI), theta * (1.0 / PI));
+                    let rd = (l.x * l.x + l.y * l.y).sqrt();
+                    let dpdv_l = if rd == 0.0 { Vec3::X } else { Vec3::new(l.z * l.x / rd, l.z * l.y / rd, -rd) };
+                    let dpdu = *rot * Vec3::new(-l.y, l.x, 0.0) * (*radius * 2.0 * PI);
+                    (tex, dpdu, *rot * dpdv_l * (*radius * PI))
+                } else {
+                    // dp/du ∝ rot·(z × l) = (rot·z) × n, without the angles.
+                    (Vec2::ZERO, rot.z_axis.cross(n), Vec3::ZERO)
+                };
                 if *flip {
                     n = -n;
                 }
@@ -217,18 +254,24 @@ impl Shape {
             }
             Shape::Disk { world_from_object, n, .. } => {
                 let p = world_from_object.transform_point3(Vec3::new(uv.x, uv.y, 0.0));
-                // Mitsuba's polar parameterisation (r, φ/2π).
-                let r2 = uv.length_squared();
-                let inv_r = if r2 != 0.0 { 1.0 / r2.sqrt() } else { 0.0 };
-                let r = r2 * inv_r;
-                let mut v = fast::atan2(uv.y, uv.x) * (0.5 / PI);
-                if v < 0.0 {
-                    v += 1.0;
+                if !param {
+                    // dp/du is radial: the direction of the hit from the centre.
+                    let dpdu = world_from_object.transform_vector3(Vec3::new(uv.x, uv.y, 0.0));
+                    (p, *n, *n, Vec2::ZERO, dpdu, Vec3::ZERO)
+                } else {
+                    // Mitsuba's polar parameterisation (r, φ/2π).
+                    let r2 = uv.length_squared();
+                    let inv_r = if r2 != 0.0 { 1.0 / r2.sqrt() } else { 0.0 };
+                    let r = r2 * inv_r;
+                    let mut v = fast::atan2(uv.y, uv.x) * (0.5 / PI);
+                    if v < 0.0 {
+                        v += 1.0;
+                    }
+                    let (c, s) = (uv.x * inv_r, uv.y * inv_r);
+                    let dpdu = world_from_object.transform_vector3(Vec3::new(c, s, 0.0));
+                    let dpdv = world_from_object.transform_vector3(Vec3::new(-s, c, 0.0)) * (2.0 * PI * r);
+                    (p, *n, *n, Vec2::new(r, v), dpdu, dpdv)
                 }
-                let (c, s) = (uv.x * inv_r, uv.y * inv_r);
-                let dpdu = world_from_object.transform_vector3(Vec3::new(c, s, 0.0));
-                let dpdv = world_from_object.transform_vector3(Vec3::new(-s, c, 0.0)) * (2.0 * PI * r);
-                (p, *n, *n, Vec2::new(r, v), dpdu, dpdv)
             }
             Shape::Cylinder(c) => {
                 let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);

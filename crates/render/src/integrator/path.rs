@@ -94,11 +94,14 @@ impl PathIntegrator {
             if bsdf.has_smooth() {
                 if let Some(ls) = scene.sample_light(si.p, si.n, u_sel, u_light) {
                     let wi = si.to_local(ls.wi);
-                    let f = bsdf.eval(wo, wi) * wi.z.abs();
+                    let mis = self.mis && !ls.delta;
+                    // With MIS, value and pdf in one BSDF dispatch.
+                    let (f, bsdf_pdf) = if mis { bsdf.eval_pdf(wo, wi) } else { (bsdf.eval(wo, wi), 0.0) };
+                    let f = f * wi.z.abs();
                     if f != Spectrum::ZERO {
                         stats.shadow_rays += 1;
                         if !scene.occluded(&si, ls.wi, ls.dist) {
-                            let w = if ls.delta || !self.mis { 1.0 } else { power_heuristic(ls.pdf, bsdf.pdf(wo, wi)) };
+                            let w = if mis { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
                             l += beta * f * ls.li * (w / ls.pdf);
                         }
                     }

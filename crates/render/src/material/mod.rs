@@ -245,6 +245,47 @@ impl Material {
         }
     }
 
+    /// Whether the BSDF reads the hit's surface parameterisation: `uv`,
+    /// `dpdu`, `dpdv`, or the orientation of `sh_frame` about the normal
+    /// (textures, normal and bump maps, anisotropy). When false, hits skip
+    /// computing them (see [`crate::geometry::Shape::interaction_with`]).
+    /// Conservative: unknown cases answer true.
+    pub fn reads_uv(&self) -> bool {
+        let tex = |ts: &[&Texture]| ts.iter().any(|t| t.constant().is_none());
+        let rough = |r: &Roughness| match (r.alpha_u.constant(), r.alpha_v.constant()) {
+            (Some(u), Some(v)) => u != v,
+            _ => true,
+        };
+        match self {
+            Material::Diffuse { reflectance } => tex(&[reflectance]),
+            Material::Dielectric { specular_reflectance, specular_transmittance, .. }
+            | Material::ThinDielectric { specular_reflectance, specular_transmittance, .. } => {
+                tex(&[specular_reflectance, specular_transmittance])
+            }
+            Material::Conductor { eta, k, specular_reflectance } => tex(&[eta, k, specular_reflectance]),
+            Material::RoughConductor { roughness, eta, k, specular_reflectance } => {
+                rough(roughness) || tex(&[eta, k, specular_reflectance])
+            }
+            Material::RoughDielectric { roughness, specular_reflectance, specular_transmittance, .. } => {
+                rough(roughness) || tex(&[specular_reflectance, specular_transmittance])
+            }
+            Material::Plastic { diffuse_reflectance, specular_reflectance, .. } => {
+                tex(&[diffuse_reflectance, specular_reflectance])
+            }
+            Material::RoughPlastic { distr, diffuse_reflectance, specular_reflectance, .. } => {
+                distr.alpha_u != distr.alpha_v || tex(&[diffuse_reflectance, specular_reflectance])
+            }
+            Material::Null => false,
+            Material::TwoSided(front, back) => front.reads_uv() || back.reads_uv(),
+            Material::Mask { opacity, inner } => tex(&[opacity]) || inner.reads_uv(),
+            Material::Blend { weight, first, second } => tex(&[weight]) || first.reads_uv() || second.reads_uv(),
+            Material::Principled(_)
+            | Material::PrincipledThin(_)
+            | Material::NormalMap { .. }
+            | Material::BumpMap { .. } => true,
+        }
+    }
+
     /// Whether a hit on this material can scatter light at all (false for
     /// `null`, which rays pass through).
     pub fn is_null(&self) -> bool {
