@@ -212,10 +212,9 @@ impl Film {
     /// Adds pixel `src` of `other` (same layers) to pixel `dst` of this film.
     #[inline]
     pub fn add_pixel(&mut self, dst: usize, other: &Film, src: usize) {
-        for c in 0..3 {
+        for c in 0..4 {
             self.acc[dst][c] += other.acc[src][c];
         }
-        self.acc[dst][3] += other.acc[src][3];
         let n = self.aov_channels();
         for k in 0..n {
             self.aov[dst * n + k] += other.aov[src * n + k];
@@ -251,10 +250,10 @@ impl Film {
         if aov.is_none() && self.moments.is_empty() {
             // The common case, without tests per pixel: beauty and weight only.
             let (x0, n) = ((px - m + xs.start as i32) as usize, xs.len());
+            let lw = l.extend(1.0);
             for ky in ys {
                 let row = (py - m + ky as i32) as usize * self.width as usize + x0;
                 let wy = wy[ky];
-                let lw = l.extend(1.0);
                 for (a, &wx) in self.acc[row..row + n].iter_mut().zip(&wx[xs.clone()]) {
                     let v = (lw * (wx * wy)).to_array();
                     for c in 0..4 {

@@ -152,61 +152,44 @@ impl Bsdf<'_> {
 
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
-        let f = match &self.kind {
-            BsdfKind::Diffuse(d) => d.eval(wo, wi),
-            BsdfKind::RoughConductor(b) => b.eval(wo, wi),
-            BsdfKind::RoughDielectric(b) => b.eval(wo, wi),
-            BsdfKind::Plastic(b) => b.eval(wo, wi),
-            BsdfKind::RoughPlastic(b) => b.eval(wo, wi),
-            BsdfKind::Principled(b) => b.eval(wo, wi),
-            BsdfKind::PrincipledThin(b) => b.eval(wo, wi),
-            BsdfKind::Blend(b) => b.eval(wo, wi),
-            BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
-                Spectrum::ZERO
-            }
-        };
-        match self.perturbation {
-            Some(p) => f * (self.opacity * p.factor(wi)),
-            None => f * self.opacity,
-        }
+        self.eval_and_pdf::<true, false>(wo, wi).0
     }
 
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let p = match &self.kind {
-            BsdfKind::Diffuse(d) => d.pdf(wo, wi),
-            BsdfKind::RoughConductor(b) => b.pdf(wo, wi),
-            BsdfKind::RoughDielectric(b) => b.pdf(wo, wi),
-            BsdfKind::Plastic(b) => b.pdf(wo, wi),
-            BsdfKind::RoughPlastic(b) => b.pdf(wo, wi),
-            BsdfKind::Principled(b) => b.pdf(wo, wi),
-            BsdfKind::PrincipledThin(b) => b.pdf(wo, wi),
-            BsdfKind::Blend(b) => b.pdf(wo, wi),
-            BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => 0.0,
-        };
-        match self.perturbation {
-            Some(q) if q.factor(wi) == 0.0 => 0.0,
-            _ => p * self.opacity,
-        }
+        self.eval_and_pdf::<false, true>(wo, wi).1
     }
 
     /// `(eval, pdf)` with one dispatch, for MIS of a light sample.
     #[inline]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Spectrum, f32) {
+        self.eval_and_pdf::<true, true>(wo, wi)
+    }
+
+    /// The one dispatch behind `eval`, `pdf` and `eval_pdf`: the value when
+    /// `F`, the pdf when `P` (the other is left zero).
+    #[inline(always)]
+    fn eval_and_pdf<const F: bool, const P: bool>(&self, wo: Vec3, wi: Vec3) -> (Spectrum, f32) {
+        macro_rules! lobe {
+            ($b:expr) => {
+                (if F { $b.eval(wo, wi) } else { Spectrum::ZERO }, if P { $b.pdf(wo, wi) } else { 0.0 })
+            };
+        }
         let (f, p) = match &self.kind {
-            BsdfKind::Diffuse(d) => (d.eval(wo, wi), d.pdf(wo, wi)),
-            BsdfKind::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            BsdfKind::RoughDielectric(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            BsdfKind::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            BsdfKind::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            BsdfKind::Principled(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            BsdfKind::PrincipledThin(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            BsdfKind::Blend(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            BsdfKind::Diffuse(b) => lobe!(b),
+            BsdfKind::RoughConductor(b) => lobe!(b),
+            BsdfKind::RoughDielectric(b) => lobe!(b),
+            BsdfKind::Plastic(b) => lobe!(b),
+            BsdfKind::RoughPlastic(b) => lobe!(b),
+            BsdfKind::Principled(b) => lobe!(b),
+            BsdfKind::PrincipledThin(b) => lobe!(b),
+            BsdfKind::Blend(b) => lobe!(b),
             BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
                 (Spectrum::ZERO, 0.0)
             }
         };
-        // As `eval` and `pdf` apply them.
+        // Opacity scales both; a bump or normal map's factor scales the
+        // value, and where it is zero the direction cannot be sampled either.
         let (scale, p) = match self.perturbation {
             Some(q) => {
                 let k = q.factor(wi);
