@@ -1,5 +1,5 @@
 //! The bounding volume hierarchy: 8-wide nodes (one SIMD slab test for all
-//! eight child boxes) over leaves of 4-triangle blocks tested in SIMD lanes
+//! eight child boxes, quantised to bytes) over leaves of 4-triangle blocks tested in SIMD lanes
 //! ([`super::tri4`]), built by binned SAH and collapsed from a binary tree
 //! ([`super::build`]). Traversal is ordered front to back and skips stacked
 //! subtrees that begin beyond the closest hit found so far.
@@ -30,22 +30,117 @@ pub enum Prim {
 /// about 0.8x (`penumbra bench --suite rays`, 1M triangles).
 const WIDTH: usize = 8;
 
-/// A wide node: the children's boxes as lanes (min x, max x, min y, max y,
-/// min z, max z) and what each child is (see [`OTHER`]). 256 bytes, four
-/// cache lines.
+/// A wide node: the children's boxes quantised to bytes on a per-axis grid
+/// (plane = origin + q·scale, as in Ylitie et al. 2017 and Embree's
+/// quantised BVH), rounded outwards, so every box tested contains the true
+/// one and the traversal stays conservative. 128 bytes, two cache lines
+/// instead of four with f32 planes: incoherent rays are bound by the
+/// latency of node loads. Measured against f32 nodes (`bench --suite rays`,
+/// 1M triangles, three alternating runs): closest hit 0.81-0.85x of Embree
+/// against 0.79-0.81x, any hit 0.89-0.99x against 0.77-0.90x, and 54.6
+/// instead of 61.1 bytes per triangle.
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
 struct Node {
-    b: [F8; 6],
+    origin: [f32; 3],
+    scale: [f32; 3],
+    /// Rows: min x, max x, min y, max y, min z, max z.
+    q: [[u8; WIDTH]; 6],
     child: [u32; WIDTH],
-    info: [u32; WIDTH],
+    /// See [`OTHER`].
+    info: [u8; WIDTH],
+    /// Bit `l` set where slot `l` holds a child.
+    used: u8,
 }
 
 /// `info` of a child slot: 0 for an inner node (`child` is its index), the
 /// number of triangle blocks for a triangle leaf (`child` is the first
 /// block), or `OTHER | count` for a leaf of other primitives (`child` is
-/// the first index into `prims`). Empty slots have an empty box.
-const OTHER: u32 = 1 << 31;
+/// the first index into `prims`). Leaves hold at most `MAX_LEAF` items, so
+/// counts fit beside the flag in a byte.
+const OTHER: u32 = 0x80;
+
+impl Node {
+    /// Quantises the boxes of up to `WIDTH` children.
+    fn new(boxes: &[Aabb], child: [u32; WIDTH], info: [u8; WIDTH]) -> Node {
+        debug_assert!(!boxes.is_empty() && boxes.len() <= WIDTH);
+        let mut n = Node {
+            origin: [0.0; 3],
+            scale: [0.0; 3],
+            q: [[255, 255, 255, 255, 255, 255, 255, 255], [0; WIDTH], [255; WIDTH], [0; WIDTH], [255; WIDTH], [0; WIDTH]],
+            child,
+            info,
+            used: ((1u32 << boxes.len()) - 1) as u8,
+        };
+        for a in 0..3 {
+            let lo: Vec<f32> = boxes.iter().map(|b| b.min[a]).collect();
+            let hi: Vec<f32> = boxes.iter().map(|b| b.max[a]).collect();
+            let (origin, scale, ql, qh) = quantize_axis(&lo, &hi);
+            n.origin[a] = origin;
+            n.scale[a] = scale;
+            n.q[2 * a][..boxes.len()].copy_from_slice(&ql);
+            n.q[2 * a + 1][..boxes.len()].copy_from_slice(&qh);
+        }
+        n
+    }
+
+    /// The box of slot `l` as the traversal tests it (None for an empty slot).
+    fn lane_box(&self, l: usize) -> Option<Aabb> {
+        if self.used & (1 << l) == 0 {
+            return None;
+        }
+        let plane = |row: usize, a: usize| dequantize(self.q[row][l], self.scale[a], self.origin[a]);
+        Some(Aabb {
+            min: Vec3::new(plane(0, 0), plane(2, 1), plane(4, 2)),
+            max: Vec3::new(plane(1, 0), plane(3, 1), plane(5, 2)),
+        })
+    }
+}
+
+/// A quantised plane as the traversal computes it ([`F8::mul_add`]: one rounding).
+#[inline]
+fn dequantize(q: u8, scale: f32, origin: f32) -> f32 {
+    f32::from(q).mul_add(scale, origin)
+}
+
+/// The grid of one axis and the byte planes of `lo` and `hi` (the lanes'
+/// minima and maxima): dequantised, every lower plane is <= its `lo` and
+/// every upper plane >= its `hi`, checked with the traversal's arithmetic.
+fn quantize_axis(lo: &[f32], hi: &[f32]) -> (f32, f32, Vec<u8>, Vec<u8>) {
+    let origin = lo.iter().copied().fold(f32::INFINITY, f32::min);
+    let top = hi.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    debug_assert!(origin.is_finite() && top.is_finite(), "BVH boxes must be finite");
+    // The smallest scale whose top plane (q = 255) reaches `top`; a flat
+    // axis gets any positive scale (q = 0 gives `origin` exactly).
+    let mut scale = ((top as f64 - origin as f64) / 255.0) as f32;
+    if !(scale > 0.0) {
+        scale = f32::MIN_POSITIVE;
+    }
+    while dequantize(255, scale, origin) < top {
+        scale = scale.next_up();
+    }
+    let ql = lo
+        .iter()
+        .map(|&v| {
+            let mut q = ((v as f64 - origin as f64) / scale as f64).floor().clamp(0.0, 255.0) as u8;
+            while q > 0 && dequantize(q, scale, origin) > v {
+                q -= 1;
+            }
+            q
+        })
+        .collect();
+    let qh = hi
+        .iter()
+        .map(|&v| {
+            let mut q = ((v as f64 - origin as f64) / scale as f64).ceil().clamp(0.0, 255.0) as u8;
+            while dequantize(q, scale, origin) < v {
+                q += 1;
+            }
+            q
+        })
+        .collect();
+    (origin, scale, ql, qh)
+}
 
 /// A stacked subtree and the distance at which the ray enters its box.
 #[derive(Clone, Copy)]
@@ -144,20 +239,14 @@ impl Emitter {
                 let kids = wide_children(node, WIDTH);
                 let idx = self.n_nodes;
                 self.n_nodes += 1;
-                let empty = Aabb::EMPTY;
-                let mut lanes = [[0.0f32; WIDTH]; 6];
-                let (mut child, mut info) = ([0u32; WIDTH], [0u32; WIDTH]);
-                for l in 0..WIDTH {
-                    let b = kids.get(l).map(|k| k.bounds()).unwrap_or(empty);
-                    for a in 0..3 {
-                        lanes[2 * a][l] = b.min[a];
-                        lanes[2 * a + 1][l] = b.max[a];
-                    }
-                    if let Some(k) = kids.get(l) {
-                        (child[l], info[l]) = self.emit(k, items, shapes);
-                    }
+                let (mut child, mut info) = ([0u32; WIDTH], [0u8; WIDTH]);
+                for (l, k) in kids.iter().enumerate() {
+                    let (c, i) = self.emit(k, items, shapes);
+                    assert!(i < 0x100, "a leaf holds at most MAX_LEAF items");
+                    (child[l], info[l]) = (c, i as u8);
                 }
-                self.nodes[idx] = Node { b: lanes.map(F8::from_array), child, info };
+                let boxes: Vec<Aabb> = kids.iter().map(|k| k.bounds()).collect();
+                self.nodes[idx] = Node::new(&boxes, child, info);
                 (idx as u32, 0)
             }
         }
@@ -268,12 +357,15 @@ impl Accel {
         loop {
             if cur.info == 0 {
                 let node = &self.nodes[cur.child as usize];
-                let slab = |row: usize, a: usize| node.b[row].sub(o[a]).mul(id[a]);
+                let plane = |row: usize, a: usize| {
+                    F8::from_u8(&node.q[row]).mul_add(F8::splat(node.scale[a]), F8::splat(node.origin[a]))
+                };
+                let slab = |row: usize, a: usize| plane(row, a).sub(o[a]).mul(id[a]);
                 let t0 = slab(near[0], 0).max(slab(near[1], 1));
                 let t0 = t0.max(slab(near[2], 2).max(F8::splat(0.0)));
                 let t1 = slab(far[0], 0).min(slab(far[1], 1));
                 let t1 = t1.min(slab(far[2], 2).min(F8::splat(ray.t_max)));
-                let mut mask = t0.le_mask(t1.mul(widen));
+                let mut mask = t0.le_mask(t1.mul(widen)) & node.used as u32;
                 if mask != 0 {
                     // Incoherent rays are bound by memory latency: start
                     // loading every child that will be visited now, so the
@@ -282,12 +374,12 @@ impl Accel {
                     while m != 0 {
                         let l = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        self.prefetch(node.child[l], node.info[l]);
+                        self.prefetch(node.child[l], node.info[l] as u32);
                     }
                     let tn = t0.to_array();
                     if mask & (mask - 1) == 0 {
                         let l = mask.trailing_zeros() as usize;
-                        cur = Entry { child: node.child[l], info: node.info[l], t: tn[l] };
+                        cur = Entry { child: node.child[l], info: node.info[l] as u32, t: tn[l] };
                         continue;
                     }
                     // Several children: push them, sorted in place far to
@@ -297,7 +389,7 @@ impl Accel {
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        let e = Entry { child: node.child[l], info: node.info[l], t: tn[l] };
+                        let e = Entry { child: node.child[l], info: node.info[l] as u32, t: tn[l] };
                         if sp == STACK {
                             debug_assert!(false, "BVH traversal stack overflow");
                             break;
@@ -440,21 +532,21 @@ impl Accel {
             return Err("tree too deep".into());
         }
         if info == 0 {
+            // Each primitive must lie inside the (quantised) box of every
+            // ancestor slot: `bounds` is their intersection. (A child's own
+            // quantised boxes may stick out of its parent's: each node
+            // rounds outwards on its own grid.)
             let n = &self.nodes[child as usize];
             for l in 0..WIDTH {
-                let b = Aabb {
-                    min: Vec3::new(n.b[0].to_array()[l], n.b[2].to_array()[l], n.b[4].to_array()[l]),
-                    max: Vec3::new(n.b[1].to_array()[l], n.b[3].to_array()[l], n.b[5].to_array()[l]),
-                };
+                let Some(b) = n.lane_box(l) else { continue };
                 if b.is_empty() {
-                    continue;
+                    return Err(format!("node {child} lane {l} has an empty box"));
                 }
-                if let Some(p) = bounds {
-                    if !p.contains_box(&b) {
-                        return Err(format!("node {child} lane {l} is not inside its parent"));
-                    }
-                }
-                self.validate_slot((n.child[l], n.info[l]), Some(b), blocks, prims, depth + 1)?;
+                let b = match bounds {
+                    Some(p) => Aabb { min: p.min.max(b.min), max: p.max.min(b.max) },
+                    None => b,
+                };
+                self.validate_slot((n.child[l], n.info[l] as u32), Some(b), blocks, prims, depth + 1)?;
             }
         } else if info & OTHER == 0 {
             for k in child..child + info {
@@ -478,11 +570,7 @@ impl Accel {
 
     /// (wide nodes, triangle blocks, average child slots used per node).
     pub fn stats(&self) -> (usize, usize, f64) {
-        let used: usize = self
-            .nodes
-            .iter()
-            .map(|n| (0..WIDTH).filter(|&l| n.b[0].to_array()[l] <= n.b[1].to_array()[l]).count())
-            .sum();
+        let used: usize = self.nodes.iter().map(|n| n.used.count_ones() as usize).sum();
         (self.nodes.len(), self.tris.len(), used as f64 / self.nodes.len().max(1) as f64)
     }
 

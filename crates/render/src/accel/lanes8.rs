@@ -1,6 +1,6 @@
 //! Eight f32 lanes: one AVX register where the target has AVX (the build
 //! uses `target-cpu=native`), else two SSE halves. Only what the 8-wide box
-//! test needs.
+//! test needs, including the dequantisation of its byte-quantised planes.
 
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 mod imp {
@@ -34,6 +34,33 @@ mod imp {
         #[inline(always)]
         pub fn mul(self, o: F8) -> F8 {
             unsafe { F8(_mm256_mul_ps(self.0, o.0)) }
+        }
+        /// Lane-wise `self * a + b`, rounded once (the same value as
+        /// `f32::mul_add` per lane, which the quantised boxes rely on).
+        #[inline(always)]
+        pub fn mul_add(self, a: F8, b: F8) -> F8 {
+            #[cfg(target_feature = "fma")]
+            unsafe {
+                F8(_mm256_fmadd_ps(self.0, a.0, b.0))
+            }
+            #[cfg(not(target_feature = "fma"))]
+            {
+                let (x, y, z) = (self.to_array(), a.to_array(), b.to_array());
+                F8::from_array(std::array::from_fn(|l| x[l].mul_add(y[l], z[l])))
+            }
+        }
+        /// Eight bytes as floats 0..=255.
+        #[inline(always)]
+        pub fn from_u8(q: &[u8; 8]) -> F8 {
+            #[cfg(target_feature = "avx2")]
+            unsafe {
+                let b = _mm_loadl_epi64(q.as_ptr() as *const __m128i);
+                F8(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(b)))
+            }
+            #[cfg(not(target_feature = "avx2"))]
+            {
+                F8::from_array(q.map(f32::from))
+            }
         }
         /// Lane-wise maximum; like `maxps`, returns `o` where either is NaN.
         #[inline(always)]
@@ -83,6 +110,17 @@ mod imp {
         pub fn mul(self, o: F8) -> F8 {
             F8([self.0[0] * o.0[0], self.0[1] * o.0[1]])
         }
+        /// Lane-wise `self * a + b`, rounded once (as `f32::mul_add`).
+        #[inline(always)]
+        pub fn mul_add(self, a: F8, b: F8) -> F8 {
+            let (x, y, z) = (self.to_array(), a.to_array(), b.to_array());
+            F8::from_array(std::array::from_fn(|l| x[l].mul_add(y[l], z[l])))
+        }
+        /// Eight bytes as floats 0..=255.
+        #[inline(always)]
+        pub fn from_u8(q: &[u8; 8]) -> F8 {
+            F8::from_array(q.map(f32::from))
+        }
         /// Lane-wise maximum, returning `o` where either is NaN (as `maxps`).
         #[inline(always)]
         pub fn max(self, o: F8) -> F8 {
@@ -119,5 +157,10 @@ mod tests {
         assert_eq!(a.max(b).to_array(), [2.0, 2.0, 3.0, 2.0, 5.0, 2.0, 2.0, 8.0]);
         assert_eq!(a.min(b).to_array(), [1.0, -2.0, 2.0, 2.0, 2.0, 0.0, -7.0, 2.0]);
         assert_eq!(a.le_mask(b), 0b0110_0011);
+        let q = F8::from_u8(&[0, 1, 2, 3, 127, 128, 254, 255]);
+        assert_eq!(q.to_array(), [0.0, 1.0, 2.0, 3.0, 127.0, 128.0, 254.0, 255.0]);
+        // Fused: one rounding (0.1 * 3 + -0.3 is not 0 when fused).
+        let (x, y, z) = (0.1f32, 3.0f32, -0.3f32);
+        assert_eq!(F8::splat(x).mul_add(F8::splat(y), F8::splat(z)).to_array()[0], x.mul_add(y, z));
     }
 }
