@@ -611,12 +611,20 @@ mod tests {
         vec![Shape::Mesh(Mesh::new(m, false)), Shape::sphere(Vec3::splat(5.0), 1.0, false)]
     }
 
+    /// Both SAH cost regimes: a scene small enough to stay in the cache,
+    /// and one above `build::SMALL_SCENE` primitives.
     #[test]
     fn bvh_agrees_with_brute_force() {
-        let shapes = random_soup(2000);
+        for n in [2000, 12000] {
+            agrees_with_brute_force(n);
+        }
+    }
+
+    fn agrees_with_brute_force(n: usize) {
+        let shapes = random_soup(n);
         let accel = Accel::build(&shapes);
         accel.validate().unwrap();
-        assert_eq!(accel.triangle_count(), 2000);
+        assert_eq!(accel.triangle_count(), n);
         for i in 0..2000u64 {
             let o = Vec3::new(rnd(i, 100), rnd(i, 101), rnd(i, 102)) * 12.0 - 1.0;
             let d = (Vec3::new(rnd(i, 103), rnd(i, 104), rnd(i, 105)) - 0.5).normalize();
@@ -636,6 +644,28 @@ mod tests {
             assert_eq!(hit.map(|h| h.t), brute.is_finite().then_some(brute), "ray {i}");
             assert_eq!(accel.occluded(&ray, &shapes), brute.is_finite(), "ray {i}");
         }
+    }
+
+    /// Separate spheres each get a leaf (a slot) of their own, so a ray
+    /// tests only those whose boxes it crosses; counted as one triangle
+    /// each, four of them would share one leaf.
+    #[test]
+    fn analytic_shapes_get_leaves_of_their_own() {
+        let shapes: Vec<Shape> =
+            (0..4).map(|k| Shape::sphere(Vec3::new(3.0 * k as f32, 0.0, 0.0), 1.0, false)).collect();
+        let accel = Accel::build(&shapes);
+        accel.validate().unwrap();
+        let mut leaves = Vec::new();
+        let mut todo = vec![accel.root.unwrap()];
+        while let Some((child, info)) = todo.pop() {
+            if info == 0 {
+                let node = &accel.nodes[child as usize];
+                todo.extend((0..WIDTH).filter(|l| node.used & (1 << l) != 0).map(|l| (node.child[l], node.info[l] as u32)));
+            } else {
+                leaves.push(info & !OTHER);
+            }
+        }
+        assert_eq!(leaves, [1, 1, 1, 1]);
     }
 
     #[test]
