@@ -174,7 +174,14 @@ pub struct Accel {
     /// The root slot, `None` when there is nothing to hit.
     root: Option<(u32, u32)>,
     pub bounds: Aabb,
+    /// Whether traversal prefetches children: only where the tree is too
+    /// large for the L2 cache (in it, prefetching costs instructions and
+    /// saves no wait).
+    prefetch: bool,
 }
+
+/// Trees of more bytes than this are prefetched during traversal.
+const PREFETCH_BYTES: usize = 256 << 10;
 
 const STACK: usize = 192;
 
@@ -300,6 +307,7 @@ impl Accel {
         };
         let root = out.emit(&tree, &items, shapes);
         debug_assert_eq!((out.n_nodes, out.n_blocks), (n_nodes, n_blocks));
+        let prefetch = std::mem::size_of_val(&out.nodes[..]) + std::mem::size_of_val(&out.tris[..]) > PREFETCH_BYTES;
         Accel {
             nodes: out.nodes,
             tris: out.tris,
@@ -307,6 +315,7 @@ impl Accel {
             prims: out.prims,
             root: Some(root),
             bounds: tree.bounds(),
+            prefetch,
         }
     }
 
@@ -370,7 +379,7 @@ impl Accel {
                     // Incoherent rays are bound by memory latency: start
                     // loading every child that will be visited now, so the
                     // misses overlap instead of following one another.
-                    let mut m = mask;
+                    let mut m = if self.prefetch { mask } else { 0 };
                     while m != 0 {
                         let l = m.trailing_zeros() as usize;
                         m &= m - 1;
