@@ -18,6 +18,8 @@ use std::process::Command;
 const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
     ("scenes/cornell-box.xml", &[]),
     ("tests/scenes/envmap_sun.xml", &[("res", "256"), ("spp", "64")]),
+    // The sun-and-sky map again, over rough metals, frosted glass and plastics.
+    ("tests/scenes/rough_spheres.xml", &[("width", "384"), ("height", "160"), ("spp", "64")]),
     ("tests/scenes/many_lights.xml", &[("res", "256"), ("spp", "64")]),
     // Glossy and textured: rough metals and glass, plastics, a normal map.
     ("scenes/material-showcase.xml", &[("width", "384"), ("height", "160"), ("spp", "64")]),
