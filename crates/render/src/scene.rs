@@ -203,6 +203,12 @@ impl Scene {
         }
     }
 
+    /// Radiance from lights at infinity along direction `d`.
+    #[inline]
+    pub fn environment_radiance(&self, d: Vec3) -> Spectrum {
+        self.env_lights.iter().map(|&i| self.lights[i as usize].environment_radiance(d)).sum()
+    }
+
     /// Radiance from lights at infinity along direction `d`, and the
     /// solid-angle density (selection included) with which `sample_light`
     /// for a receiver at (`p_ref`, `n_ref`) samples that direction.

@@ -67,7 +67,14 @@ impl Node {
         let mut n = Node {
             origin: [0.0; 3],
             scale: [0.0; 3],
-            q: [[255, 255, 255, 255, 255, 255, 255, 255], [0; WIDTH], [255; WIDTH], [0; WIDTH], [255; WIDTH], [0; WIDTH]],
+            q: [
+                [255, 255, 255, 255, 255, 255, 255, 255],
+                [0; WIDTH],
+                [255; WIDTH],
+                [0; WIDTH],
+                [255; WIDTH],
+                [0; WIDTH],
+            ],
             child,
             info,
             used: ((1u32 << boxes.len()) - 1) as u8,
@@ -669,7 +676,9 @@ mod tests {
         while let Some((child, info)) = todo.pop() {
             if info == 0 {
                 let node = &accel.nodes[child as usize];
-                todo.extend((0..WIDTH).filter(|l| node.used & (1 << l) != 0).map(|l| (node.child[l], node.info[l] as u32)));
+                todo.extend(
+                    (0..WIDTH).filter(|l| node.used & (1 << l) != 0).map(|l| (node.child[l], node.info[l] as u32)),
+                );
             } else {
                 leaves.push(info & !OTHER);
             }

@@ -63,7 +63,12 @@ impl PathIntegrator {
 
             let Some(mut si) = hit else {
                 // Escaped: environment emission, MIS-weighted against light sampling.
-                if !(depth == 0 && self.hide_emitters) {
+                if prev_delta {
+                    // Camera ray or specular bounce: weight 1, no density needed.
+                    if !(depth == 0 && self.hide_emitters) {
+                        l += beta * scene.environment_radiance(ray.d);
+                    }
+                } else {
                     let (le, env_pdf) = scene.environment(prev_p, prev_n, ray.d);
                     if le != Spectrum::ZERO {
                         l += beta * le * self.bsdf_weight(prev_delta, prev_bsdf_pdf, env_pdf);

@@ -79,6 +79,17 @@ impl Light {
         }
     }
 
+    /// [`Self::environment`] without the density, for paths whose last
+    /// vertex was the camera or a specular bounce (no MIS weight to form).
+    #[inline]
+    pub fn environment_radiance(&self, wi: Vec3) -> Spectrum {
+        match self {
+            Light::Constant(c) => c.radiance,
+            Light::EnvMap(e) => e.eval(wi),
+            _ => Spectrum::ZERO,
+        }
+    }
+
     /// Dirac-delta lights (point, spot, directional): reachable only by light sampling.
     pub fn is_delta(&self) -> bool {
         matches!(self, Light::Point(_) | Light::Spot(_) | Light::Directional(_))
