@@ -61,7 +61,10 @@ pub fn erf(x: f64) -> f64 {
 }
 
 /// Inverse error function on (−1, 1): Giles' single-precision approximation
-/// refined by two Newton steps against [`erf`] (f32-level accuracy).
+/// ("Approximating the erfinv function", 2010), evaluated in f64. Its
+/// residual |erf(x) − y| stays below 9e-8, within [`erf`]'s own error, so
+/// Newton steps against `erf` (which cost four `exp` and tripled the price
+/// of Beckmann sampling) gain nothing.
 pub fn erfinv(y: f64) -> f64 {
     if y <= -1.0 {
         return f64::NEG_INFINITY;
@@ -70,7 +73,7 @@ pub fn erfinv(y: f64) -> f64 {
         return f64::INFINITY;
     }
     let w = -((1.0 - y) * (1.0 + y)).ln();
-    let mut x = if w < 5.0 {
+    let x = if w < 5.0 {
         let w = w - 2.5;
         let mut p = 2.810_226_36e-08;
         for c in [
@@ -103,12 +106,6 @@ pub fn erfinv(y: f64) -> f64 {
         }
         p * y
     };
-    for _ in 0..2 {
-        let d = 2.0 * INV_SQRT_PI * (-x * x).exp();
-        if d > 0.0 {
-            x -= (erf(x) - y) / d;
-        }
-    }
     x
 }
 
@@ -335,7 +332,7 @@ mod tests {
         for i in 1..2000 {
             let y = -1.0 + i as f64 / 1000.0;
             let x = erfinv(y);
-            assert!((erf(x) - y).abs() < 3e-7, "erfinv({y}) = {x}");
+            assert!((erf(x) - y).abs() < 1e-7, "erfinv({y}) = {x}");
         }
     }
 
