@@ -67,26 +67,20 @@ impl Node {
         let mut n = Node {
             origin: [0.0; 3],
             scale: [0.0; 3],
-            q: [
-                [255, 255, 255, 255, 255, 255, 255, 255],
-                [0; WIDTH],
-                [255; WIDTH],
-                [0; WIDTH],
-                [255; WIDTH],
-                [0; WIDTH],
-            ],
+            // Unused slots keep an inverted box; `used` masks them anyway.
+            q: [[255; WIDTH], [0; WIDTH], [255; WIDTH], [0; WIDTH], [255; WIDTH], [0; WIDTH]],
             child,
             info,
             used: ((1u32 << boxes.len()) - 1) as u8,
         };
+        let k = boxes.len();
         for a in 0..3 {
-            let lo: Vec<f32> = boxes.iter().map(|b| b.min[a]).collect();
-            let hi: Vec<f32> = boxes.iter().map(|b| b.max[a]).collect();
-            let (origin, scale, ql, qh) = quantize_axis(&lo, &hi);
-            n.origin[a] = origin;
-            n.scale[a] = scale;
-            n.q[2 * a][..boxes.len()].copy_from_slice(&ql);
-            n.q[2 * a + 1][..boxes.len()].copy_from_slice(&qh);
+            let (mut lo, mut hi) = ([0.0f32; WIDTH], [0.0f32; WIDTH]);
+            for (l, b) in boxes.iter().enumerate() {
+                (lo[l], hi[l]) = (b.min[a], b.max[a]);
+            }
+            let [ql, qh] = n.q.get_disjoint_mut([2 * a, 2 * a + 1]).unwrap();
+            (n.origin[a], n.scale[a]) = quantize_axis(&lo[..k], &hi[..k], &mut ql[..k], &mut qh[..k]);
         }
         n
     }
@@ -110,10 +104,11 @@ fn dequantize(q: u8, scale: f32, origin: f32) -> f32 {
     f32::from(q).mul_add(scale, origin)
 }
 
-/// The grid of one axis and the byte planes of `lo` and `hi` (the lanes'
-/// minima and maxima): dequantised, every lower plane is <= its `lo` and
-/// every upper plane >= its `hi`, checked with the traversal's arithmetic.
-fn quantize_axis(lo: &[f32], hi: &[f32]) -> (f32, f32, Vec<u8>, Vec<u8>) {
+/// The grid of one axis, (origin, scale), and the byte planes `ql`, `qh` of
+/// `lo` and `hi` (the lanes' minima and maxima): dequantised, every lower
+/// plane is <= its `lo` and every upper plane >= its `hi`, checked with the
+/// traversal's arithmetic.
+fn quantize_axis(lo: &[f32], hi: &[f32], ql: &mut [u8], qh: &mut [u8]) -> (f32, f32) {
     let origin = lo.iter().copied().fold(f32::INFINITY, f32::min);
     let top = hi.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     debug_assert!(origin.is_finite() && top.is_finite(), "BVH boxes must be finite");
@@ -126,27 +121,20 @@ fn quantize_axis(lo: &[f32], hi: &[f32]) -> (f32, f32, Vec<u8>, Vec<u8>) {
     while dequantize(255, scale, origin) < top {
         scale = scale.next_up();
     }
-    let ql = lo
-        .iter()
-        .map(|&v| {
-            let mut q = ((v as f64 - origin as f64) / scale as f64).floor().clamp(0.0, 255.0) as u8;
-            while q > 0 && dequantize(q, scale, origin) > v {
-                q -= 1;
-            }
-            q
-        })
-        .collect();
-    let qh = hi
-        .iter()
-        .map(|&v| {
-            let mut q = ((v as f64 - origin as f64) / scale as f64).ceil().clamp(0.0, 255.0) as u8;
-            while dequantize(q, scale, origin) < v {
-                q += 1;
-            }
-            q
-        })
-        .collect();
-    (origin, scale, ql, qh)
+    let grid = |v: f32| (v as f64 - origin as f64) / scale as f64;
+    for (q, &v) in ql.iter_mut().zip(lo) {
+        *q = grid(v).floor().clamp(0.0, 255.0) as u8;
+        while *q > 0 && dequantize(*q, scale, origin) > v {
+            *q -= 1;
+        }
+    }
+    for (q, &v) in qh.iter_mut().zip(hi) {
+        *q = grid(v).ceil().clamp(0.0, 255.0) as u8;
+        while dequantize(*q, scale, origin) < v {
+            *q += 1;
+        }
+    }
+    (origin, scale)
 }
 
 /// A stacked subtree and the distance at which the ray enters its box.
@@ -259,8 +247,11 @@ impl Emitter {
                     assert!(i < 0x100, "a leaf holds at most MAX_LEAF items");
                     (child[l], info[l]) = (c, i as u8);
                 }
-                let boxes: Vec<Aabb> = kids.iter().map(|k| k.bounds()).collect();
-                self.nodes[idx] = Node::new(&boxes, child, info);
+                let mut boxes = [Aabb::EMPTY; WIDTH];
+                for (b, k) in boxes.iter_mut().zip(&kids) {
+                    *b = k.bounds();
+                }
+                self.nodes[idx] = Node::new(&boxes[..kids.len()], child, info);
                 (idx as u32, 0)
             }
         }

@@ -73,7 +73,7 @@ pub fn erfinv(y: f64) -> f64 {
         return f64::INFINITY;
     }
     let w = -((1.0 - y) * (1.0 + y)).ln();
-    let x = if w < 5.0 {
+    if w < 5.0 {
         let w = w - 2.5;
         let mut p = 2.810_226_36e-08;
         for c in [
@@ -105,8 +105,7 @@ pub fn erfinv(y: f64) -> f64 {
             p = c + p * w;
         }
         p * y
-    };
-    x
+    }
 }
 
 /// Smith's Λ for the Beckmann distribution, exact, at a = 1 / (α tan θ).
