@@ -193,6 +193,10 @@ fn bench_prints_its_table() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("Msamples/s") && stdout.contains("cornell-box.xml"), "{stdout}");
+    // The trace-only column: the render's own rays replayed through the BVH.
+    let row = stdout.lines().find(|l| l.starts_with("cornell-box.xml")).unwrap();
+    let trace: f64 = row.split_whitespace().nth(8).and_then(|v| v.parse().ok()).unwrap_or(-1.0);
+    assert!(trace > 0.0, "no trace-only time in: {row}");
     // Mitsuba could not be run: its column is empty and a note says why.
     assert!(String::from_utf8_lossy(&o.stderr).contains("Mitsuba timing skipped"));
 }

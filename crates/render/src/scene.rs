@@ -10,6 +10,20 @@ use crate::material::Material;
 use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
 use crate::sampling::Distribution1D;
 use glam::{Vec2, Vec3};
+use std::sync::{Arc, Mutex};
+
+/// Every ray query a scene answers, in order, while attached to it
+/// (`Scene::ray_log`): `penumbra bench` replays a render's rays through
+/// the BVH alone, and through Embree, to time traversal without shading.
+pub type RayLog = Arc<Mutex<Vec<LoggedRay>>>;
+
+/// One recorded query: the ray as handed to the BVH, and whether it was a
+/// shadow (any-hit) query.
+#[derive(Debug, Clone, Copy)]
+pub struct LoggedRay {
+    pub ray: Ray,
+    pub shadow: bool,
+}
 
 /// Per-shape attributes beside its geometry.
 #[derive(Debug, Clone, Copy)]
@@ -50,6 +64,14 @@ pub struct Scene {
     /// [`Material::reads_uv`] per material: hits on the others skip the
     /// surface parameterisation.
     reads_uv: Vec<bool>,
+    /// When set, every `intersect` and `occluded` query is appended here
+    /// (benchmarking only; one predictable branch per ray otherwise).
+    pub ray_log: Option<RayLog>,
+}
+
+#[cold]
+fn log_ray(log: &RayLog, ray: Ray, shadow: bool) {
+    log.lock().unwrap_or_else(|e| e.into_inner()).push(LoggedRay { ray, shadow });
 }
 
 impl Scene {
@@ -70,6 +92,7 @@ impl Scene {
             power_distrib: None,
             light_bvh: None,
             reads_uv,
+            ray_log: None,
         }
     }
 
@@ -93,6 +116,9 @@ impl Scene {
     /// Closest surface hit.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
+        if let Some(log) = &self.ray_log {
+            log_ray(log, *ray, false);
+        }
         let hit = self.accel.intersect(ray, &self.shapes)?;
         let (m, i, t, uv) = (hit.member as usize, hit.index as usize, hit.t, hit.uv);
         // Instances and their flattened geometry take the same path (the same frames).
@@ -112,7 +138,11 @@ impl Scene {
         let o = offset_origin(si.p, si.n, wi);
         let t_max =
             if dist.is_finite() { (si.p + wi * dist - o).length() * (1.0 - SHADOW_EPSILON) } else { f32::INFINITY };
-        self.accel.occluded(&Ray::new(o, wi, t_max), &self.shapes)
+        let ray = Ray::new(o, wi, t_max);
+        if let Some(log) = &self.ray_log {
+            log_ray(log, ray, true);
+        }
+        self.accel.occluded(&ray, &self.shapes)
     }
 
     /// A ray leaving `si` in direction `wi`.

@@ -4,7 +4,8 @@
 
 use super::rays::{BenchRay, Tracer};
 use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene};
-use penumbra_render::geometry::TriangleMesh;
+use glam::Vec3;
+use penumbra_render::geometry::{Shape, TriangleMesh};
 use std::time::Instant;
 
 /// Embree's scene as a benchmark [`Tracer`].
@@ -40,6 +41,50 @@ impl Tracer for EmbreeTracer<'_, '_> {
 /// Builds Embree's BVH (default, medium quality) over the mesh and runs `f`
 /// with it and the build time in seconds.
 pub fn with_embree<R>(mesh: &TriangleMesh, f: impl FnOnce(&dyn Tracer, f64) -> R) -> Option<R> {
+    let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+    with_geometry(&positions, &mesh.indices, &[], f)
+}
+
+/// Segments per disk: a disk becomes a fan of this many triangles.
+const DISK_SEGMENTS: u32 = 256;
+
+/// Embree over a scene's shapes: meshes as triangles, spheres as Embree's
+/// sphere points, disks as fine triangle fans. Cylinders and instances have
+/// no counterpart here; they return an error naming them.
+pub fn with_embree_shapes<R>(shapes: &[Shape], f: impl FnOnce(&dyn Tracer) -> R) -> Result<R, String> {
+    let (mut positions, mut indices, mut spheres) = (Vec::<[f32; 3]>::new(), Vec::<[u32; 3]>::new(), Vec::new());
+    for shape in shapes {
+        let base = positions.len() as u32;
+        match shape {
+            Shape::Mesh(m) => {
+                positions.extend(m.mesh.positions.iter().map(|p| p.to_array()));
+                indices.extend(m.mesh.indices.iter().map(|t| t.map(|i| i + base)));
+            }
+            Shape::Sphere { center, radius, .. } => spheres.push([center.x, center.y, center.z, *radius]),
+            Shape::Disk { world_from_object, .. } => {
+                positions.push(world_from_object.transform_point3(Vec3::ZERO).to_array());
+                for k in 0..DISK_SEGMENTS {
+                    let phi = std::f32::consts::TAU * k as f32 / DISK_SEGMENTS as f32;
+                    let p = Vec3::new(phi.cos(), phi.sin(), 0.0);
+                    positions.push(world_from_object.transform_point3(p).to_array());
+                    indices.push([base, base + 1 + k, base + 1 + (k + 1) % DISK_SEGMENTS]);
+                }
+            }
+            Shape::GroupMember => {}
+            Shape::Cylinder(_) => return Err("a cylinder has no Embree counterpart here".into()),
+            Shape::Instance(_) => return Err("an instance has no Embree counterpart here".into()),
+        }
+    }
+    with_geometry(&positions, &indices, &spheres, |t, _| f(t)).ok_or_else(|| "Embree's device failed".into())
+}
+
+/// Builds an Embree scene of triangles and spheres ([x, y, z, radius]).
+fn with_geometry<R>(
+    positions: &[[f32; 3]],
+    indices: &[[u32; 3]],
+    spheres: &[[f32; 4]],
+    f: impl FnOnce(&dyn Tracer, f64) -> R,
+) -> Option<R> {
     let device = match Device::new() {
         Ok(d) => d,
         Err(e) => {
@@ -49,15 +94,27 @@ pub fn with_embree<R>(mesh: &TriangleMesh, f: impl FnOnce(&dyn Tracer, f64) -> R
     };
     let start = Instant::now();
     let mut scene = device.create_scene().ok()?;
-    let mut geom = device.create_geometry(GeometryKind::TRIANGLE).ok()?;
-    geom.set_new_buffer::<[f32; 3]>(BufferUsage::VERTEX, 0, Format::FLOAT3, 12, mesh.positions.len())
-        .ok()?
-        .copy_from_slice(&mesh.positions.iter().map(|p| p.to_array()).collect::<Vec<_>>());
-    geom.set_new_buffer::<[u32; 3]>(BufferUsage::INDEX, 0, Format::UINT3, 12, mesh.indices.len())
-        .ok()?
-        .copy_from_slice(&mesh.indices);
-    let geom = geom.commit();
-    scene.attach_geometry(&geom);
+    let mut committed = Vec::new();
+    if !indices.is_empty() {
+        let mut geom = device.create_geometry(GeometryKind::TRIANGLE).ok()?;
+        geom.set_new_buffer::<[f32; 3]>(BufferUsage::VERTEX, 0, Format::FLOAT3, 12, positions.len())
+            .ok()?
+            .copy_from_slice(positions);
+        geom.set_new_buffer::<[u32; 3]>(BufferUsage::INDEX, 0, Format::UINT3, 12, indices.len())
+            .ok()?
+            .copy_from_slice(indices);
+        committed.push(geom.commit());
+    }
+    if !spheres.is_empty() {
+        let mut geom = device.create_geometry(GeometryKind::SPHERE_POINT).ok()?;
+        geom.set_new_buffer::<[f32; 4]>(BufferUsage::VERTEX, 0, Format::FLOAT4, 16, spheres.len())
+            .ok()?
+            .copy_from_slice(spheres);
+        committed.push(geom.commit());
+    }
+    for g in &committed {
+        scene.attach_geometry(g);
+    }
     scene.commit();
     let build_s = start.elapsed().as_secs_f64();
     let result = f(&EmbreeTracer(&scene), build_s);

@@ -7,6 +7,7 @@ mod efficiency;
 mod embree;
 mod rays;
 mod scale;
+mod trace_only;
 
 use crate::args::BenchArgs;
 use anyhow::{anyhow, Result};
@@ -24,6 +25,9 @@ const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
     // Glossy and textured: rough metals and glass, plastics, a normal map.
     ("scenes/material-showcase.xml", &[("width", "384"), ("height", "160"), ("spp", "64")]),
 ];
+
+/// Samples per pixel whose rays the trace-only columns record.
+const TRACE_SPP: u32 = 8;
 
 /// Light-selection comparison: this scene against its converged reference.
 const SELECTION_SCENE: &str = "tests/scenes/many_lights.xml";
@@ -104,8 +108,8 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
     let threads = pool.current_num_threads();
     let mitsuba = mitsuba_python(a);
     println!(
-        "{:<20} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8}",
-        "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup"
+        "{:<20} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8} {:>8} {:>8}",
+        "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup", "trace s", "embree s"
     );
     for (scene, defines) in &scenes {
         let ov = Overrides { spp: a.spp, ..Default::default() };
@@ -127,8 +131,20 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
             },
             None => ("-".into(), "-".into()),
         };
+        let trace = trace_only::measure(&job, pool, TRACE_SPP);
+        match &trace.embree_s {
+            Err(e) => eprintln!("note: Embree trace-only column skipped: {e}"),
+            Ok(_) => eprintln!(
+                "note: {}: {:.1} M rays at {} spp; of those recorded, closest hits / blocked shadow rays {:?} (penumbra) vs {:?} (embree)",
+                scene.display(),
+                trace.rays / 1e6,
+                job.sampler.spp,
+                trace.counts[0],
+                trace.counts[1]
+            ),
+        }
         println!(
-            "{:<20} {:>9} {:>6} {:>9.2} {:>11.3} {:>10.2} {:>11} {:>8}",
+            "{:<20} {:>9} {:>6} {:>9.2} {:>11.3} {:>10.2} {:>11} {:>8} {:>8.2} {:>8}",
             scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
             format!("{}x{}", job.width, job.height),
             job.sampler.spp,
@@ -136,13 +152,18 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
             stats.samples as f64 / secs / 1e6,
             rays / secs / 1e6,
             mi,
-            ratio
+            ratio,
+            trace.penumbra_s,
+            trace.embree_s.map(|s| format!("{s:.2}")).unwrap_or_else(|_| "-".into())
         );
     }
     if mitsuba.is_none() {
         println!("(Mitsuba 3 not found: pass --mitsuba PYTHON or set PENUMBRA_MITSUBA_PYTHON to compare)");
     }
     println!("threads: {threads}; speedup = Mitsuba seconds / Penumbra seconds at equal spp ({})", a.mitsuba_variant);
+    println!(
+        "trace s / embree s: the render's own rays (recorded at {TRACE_SPP} spp, scaled) traced alone, without shading, by Penumbra's BVH / by Embree"
+    );
     if a.scenes.is_empty() {
         light_selection_table(pool)?;
     }

@@ -59,6 +59,12 @@ pub struct BenchRay {
     pub t_max: f32,
 }
 
+impl BenchRay {
+    pub fn ray(&self) -> Ray {
+        Ray::new(self.o, self.d, self.t_max)
+    }
+}
+
 /// A uniformly chosen point of the surface (by triangle index, then
 /// uniform barycentrics) and the face normal turned towards the inside.
 fn surface_point(m: &TriangleMesh, key: u64) -> Option<(Vec3, Vec3)> {
@@ -140,7 +146,7 @@ impl Tracer for PenumbraTracer {
     fn closest(&self, rays: &[BenchRay]) -> (u64, f64) {
         let (mut n, mut ts) = (0u64, 0f64);
         for r in rays {
-            if let Some(h) = self.accel.intersect(&Ray::new(r.o, r.d, r.t_max), &self.shapes) {
+            if let Some(h) = self.accel.intersect(&r.ray(), &self.shapes) {
                 n += 1;
                 ts += h.t as f64;
             }
@@ -148,19 +154,25 @@ impl Tracer for PenumbraTracer {
         (n, ts)
     }
     fn occluded(&self, rays: &[BenchRay]) -> u64 {
-        rays.iter().filter(|r| self.accel.occluded(&Ray::new(r.o, r.d, r.t_max), &self.shapes)).count() as u64
+        rays.iter().filter(|r| self.accel.occluded(&r.ray(), &self.shapes)).count() as u64
     }
 }
 
 /// Runs `f` with Embree's BVH over the mesh and its build time, or returns
 /// `None` when Embree is not compiled in (or its device fails).
 #[cfg(feature = "embree")]
-pub use super::embree::with_embree;
+pub use super::embree::{with_embree, with_embree_shapes};
 
 /// Embree is not compiled in: no column.
 #[cfg(not(feature = "embree"))]
 pub fn with_embree<R>(_: &TriangleMesh, _: impl FnOnce(&dyn Tracer, f64) -> R) -> Option<R> {
     None
+}
+
+/// Embree is not compiled in: no column.
+#[cfg(not(feature = "embree"))]
+pub fn with_embree_shapes<R>(_: &[Shape], _: impl FnOnce(&dyn Tracer) -> R) -> Result<R, String> {
+    Err("Embree is not compiled in (build with --features embree)".into())
 }
 
 /// Times one pass of a query over all rays in parallel chunks; returns
