@@ -111,6 +111,7 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
         "{:<20} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8} {:>8} {:>8}",
         "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup", "trace s", "embree s"
     );
+    let mut embree_skipped = None;
     for (scene, defines) in &scenes {
         let ov = Overrides { spp: a.spp, ..Default::default() };
         let job = penumbra_scene::load_scene(scene, defines, &ov).map_err(|e| anyhow!(e))?;
@@ -133,7 +134,7 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
         };
         let trace = trace_only::measure(&job, pool, TRACE_SPP);
         match &trace.embree_s {
-            Err(e) => eprintln!("note: Embree trace-only column skipped: {e}"),
+            Err(e) => embree_skipped = Some(e.clone()),
             Ok(_) => eprintln!(
                 "note: {}: {:.1} M rays at {} spp; of those recorded, closest hits / blocked shadow rays {:?} (penumbra) vs {:?} (embree)",
                 scene.display(),
@@ -161,6 +162,9 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
         println!("(Mitsuba 3 not found: pass --mitsuba PYTHON or set PENUMBRA_MITSUBA_PYTHON to compare)");
     }
     println!("threads: {threads}; speedup = Mitsuba seconds / Penumbra seconds at equal spp ({})", a.mitsuba_variant);
+    if let Some(e) = embree_skipped {
+        println!("(embree trace-only column: {e})");
+    }
     println!(
         "trace s / embree s: the render's own rays (recorded at {TRACE_SPP} spp, scaled) traced alone, without shading, by Penumbra's BVH / by Embree"
     );
