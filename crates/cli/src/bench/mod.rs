@@ -26,8 +26,10 @@ const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
     ("scenes/material-showcase.xml", &[("width", "384"), ("height", "160"), ("spp", "64")]),
 ];
 
-/// Samples per pixel whose rays the trace-only columns record.
+/// Samples per pixel whose rays the trace-only columns record, at most...
 const TRACE_SPP: u32 = 8;
+/// ...and camera samples in all (about 10 rays and 320 bytes of log each).
+const TRACE_SAMPLES: u64 = 1 << 20;
 
 /// Light-selection comparison: this scene against its converged reference.
 const SELECTION_SCENE: &str = "tests/scenes/many_lights.xml";
@@ -132,7 +134,10 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
             },
             None => ("-".into(), "-".into()),
         };
-        let trace = trace_only::measure(&job, pool, TRACE_SPP);
+        // Fewer recorded samples on large films: the log holds 32 bytes a ray.
+        let pixels = job.width as u64 * job.height as u64;
+        let trace_spp = (TRACE_SAMPLES / pixels.max(1)).clamp(1, TRACE_SPP as u64) as u32;
+        let trace = trace_only::measure(&job, pool, trace_spp);
         match &trace.embree_s {
             Err(e) => embree_skipped = Some(e.clone()),
             Ok(_) => eprintln!(
@@ -166,7 +171,7 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
         println!("(embree trace-only column: {e})");
     }
     println!(
-        "trace s / embree s: the render's own rays (recorded at {TRACE_SPP} spp, scaled) traced alone, without shading, by Penumbra's BVH / by Embree"
+        "trace s / embree s: the render's own rays (recorded at up to {TRACE_SPP} spp, scaled) traced alone, without shading, by Penumbra's BVH / by Embree"
     );
     if a.scenes.is_empty() {
         light_selection_table(pool)?;
