@@ -71,7 +71,7 @@ impl PathIntegrator {
                 } else {
                     let (le, env_pdf) = scene.environment(prev_p, prev_n, ray.d);
                     if le != Spectrum::ZERO {
-                        l += beta * le * self.bsdf_weight(prev_delta, prev_bsdf_pdf, env_pdf);
+                        l += beta * le * self.bsdf_weight(prev_bsdf_pdf, env_pdf);
                     }
                 }
                 break;
@@ -83,7 +83,7 @@ impl PathIntegrator {
                 let w = if prev_delta {
                     1.0
                 } else {
-                    self.bsdf_weight(false, prev_bsdf_pdf, scene.light_pdf(prev_p, prev_n, &si))
+                    self.bsdf_weight(prev_bsdf_pdf, scene.light_pdf(prev_p, prev_n, &si))
                 };
                 l += beta * le * w;
             }
@@ -135,13 +135,12 @@ impl PathIntegrator {
         l
     }
 
-    /// MIS weight of emission found by BSDF sampling. Without MIS, emission
-    /// after a non-delta bounce belongs to light sampling alone (weight 0).
+    /// MIS weight of emission found by BSDF sampling after a non-delta
+    /// bounce (after a delta one it is 1, and callers skip this). Without
+    /// MIS, that emission belongs to light sampling alone (weight 0).
     #[inline]
-    fn bsdf_weight(&self, prev_delta: bool, bsdf_pdf: f32, light_pdf: f32) -> f32 {
-        if prev_delta {
-            1.0
-        } else if self.mis {
+    fn bsdf_weight(&self, bsdf_pdf: f32, light_pdf: f32) -> f32 {
+        if self.mis {
             power_heuristic(bsdf_pdf, light_pdf)
         } else {
             0.0
