@@ -2,10 +2,10 @@
 //! ray-traversal benchmark's triangles and rays: the reference for BVH
 //! build time and traversal speed. Compiled only with the `embree` feature.
 
-use super::rays::{BenchRay, Tracer};
+use super::rays::Tracer;
 use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene};
 use glam::Vec3;
-use penumbra_render::geometry::{Shape, TriangleMesh};
+use penumbra_render::geometry::{Ray as PenumbraRay, Shape, TriangleMesh};
 use std::time::Instant;
 
 /// Embree's scene as a benchmark [`Tracer`].
@@ -13,7 +13,7 @@ struct EmbreeTracer<'s, 'd>(&'s Scene<'d>);
 
 impl Tracer for EmbreeTracer<'_, '_> {
     /// `rtcIntersect1` with an incoherent context.
-    fn closest(&self, rays: &[BenchRay]) -> (u64, f64) {
+    fn closest(&self, rays: &[PenumbraRay]) -> (u64, f64) {
         let mut ctx = IntersectContext::incoherent();
         let (mut n, mut ts) = (0u64, 0f64);
         for r in rays {
@@ -27,7 +27,7 @@ impl Tracer for EmbreeTracer<'_, '_> {
         (n, ts)
     }
     /// `rtcOccluded1` with an incoherent context.
-    fn occluded(&self, rays: &[BenchRay]) -> u64 {
+    fn occluded(&self, rays: &[PenumbraRay]) -> u64 {
         let mut ctx = IntersectContext::incoherent();
         rays.iter()
             .filter(|r| {

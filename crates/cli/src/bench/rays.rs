@@ -51,20 +51,6 @@ pub fn cave_mesh(target: usize) -> TriangleMesh {
     m
 }
 
-/// One query: origin, direction, t_max.
-#[derive(Clone, Copy)]
-pub struct BenchRay {
-    pub o: Vec3,
-    pub d: Vec3,
-    pub t_max: f32,
-}
-
-impl BenchRay {
-    pub fn ray(&self) -> Ray {
-        Ray::new(self.o, self.d, self.t_max)
-    }
-}
-
 /// A uniformly chosen point of the surface (by triangle index, then
 /// uniform barycentrics) and the face normal turned towards the inside.
 fn surface_point(m: &TriangleMesh, key: u64) -> Option<(Vec3, Vec3)> {
@@ -87,7 +73,7 @@ fn surface_point(m: &TriangleMesh, key: u64) -> Option<(Vec3, Vec3)> {
 
 /// `count` diffuse-bounce rays (closest hit) and `count` shadow segments
 /// (any hit), a pure function of `count`.
-pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<BenchRay>, Vec<BenchRay>) {
+pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<Ray>, Vec<Ray>) {
     let bounce = (0..count as u64 * 2)
         .into_par_iter()
         .filter_map(|k| {
@@ -95,7 +81,7 @@ pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<BenchRay>, Vec<Be
             let u = Vec2::new(to_unit_f32(hash_words(&[k, 4])), to_unit_f32(hash_words(&[k, 5])));
             let local = warp::sample_cosine_hemisphere(u);
             let frame = penumbra_render::math::Frame::from_normal(n);
-            Some(BenchRay { o, d: frame.to_world(local).normalize(), t_max: f32::INFINITY })
+            Some(Ray::new(o, frame.to_world(local).normalize(), f32::INFINITY))
         })
         .collect::<Vec<_>>()
         .into_iter()
@@ -107,7 +93,7 @@ pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<BenchRay>, Vec<Be
             let (o, _) = surface_point(m, k + (1 << 40))?;
             let (q, _) = surface_point(m, k + (2 << 40))?;
             let dist = (q - o).length();
-            (dist > 1e-3).then(|| BenchRay { o, d: (q - o) / dist, t_max: dist * 0.999 })
+            (dist > 1e-3).then(|| Ray::new(o, (q - o) / dist, dist * 0.999))
         })
         .collect::<Vec<_>>()
         .into_iter()
@@ -120,41 +106,39 @@ pub fn incoherent_rays(m: &TriangleMesh, count: usize) -> (Vec<BenchRay>, Vec<Be
 /// benchmark splits the rays into chunks across the pool).
 pub trait Tracer: Sync {
     /// Closest hits found and the sum of their distances.
-    fn closest(&self, rays: &[BenchRay]) -> (u64, f64);
+    fn closest(&self, rays: &[Ray]) -> (u64, f64);
     /// Segments found occluded.
-    fn occluded(&self, rays: &[BenchRay]) -> u64;
+    fn occluded(&self, rays: &[Ray]) -> u64;
 }
 
-/// Penumbra's BVH over the benchmark mesh.
-pub struct PenumbraTracer {
-    shapes: Vec<Shape>,
-    accel: Accel,
+/// Penumbra's BVH over its shapes: the benchmark mesh's, or a scene's.
+pub struct Bvh<'a> {
+    pub accel: &'a Accel,
+    pub shapes: &'a [Shape],
 }
 
-impl PenumbraTracer {
-    /// Builds the BVH; returns it and the build time in seconds.
-    pub fn build(mesh: &TriangleMesh) -> (PenumbraTracer, f64) {
-        let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
-        let start = Instant::now();
-        let accel = Accel::build(&shapes);
-        let secs = start.elapsed().as_secs_f64();
-        (PenumbraTracer { shapes, accel }, secs)
-    }
+/// The benchmark mesh as a shape, its BVH, and the build time in seconds.
+fn build_bvh(mesh: &TriangleMesh) -> (Vec<Shape>, Accel, f64) {
+    let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
+    let start = Instant::now();
+    let accel = Accel::build(&shapes);
+    let secs = start.elapsed().as_secs_f64();
+    (shapes, accel, secs)
 }
 
-impl Tracer for PenumbraTracer {
-    fn closest(&self, rays: &[BenchRay]) -> (u64, f64) {
+impl Tracer for Bvh<'_> {
+    fn closest(&self, rays: &[Ray]) -> (u64, f64) {
         let (mut n, mut ts) = (0u64, 0f64);
         for r in rays {
-            if let Some(h) = self.accel.intersect(&r.ray(), &self.shapes) {
+            if let Some(h) = self.accel.intersect(r, self.shapes) {
                 n += 1;
                 ts += h.t as f64;
             }
         }
         (n, ts)
     }
-    fn occluded(&self, rays: &[BenchRay]) -> u64 {
-        rays.iter().filter(|r| self.accel.occluded(&r.ray(), &self.shapes)).count() as u64
+    fn occluded(&self, rays: &[Ray]) -> u64 {
+        rays.iter().filter(|r| self.accel.occluded(r, self.shapes)).count() as u64
     }
 }
 
@@ -177,7 +161,7 @@ pub fn with_embree_shapes<R>(_: &[Shape], _: impl FnOnce(&dyn Tracer) -> R) -> R
 
 /// Times one pass of a query over all rays in parallel chunks; returns
 /// (Mrays/s, result).
-fn timed<R: Send>(rays: &[BenchRay], f: impl Fn(&[BenchRay]) -> R + Sync, sum: impl Fn(Vec<R>) -> R) -> (f64, R) {
+fn timed<R: Send>(rays: &[Ray], f: impl Fn(&[Ray]) -> R + Sync, sum: impl Fn(Vec<R>) -> R) -> (f64, R) {
     let start = Instant::now();
     let parts: Vec<R> = rays.par_chunks(4096).map(&f).collect();
     let secs = start.elapsed().as_secs_f64();
@@ -203,7 +187,7 @@ fn median(v: &[f64]) -> f64 {
 }
 
 /// One timed pass of each query.
-fn pass(t: &dyn Tracer, bounce: &[BenchRay], shadow: &[BenchRay], f: &mut Figures) {
+fn pass(t: &dyn Tracer, bounce: &[Ray], shadow: &[Ray], f: &mut Figures) {
     let (mrays, (hits, t_sum)) =
         timed(bounce, |c| t.closest(c), |v| v.into_iter().fold((0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1)));
     f.closest.push(mrays);
@@ -230,13 +214,14 @@ pub fn table(pool: &rayon::ThreadPool, triangles: usize, rays: usize) {
     let (mut ours, mut theirs) = (Figures::default(), Figures::default());
     let mut ratios = (Vec::new(), Vec::new());
     pool.install(|| {
-        let mut tracer = None;
+        let mut built = None;
         for _ in 0..3 {
-            let (t, secs) = PenumbraTracer::build(&mesh);
+            let (shapes, accel, secs) = build_bvh(&mesh);
             ours.build_s.push(secs);
-            tracer = Some(t);
+            built = Some((shapes, accel));
         }
-        let pen = tracer.expect("built");
+        let (shapes, accel) = built.expect("built");
+        let pen = Bvh { accel: &accel, shapes: &shapes };
         let (nodes, blocks, fill) = pen.accel.stats();
         eprintln!(
             "penumbra BVH: {nodes} nodes ({fill:.2} children each), {blocks} triangle blocks ({:.2} triangles each), {:.1} bytes/triangle",

@@ -4,9 +4,10 @@
 //! render's time that traversal alone sets, and so a floor under it: a
 //! render cannot be faster than its rays can be traced.
 
-use super::rays::{BenchRay, Tracer};
+use super::rays::{Bvh, Tracer};
+use penumbra_render::geometry::Ray;
 use penumbra_render::render::RenderJob;
-use penumbra_render::scene::{LoggedRay, RayLog, Scene};
+use penumbra_render::scene::{LoggedRay, RayLog};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -27,28 +28,9 @@ pub struct TraceOnly {
     pub counts: [[u64; 2]; 2],
 }
 
-/// The scene's own BVH, as the integrator's queries reach it.
-struct SceneTracer<'a>(&'a Scene);
-
-impl Tracer for SceneTracer<'_> {
-    fn closest(&self, rays: &[BenchRay]) -> (u64, f64) {
-        let (mut n, mut ts) = (0u64, 0f64);
-        for r in rays {
-            if let Some(h) = self.0.accel.intersect(&r.ray(), &self.0.shapes) {
-                n += 1;
-                ts += h.t as f64;
-            }
-        }
-        (n, ts)
-    }
-    fn occluded(&self, rays: &[BenchRay]) -> u64 {
-        rays.iter().filter(|r| self.0.accel.occluded(&r.ray(), &self.0.shapes)).count() as u64
-    }
-}
-
 /// Seconds to trace the closest-hit rays and then the shadow rays, in
 /// parallel chunks, with the hits and blocked segments found.
-fn replay(t: &dyn Tracer, closest: &[BenchRay], shadow: &[BenchRay]) -> (f64, [u64; 2]) {
+fn replay(t: &dyn Tracer, closest: &[Ray], shadow: &[Ray]) -> (f64, [u64; 2]) {
     let start = Instant::now();
     let hits: u64 = closest.par_chunks(4096).map(|c| t.closest(c).0).sum();
     let blocked: u64 = shadow.par_chunks(4096).map(|c| t.occluded(c)).sum();
@@ -72,12 +54,10 @@ pub fn measure(job: &RenderJob, pool: &rayon::ThreadPool, record_spp: u32) -> Tr
     let scale = job.sampler.spp as f64 / rec.sampler.spp as f64;
     let logged = std::mem::take(&mut *log.lock().unwrap_or_else(|e| e.into_inner()));
     let (shadow, closest): (Vec<LoggedRay>, Vec<LoggedRay>) = logged.into_iter().partition(|l| l.shadow);
-    let bench = |v: Vec<LoggedRay>| -> Vec<BenchRay> {
-        v.into_iter().map(|l| BenchRay { o: l.ray.o, d: l.ray.d, t_max: l.ray.t_max }).collect()
-    };
-    let (closest, shadow) = (bench(closest), bench(shadow));
+    let rays_of = |v: Vec<LoggedRay>| -> Vec<Ray> { v.into_iter().map(|l| l.ray).collect() };
+    let (closest, shadow) = (rays_of(closest), rays_of(shadow));
     let rays = (closest.len() + shadow.len()) as f64 * scale;
-    let ours = SceneTracer(&job.scene);
+    let ours = Bvh { accel: &job.scene.accel, shapes: &job.scene.shapes };
     let (mut pen, mut emb, mut counts) = (Vec::new(), Vec::new(), [[0; 2]; 2]);
     let mut round = |t: &dyn Tracer, times: &mut Vec<f64>, k: usize| {
         let (secs, n) = replay(t, &closest, &shadow);
