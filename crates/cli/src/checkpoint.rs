@@ -15,7 +15,7 @@
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
-use penumbra_render::aov::AovKind;
+use penumbra_render::film::AovKind;
 use penumbra_render::film::{Film, FilmLayers};
 use std::fs;
 use std::io::Write;

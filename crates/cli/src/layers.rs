@@ -12,7 +12,7 @@
 
 use crate::exrmeta::{ExrImage, WEIGHT_CHANNEL};
 use anyhow::{bail, Result};
-use penumbra_render::aov::AovKind;
+use penumbra_render::film::AovKind;
 use penumbra_render::film::{Film, FilmLayers};
 
 /// What `--aov` names, besides the AOV kinds.

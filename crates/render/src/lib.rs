@@ -5,7 +5,6 @@
 //! `texture` → `bsdf` → `material` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
 
 pub mod accel;
-pub mod aov;
 pub mod bsdf;
 pub mod camera;
 pub mod film;

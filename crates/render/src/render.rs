@@ -3,9 +3,9 @@
 //! own with the filter's margin, and the tile films are added in tile order,
 //! so the film is bitwise identical for any thread count or scheduling.
 
-use crate::aov;
 use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
+use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;

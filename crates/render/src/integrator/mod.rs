@@ -9,6 +9,7 @@
 //! | `direct`     | direct illumination only: N light samples + M BSDF samples, MIS (Mitsuba `direct`) |
 //! | `bruteforce` | hemisphere form only: one sampled direction per vertex, emission only when hit |
 
+pub mod aov;
 pub mod bruteforce;
 pub mod direct;
 pub mod path;

@@ -10,8 +10,10 @@
 //! tiles render into films with a margin of the filter's reach and are added
 //! in a fixed order, so the image does not depend on the thread count.
 
-use crate::aov::{channel_count, AovKind};
+pub mod aov;
+
 use crate::math::{fast, Spectrum};
+pub use aov::{channel_count, AovKind, AovSample};
 use glam::Vec2;
 
 /// Mitsuba's reconstruction filters (`rfilter`), as 1D profiles applied
