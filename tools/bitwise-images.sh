@@ -15,7 +15,7 @@ if [ "${1:-}" = --compare ]; then
 fi
 bin=$1 out=$2
 mkdir -p "$out"
-for s in scenes/*.xml tests/scenes/*.xml; do
+for s in scenes/*.xml tests/scenes/*.xml tools/bitwise-scenes/*.xml; do
     n=$(basename "$s" .xml)
     "$bin" render "$s" -o "$out/$n.pfm" --spp 16 --seed 3 --threads 2 --quiet 2>/dev/null
 done

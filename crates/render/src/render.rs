@@ -7,6 +7,7 @@ use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
 use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
+use crate::material::Scratch;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec2;
@@ -186,6 +187,7 @@ impl RenderJob {
         let m = self.filter.margin().min(MAX_MARGIN);
         let mut film = Film::with_layers(w + 2 * m, h + 2 * m, layers);
         let mut aov_values = vec![0f32; film.aov_channels()];
+        let mut scratch = Scratch::new();
         let camera_from_world = self.camera.world_from_camera.inverse();
         let mut stats = RenderStats::default();
         let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
@@ -206,7 +208,8 @@ impl RenderJob {
                     let mut rng = self.sampler.stream((gx, gy), s);
                     let u = rng.next_2d();
                     let ray = self.camera.sample_ray((Vec2::new(gx as f32, gy as f32) + u) * inv, &mut rng);
-                    let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays);
+                    scratch.reset();
+                    let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays, &scratch);
                     stats.samples += 1;
                     if l.is_finite() {
                         let aov = if aov_values.is_empty() {
@@ -222,6 +225,7 @@ impl RenderJob {
                                 &ray,
                                 self.eye(&ray, &camera_from_world),
                                 &mut aov_rng,
+                                &scratch,
                             );
                             a.write(&film.aov_kinds, &mut aov_values);
                             Some(&aov_values[..])

@@ -6,7 +6,7 @@ use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::bvh::LightBvh;
 use crate::light::{Light, LightSample};
-use crate::material::Material;
+use crate::material::{Material, Scratch};
 use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
 use crate::sampling::Distribution1D;
 use glam::{Vec2, Vec3};
@@ -152,10 +152,10 @@ impl Scene {
     }
 
     /// The BSDF at a hit, with textures evaluated. May replace
-    /// `si.sh_frame` (see [`Material::bsdf`]).
+    /// `si.sh_frame` (see [`Material::bsdf`]); nested BSDFs go to `scratch`.
     #[inline]
-    pub fn bsdf(&self, si: &mut SurfaceInteraction) -> Bsdf<'_> {
-        self.materials[self.shape_info[si.shape as usize].material as usize].bsdf(si)
+    pub fn bsdf<'a>(&'a self, si: &mut SurfaceInteraction, scratch: &'a Scratch) -> Bsdf<'a> {
+        self.materials[self.shape_info[si.shape as usize].material as usize].bsdf(si, scratch)
     }
 
     /// Probability that `sample_light` picks light `i` for a receiver at
@@ -268,7 +268,7 @@ mod tests {
     fn three_lights() -> Scene {
         let shapes = vec![Shape::sphere(Vec3::new(0.0, 3.0, 0.0), 0.5, false)];
         let info = vec![ShapeInfo { material: 0, light: Some(2) }];
-        let materials = vec![Material::Diffuse { reflectance: Vec3::splat(0.5).into() }];
+        let materials = vec![Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Vec3::splat(0.5).into() })];
         let lights = vec![
             Light::Point(PointLight { position: Vec3::X, intensity: Vec3::splat(1.0) }),
             Light::Point(PointLight { position: Vec3::Y, intensity: Vec3::splat(5.0) }),

@@ -49,7 +49,7 @@ fn white_sphere_in_constant_env(reflectance: f32) -> Scene {
     Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, false)],
         vec![ShapeInfo { material: 0, light: None }],
-        vec![Material::Diffuse { reflectance: Vec3::splat(reflectance).into() }],
+        vec![Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Vec3::splat(reflectance).into() })],
         vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
     )
 }
@@ -82,7 +82,7 @@ fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
     let scene = Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, true)],
         vec![ShapeInfo { material: 0, light: Some(0) }],
-        vec![Material::Diffuse { reflectance: Vec3::splat(rho).into() }],
+        vec![Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Vec3::splat(rho).into() })],
         vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le) })],
     );
     let spp = 256;
@@ -100,7 +100,7 @@ fn non_finite_samples_are_dropped_and_counted() {
     let scene = Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, false)],
         vec![ShapeInfo { material: 0, light: None }],
-        vec![Material::Diffuse { reflectance: Vec3::splat(f32::NAN).into() }],
+        vec![Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Vec3::splat(f32::NAN).into() })],
         vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
     );
     let j = job(scene, Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, 4);

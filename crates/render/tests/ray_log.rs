@@ -20,7 +20,7 @@ fn the_log_holds_every_query_and_changes_nothing() {
     let scene = Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, false), Shape::sphere(Vec3::new(1.6, 0.0, 0.0), 0.5, false)],
         vec![ShapeInfo { material: 0, light: None }; 2],
-        vec![Material::Diffuse { reflectance: Vec3::splat(0.8).into() }],
+        vec![Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Vec3::splat(0.8).into() })],
         vec![Light::Constant(ConstantLight { radiance: Vec3::ONE })],
     );
     let mut job = RenderJob {

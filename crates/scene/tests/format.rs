@@ -135,7 +135,7 @@ fn spectrum_files_are_read_through_the_search_path() {
     let job = build(&desc, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
     let scene = &job.scene;
     assert_eq!(scene.shapes.len(), 2);
-    let Material::Diffuse { reflectance: Texture::Constant(r) } =
+    let Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Texture::Constant(r) }) =
         &scene.materials[scene.shape_info[0].material as usize]
     else {
         panic!("diffuse with a constant reflectance expected");

@@ -164,7 +164,7 @@ fn blendbsdf_parses_weight_and_two_nested_bsdfs() {
     match with(&format!(r#"<bsdf type="blendbsdf"><float name="weight" value="0.25"/>{two}</bsdf>"#)).unwrap() {
         Material::Blend { weight, first, second } => {
             assert_eq!(weight.constant(), Some(glam::Vec3::splat(0.25)));
-            assert!(matches!(*first, Material::Diffuse { .. }) && matches!(*second, Material::Conductor { .. }));
+            assert!(matches!(*first, Material::Diffuse(..)) && matches!(*second, Material::Conductor(..)));
         }
         m => panic!("{m:?}"),
     }

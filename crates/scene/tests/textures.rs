@@ -46,7 +46,7 @@ fn job(scene: &Path, texture: &str) -> Result<penumbra_render::render::RenderJob
 
 fn reflectance(j: &penumbra_render::render::RenderJob) -> Texture {
     match &j.scene.materials[j.scene.shape_info[0].material as usize] {
-        Material::Diffuse { reflectance } => reflectance.clone(),
+        Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance }) => reflectance.clone(),
         m => panic!("unexpected material {m:?}"),
     }
 }

@@ -8,8 +8,11 @@
 
 use super::fresnel::{fresnel_conductor, reflect};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
-use glam::Vec3;
+use crate::texture::Texture;
+use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy)]
 pub struct Conductor {
@@ -18,9 +21,39 @@ pub struct Conductor {
     pub specular_reflectance: Spectrum,
 }
 
-impl Conductor {
+/// Mitsuba `conductor` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct ConductorParams {
+    pub eta: Texture,
+    pub k: Texture,
+    pub specular_reflectance: Texture,
+}
+
+impl BsdfParams for ConductorParams {
+    type Model<'a> = Conductor;
+
     #[inline]
-    pub fn sample(&self, wo: Vec3) -> Option<BsdfSample> {
+    fn at(&self, si: &SurfaceInteraction) -> Conductor {
+        Conductor {
+            eta: self.eta.eval(si),
+            k: self.k.eval(si),
+            specular_reflectance: self.specular_reflectance.eval(si),
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.eta, &self.k, &self.specular_reflectance]
+    }
+}
+
+impl BsdfModel for Conductor {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        false
+    }
+
+    #[inline]
+    fn sample(&self, wo: Vec3, _u: f32, _u2: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }

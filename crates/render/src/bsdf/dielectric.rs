@@ -9,7 +9,10 @@
 
 use super::fresnel::{fresnel_dielectric, reflect, refract};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy)]
@@ -20,12 +23,43 @@ pub struct Dielectric {
     pub specular_transmittance: Spectrum,
 }
 
-impl Dielectric {
+/// Mitsuba `dielectric` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct DielectricParams {
+    /// Relative IOR (interior / exterior).
+    pub eta: f32,
+    pub specular_reflectance: Texture,
+    pub specular_transmittance: Texture,
+}
+
+impl BsdfParams for DielectricParams {
+    type Model<'a> = Dielectric;
+
+    #[inline]
+    fn at(&self, si: &SurfaceInteraction) -> Dielectric {
+        Dielectric {
+            eta: self.eta,
+            specular_reflectance: self.specular_reflectance.eval(si),
+            specular_transmittance: self.specular_transmittance.eval(si),
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.specular_reflectance, &self.specular_transmittance]
+    }
+}
+
+impl BsdfModel for Dielectric {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        false
+    }
+
     /// Chooses reflection with probability F, refraction otherwise, so the
     /// weight is the tint alone; in radiance transport refraction scales by
     /// 1/η² (Veach 1997, §5.2; Mitsuba's `dielectric.cpp`).
     #[inline]
-    pub fn sample(&self, wo: Vec3, u: f32, _u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, _u2: Vec2) -> Option<BsdfSample> {
         let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, self.eta);
         if u <= r {
             Some(BsdfSample { wi: reflect(wo), pdf: r, weight: self.specular_reflectance, delta: true, eta: 1.0 })

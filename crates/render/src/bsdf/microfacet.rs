@@ -13,7 +13,9 @@
 //! normal distribution. We use the exact Λ(a) = (erf(a) − 1)/2 +
 //! exp(−a²)/(2a√π) so that the density and the sampler agree.
 
+use crate::geometry::SurfaceInteraction;
 use crate::math::{safe_sqrt, PI};
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 /// Which normal distribution function.
@@ -30,6 +32,31 @@ pub struct Microfacet {
     pub kind: MicrofacetType,
     pub alpha_u: f32,
     pub alpha_v: f32,
+}
+
+/// A distribution with (possibly textured) roughness along `s` and `t`, as
+/// `roughconductor` and `roughdielectric` store it.
+#[derive(Debug, Clone)]
+pub struct Roughness {
+    pub kind: MicrofacetType,
+    pub alpha_u: Texture,
+    pub alpha_v: Texture,
+}
+
+impl Roughness {
+    /// The distribution at a hit (`Microfacet` keeps the roughness positive).
+    #[inline]
+    pub fn at(&self, si: &SurfaceInteraction) -> Microfacet {
+        Microfacet { kind: self.kind, alpha_u: self.alpha_u.eval_1(si), alpha_v: self.alpha_v.eval_1(si) }
+    }
+
+    /// Anisotropic, or textured: the model reads the frame's orientation or the uv.
+    pub fn reads_uv(&self) -> bool {
+        match (self.alpha_u.constant(), self.alpha_v.constant()) {
+            (Some(u), Some(v)) => u != v,
+            _ => true,
+        }
+    }
 }
 
 const INV_SQRT_PI: f64 = 0.564_189_583_547_756_3;

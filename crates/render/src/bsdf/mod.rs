@@ -1,6 +1,10 @@
 //! BSDFs: the scattering functions an integrator evaluates and samples at a
-//! hit. A [`crate::material::Material`] (parameters that may be textured)
-//! produces one [`Bsdf`] per hit with every parameter evaluated there.
+//! hit. Each plugin's file holds both of its forms: the parameters as the
+//! scene stores them (constants or textures, `XxxParams`, see
+//! [`BsdfParams`]) and the per-hit model they evaluate to with
+//! [`BsdfParams::at`] (pbrt-v4's Material → BSDF split). A
+//! [`crate::material::Material`] adds the wrappers (`twosided`, `mask`,
+//! normal and bump maps, `blendbsdf`) and produces one [`Bsdf`] per hit.
 //!
 //! Contract (see CONVENTIONS.md), in the local shading frame (normal = +z):
 //! - `wo` points towards the camera side, `wi` is the light / sampled direction.
@@ -12,6 +16,7 @@
 //! - BSDFs are one-sided like Mitsuba's (black when `wo.z <= 0`) except
 //!   dielectrics; `twosided` is resolved by the material (it flips the frame).
 
+pub mod blend;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
@@ -26,20 +31,91 @@ pub mod roughdielectric;
 pub mod roughplastic;
 pub mod thindielectric;
 
-pub use conductor::Conductor;
-pub use dielectric::Dielectric;
-pub use diffuse::Diffuse;
-pub use microfacet::{Microfacet, MicrofacetType};
-pub use plastic::Plastic;
-pub use principled::Principled;
-pub use principledthin::PrincipledThin;
-pub use roughconductor::RoughConductor;
-pub use roughdielectric::RoughDielectric;
-pub use roughplastic::{RoughPlastic, RoughPlasticTables};
-pub use thindielectric::ThinDielectric;
+pub use blend::{Blend, Nested};
+pub use conductor::{Conductor, ConductorParams};
+pub use dielectric::{Dielectric, DielectricParams};
+pub use diffuse::{Diffuse, DiffuseParams};
+pub use microfacet::{Microfacet, MicrofacetType, Roughness};
+pub use plastic::{Plastic, PlasticParams};
+pub use principled::{Principled, PrincipledParams};
+pub use principledthin::{PrincipledThin, PrincipledThinParams};
+pub use roughconductor::{RoughConductor, RoughConductorParams};
+pub use roughdielectric::{RoughDielectric, RoughDielectricParams};
+pub use roughplastic::{RoughPlastic, RoughPlasticParams, RoughPlasticTables};
+pub use thindielectric::{ThinDielectric, ThinDielectricParams};
 
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
+
+/// The per-hit model of a BSDF plugin, in the local shading frame
+/// (normal = +z), with the contract above. Delta-only models keep the
+/// default `eval` and `pdf` (zero).
+pub trait BsdfModel {
+    /// Whether any lobe is non-delta, i.e. light sampling can help.
+    fn has_smooth(&self) -> bool;
+
+    /// f(wo, wi) without the cosine.
+    #[inline]
+    fn eval(&self, _wo: Vec3, _wi: Vec3) -> Spectrum {
+        Spectrum::ZERO
+    }
+
+    /// The density of `sample` per unit solid angle of `wi`.
+    #[inline]
+    fn pdf(&self, _wo: Vec3, _wi: Vec3) -> f32 {
+        0.0
+    }
+
+    /// Samples `wi` given `wo`: `u` picks a lobe, `u2` the direction.
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample>;
+}
+
+/// Runs `$e` with `$b` bound to the model of every plugin variant of a
+/// [`BsdfKind`], and `$null` for `null`: the one list of models the
+/// dispatch of [`Bsdf`] goes through.
+macro_rules! with_model {
+    ($kind:expr, $b:ident => $e:expr, null => $null:expr) => {
+        match $kind {
+            BsdfKind::Diffuse($b) => $e,
+            BsdfKind::Dielectric($b) => $e,
+            BsdfKind::ThinDielectric($b) => $e,
+            BsdfKind::Conductor($b) => $e,
+            BsdfKind::RoughConductor($b) => $e,
+            BsdfKind::RoughDielectric($b) => $e,
+            BsdfKind::Plastic($b) => $e,
+            BsdfKind::RoughPlastic($b) => $e,
+            BsdfKind::Principled($b) => $e,
+            BsdfKind::PrincipledThin($b) => $e,
+            BsdfKind::Blend($b) => $e,
+            BsdfKind::Null => $null,
+        }
+    };
+}
+
+/// A BSDF plugin as the scene stores it: its parameters, any of which may
+/// be a texture. Implemented by each plugin's `XxxParams` beside its model.
+pub trait BsdfParams {
+    /// The per-hit model, every parameter evaluated.
+    type Model<'a>
+    where
+        Self: 'a;
+
+    /// The model with every parameter evaluated at `si`.
+    fn at<'a>(&'a self, si: &SurfaceInteraction) -> Self::Model<'a>;
+
+    /// Every texture the plugin reads.
+    fn textures(&self) -> Vec<&Texture>;
+
+    /// Whether the model reads the hit's surface parameterisation (`uv`,
+    /// `dpdu`, `dpdv`, or the orientation of the shading frame about the
+    /// normal): when a texture varies, and for anisotropic models (which
+    /// override this).
+    fn reads_uv(&self) -> bool {
+        self.textures().iter().any(|t| t.constant().is_none())
+    }
+}
 
 /// A sampled direction with its weight.
 /// `v` with the sign of `s` (+ for s = 0), as Dr.Jit's `mulsign`.
@@ -81,8 +157,8 @@ pub enum BsdfKind<'a> {
     PrincipledThin(PrincipledThin),
     /// Mitsuba `null`: light passes straight through.
     Null,
-    /// Mitsuba `blendbsdf`: two nested materials, resolved on demand.
-    Blend(crate::material::blend::Blend<'a>),
+    /// Mitsuba `blendbsdf`: two nested BSDFs, resolved with the hit.
+    Blend(Blend<'a>),
 }
 
 /// The BSDF at a hit: a model and Mitsuba `mask`'s opacity (1 when unmasked).
@@ -134,20 +210,7 @@ impl Bsdf<'_> {
     /// Whether any lobe is non-delta, i.e. light sampling can help.
     #[inline]
     pub fn has_smooth(&self) -> bool {
-        self.opacity > 0.0
-            && match self.kind {
-                BsdfKind::Diffuse(_)
-                | BsdfKind::RoughConductor(_)
-                | BsdfKind::RoughDielectric(_)
-                | BsdfKind::Plastic(_)
-                | BsdfKind::RoughPlastic(_)
-                | BsdfKind::Principled(_)
-                | BsdfKind::PrincipledThin(_) => true,
-                BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
-                    false
-                }
-                BsdfKind::Blend(b) => b.has_smooth(),
-            }
+        self.opacity > 0.0 && with_model!(&self.kind, b => b.has_smooth(), null => false)
     }
 
     #[inline]
@@ -170,24 +233,10 @@ impl Bsdf<'_> {
     /// `F`, the pdf when `P` (the other is left zero).
     #[inline(always)]
     fn eval_and_pdf<const F: bool, const P: bool>(&self, wo: Vec3, wi: Vec3) -> (Spectrum, f32) {
-        macro_rules! lobe {
-            ($b:expr) => {
-                (if F { $b.eval(wo, wi) } else { Spectrum::ZERO }, if P { $b.pdf(wo, wi) } else { 0.0 })
-            };
-        }
-        let (f, p) = match &self.kind {
-            BsdfKind::Diffuse(b) => lobe!(b),
-            BsdfKind::RoughConductor(b) => lobe!(b),
-            BsdfKind::RoughDielectric(b) => lobe!(b),
-            BsdfKind::Plastic(b) => lobe!(b),
-            BsdfKind::RoughPlastic(b) => lobe!(b),
-            BsdfKind::Principled(b) => lobe!(b),
-            BsdfKind::PrincipledThin(b) => lobe!(b),
-            BsdfKind::Blend(b) => lobe!(b),
-            BsdfKind::Dielectric(_) | BsdfKind::ThinDielectric(_) | BsdfKind::Conductor(_) | BsdfKind::Null => {
-                (Spectrum::ZERO, 0.0)
-            }
-        };
+        let (f, p) = with_model!(&self.kind, b => (
+            if F { b.eval(wo, wi) } else { Spectrum::ZERO },
+            if P { b.pdf(wo, wi) } else { 0.0 },
+        ), null => (Spectrum::ZERO, 0.0));
         // Opacity scales both; a bump or normal map's factor scales the
         // value, and where it is zero the direction cannot be sampled either.
         let (scale, p) = match self.perturbation {
@@ -218,20 +267,9 @@ impl Bsdf<'_> {
             }
             u /= self.opacity;
         }
-        let mut s = match &self.kind {
-            BsdfKind::Diffuse(d) => d.sample(wo, u2),
-            BsdfKind::Dielectric(d) => d.sample(wo, u, u2),
-            BsdfKind::ThinDielectric(d) => d.sample(wo, u),
-            BsdfKind::Conductor(c) => c.sample(wo),
-            BsdfKind::RoughConductor(b) => b.sample(wo, u, u2),
-            BsdfKind::RoughDielectric(b) => b.sample(wo, u, u2),
-            BsdfKind::Plastic(b) => b.sample(wo, u, u2),
-            BsdfKind::RoughPlastic(b) => b.sample(wo, u, u2),
-            BsdfKind::Principled(b) => b.sample(wo, u, u2),
-            BsdfKind::PrincipledThin(b) => b.sample(wo, u, u2),
-            BsdfKind::Blend(b) => b.sample(wo, u, u2),
-            BsdfKind::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 }),
-        }?;
+        let mut s = with_model!(&self.kind, b => b.sample(wo, u, u2), null => {
+            Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 })
+        })?;
         s.pdf *= self.opacity;
         if let Some(p) = self.perturbation {
             let g = p.factor(s.wi);

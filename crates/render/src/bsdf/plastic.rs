@@ -15,8 +15,11 @@
 
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::{Spectrum, INV_PI};
 use crate::sampling::warp;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy)]
@@ -30,6 +33,40 @@ pub struct Plastic {
     pub fdr_int: f32,
     /// s_mean / (d_mean + s_mean) of the reflectances' means, as Mitsuba.
     pub specular_sampling_weight: f32,
+}
+
+/// Mitsuba `plastic` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct PlasticParams {
+    /// Relative IOR int_ior / ext_ior.
+    pub eta: f32,
+    pub diffuse_reflectance: Texture,
+    pub specular_reflectance: Texture,
+    pub nonlinear: bool,
+    /// F_dr(1/η), precomputed from `eta`.
+    pub fdr_int: f32,
+    /// As the model's, from the reflectances' means.
+    pub specular_sampling_weight: f32,
+}
+
+impl BsdfParams for PlasticParams {
+    type Model<'a> = Plastic;
+
+    #[inline]
+    fn at(&self, si: &SurfaceInteraction) -> Plastic {
+        Plastic {
+            eta: self.eta,
+            diffuse_reflectance: self.diffuse_reflectance.eval(si),
+            specular_reflectance: self.specular_reflectance.eval(si),
+            nonlinear: self.nonlinear,
+            fdr_int: self.fdr_int,
+            specular_sampling_weight: self.specular_sampling_weight,
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.diffuse_reflectance, &self.specular_reflectance]
+    }
 }
 
 /// Hemispherical average of the dielectric Fresnel reflectance for diffuse
@@ -63,9 +100,16 @@ impl Plastic {
             d / (1.0 - self.fdr_int)
         }
     }
+}
+
+impl BsdfModel for Plastic {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
 
     #[inline]
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Spectrum::ZERO;
         }
@@ -75,7 +119,7 @@ impl Plastic {
     }
 
     #[inline]
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
@@ -84,7 +128,7 @@ impl Plastic {
     }
 
     #[inline]
-    pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }

@@ -16,8 +16,11 @@
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{reflect_m, refract_m, Microfacet, MicrofacetType};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::{luminance, safe_sqrt, Spectrum};
 use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -45,6 +48,79 @@ pub struct Principled {
     pub spec_srate: f32,
     pub clearcoat_srate: f32,
     pub diffuse_srate: f32,
+}
+
+/// Parameters absent from the scene (or given as the float 0, Mitsuba's
+/// `get_flag`) are `None` and evaluate to 0.
+#[derive(Debug, Clone)]
+pub struct PrincipledParams {
+    pub base_color: Texture,
+    pub roughness: Texture,
+    pub anisotropic: Option<Texture>,
+    pub spec_trans: Option<Texture>,
+    pub metallic: Option<Texture>,
+    pub spec_tint: Option<Texture>,
+    pub sheen: Option<Texture>,
+    pub sheen_tint: Option<Texture>,
+    pub clearcoat: Option<Texture>,
+    pub clearcoat_gloss: Texture,
+    pub flatness: Option<Texture>,
+    /// Relative IOR (Mitsuba's adjustments for η = 1 already applied).
+    pub eta: f32,
+    pub spec_srate: f32,
+    pub clearcoat_srate: f32,
+    pub diffuse_srate: f32,
+}
+
+impl BsdfParams for PrincipledParams {
+    type Model<'a> = Principled;
+
+    fn at(&self, si: &SurfaceInteraction) -> Principled {
+        let opt = |t: &Option<Texture>| t.as_ref().map_or(0.0, |t| t.eval_1(si));
+        Principled {
+            base_color: self.base_color.eval(si),
+            roughness: self.roughness.eval_1(si),
+            anisotropic: opt(&self.anisotropic),
+            spec_trans: opt(&self.spec_trans),
+            metallic: opt(&self.metallic),
+            spec_tint: opt(&self.spec_tint),
+            sheen: opt(&self.sheen),
+            sheen_tint: opt(&self.sheen_tint),
+            clearcoat: opt(&self.clearcoat),
+            clearcoat_gloss: if self.clearcoat.is_some() { self.clearcoat_gloss.eval_1(si) } else { 0.0 },
+            flatness: opt(&self.flatness),
+            eta: self.eta,
+            has_spec_trans: self.spec_trans.is_some(),
+            has_flatness: self.flatness.is_some(),
+            spec_srate: self.spec_srate,
+            clearcoat_srate: self.clearcoat_srate,
+            diffuse_srate: self.diffuse_srate,
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        let mut t = vec![&self.base_color, &self.roughness, &self.clearcoat_gloss];
+        t.extend(
+            [
+                &self.anisotropic,
+                &self.spec_trans,
+                &self.metallic,
+                &self.spec_tint,
+                &self.sheen,
+                &self.sheen_tint,
+                &self.clearcoat,
+                &self.flatness,
+            ]
+            .into_iter()
+            .flatten(),
+        );
+        t
+    }
+
+    /// Always: the specular lobes are anisotropic in the frame's orientation.
+    fn reads_uv(&self) -> bool {
+        true
+    }
 }
 
 pub(super) use super::mulsign;
@@ -283,16 +359,23 @@ impl Principled {
         }
         value
     }
+}
+
+impl BsdfModel for Principled {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
 
     /// f(wo, wi) without the cosine.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         if wi.z == 0.0 {
             return Spectrum::ZERO;
         }
         self.value(wo, wi) / wi.z.abs()
     }
 
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (a, b) = (wo, wi);
         let cos_i = a.z;
         if cos_i == 0.0 {
@@ -330,7 +413,7 @@ impl Principled {
         pdf
     }
 
-    pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let a = wo;
         let cos_i = a.z;
         if cos_i == 0.0 {

@@ -14,8 +14,11 @@ use super::fresnel::fresnel_dielectric;
 use super::microfacet::{reflect_m, Microfacet, MicrofacetType};
 use super::principled::{calc_schlick, mac_mic, mulsign, schlick_weight};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::{luminance, Spectrum};
 use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -45,6 +48,81 @@ pub struct PrincipledThin {
     pub spec_trans_srate: f32,
     pub diff_trans_srate: f32,
     pub diff_refl_srate: f32,
+}
+
+/// Mitsuba `principledthin`; absent parameters (or the float 0, Mitsuba's
+/// `get_flag`) are `None`.
+#[derive(Debug, Clone)]
+pub struct PrincipledThinParams {
+    pub base_color: Texture,
+    pub roughness: Texture,
+    pub anisotropic: Option<Texture>,
+    pub spec_trans: Option<Texture>,
+    pub spec_tint: Option<Texture>,
+    pub sheen: Option<Texture>,
+    pub sheen_tint: Option<Texture>,
+    pub flatness: Option<Texture>,
+    /// Mitsuba's 0..2 `diff_trans`, halved at evaluation as there.
+    pub diff_trans: Option<Texture>,
+    pub eta: Texture,
+    pub spec_refl_srate: f32,
+    pub spec_trans_srate: f32,
+    pub diff_trans_srate: f32,
+    pub diff_refl_srate: f32,
+}
+
+impl BsdfParams for PrincipledThinParams {
+    type Model<'a> = PrincipledThin;
+
+    fn at(&self, si: &SurfaceInteraction) -> PrincipledThin {
+        let opt = |t: &Option<Texture>| t.as_ref().map_or(0.0, |t| t.eval_1(si));
+        PrincipledThin {
+            base_color: self.base_color.eval(si),
+            roughness: self.roughness.eval_1(si),
+            anisotropic: opt(&self.anisotropic),
+            spec_trans: opt(&self.spec_trans),
+            spec_tint: opt(&self.spec_tint),
+            sheen: opt(&self.sheen),
+            sheen_tint: opt(&self.sheen_tint),
+            flatness: opt(&self.flatness),
+            diff_trans: opt(&self.diff_trans) / 2.0,
+            eta: self.eta.eval_1(si),
+            has_anisotropic: self.anisotropic.is_some(),
+            has_spec_trans: self.spec_trans.is_some(),
+            has_spec_tint: self.spec_tint.is_some(),
+            has_sheen: self.sheen.is_some(),
+            has_sheen_tint: self.sheen_tint.is_some(),
+            has_flatness: self.flatness.is_some(),
+            has_diff_trans: self.diff_trans.is_some(),
+            spec_refl_srate: self.spec_refl_srate,
+            spec_trans_srate: self.spec_trans_srate,
+            diff_trans_srate: self.diff_trans_srate,
+            diff_refl_srate: self.diff_refl_srate,
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        let mut t = vec![&self.base_color, &self.roughness, &self.eta];
+        t.extend(
+            [
+                &self.anisotropic,
+                &self.spec_trans,
+                &self.spec_tint,
+                &self.sheen,
+                &self.sheen_tint,
+                &self.flatness,
+                &self.diff_trans,
+            ]
+            .into_iter()
+            .flatten(),
+        );
+        t
+    }
+
+    /// Always: the specular lobes are anisotropic in the frame's orientation.
+    fn reads_uv(&self) -> bool {
+        true
+    }
 }
 
 /// Lobe probabilities (specular reflection, specular transmission, diffuse
@@ -166,16 +244,23 @@ impl PrincipledThin {
         }
         value
     }
+}
+
+impl BsdfModel for PrincipledThin {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
 
     /// f(wo, wi) without the cosine.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         if wi.z == 0.0 {
             return Spectrum::ZERO;
         }
         self.value(wo, wi) / wi.z.abs()
     }
 
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let cos_i = wo.z;
         if cos_i == 0.0 {
             return 0.0;
@@ -208,7 +293,7 @@ impl PrincipledThin {
         pdf
     }
 
-    pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let cos_i = wo.z;
         if cos_i == 0.0 {
             return None;

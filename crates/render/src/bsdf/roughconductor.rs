@@ -3,9 +3,13 @@
 //! one-sided, sampled by reflecting visible normals of `wo`.
 
 use super::fresnel::fresnel_conductor;
+use super::microfacet::Roughness;
 use super::microfacet::{reflect_m, Microfacet};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy)]
@@ -16,8 +20,44 @@ pub struct RoughConductor {
     pub specular_reflectance: Spectrum,
 }
 
-impl RoughConductor {
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+/// Mitsuba `roughconductor` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct RoughConductorParams {
+    pub roughness: Roughness,
+    pub eta: Texture,
+    pub k: Texture,
+    pub specular_reflectance: Texture,
+}
+
+impl BsdfParams for RoughConductorParams {
+    type Model<'a> = RoughConductor;
+
+    #[inline]
+    fn at(&self, si: &SurfaceInteraction) -> RoughConductor {
+        RoughConductor {
+            distr: self.roughness.at(si),
+            eta: self.eta.eval(si),
+            k: self.k.eval(si),
+            specular_reflectance: self.specular_reflectance.eval(si),
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.roughness.alpha_u, &self.roughness.alpha_v, &self.eta, &self.k, &self.specular_reflectance]
+    }
+
+    fn reads_uv(&self) -> bool {
+        self.roughness.reads_uv() || self.textures().iter().any(|t| t.constant().is_none())
+    }
+}
+
+impl BsdfModel for RoughConductor {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Spectrum::ZERO;
         }
@@ -31,7 +71,7 @@ impl RoughConductor {
         f * self.specular_reflectance * (d * g / (4.0 * wo.z * wi.z))
     }
 
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
@@ -43,7 +83,7 @@ impl RoughConductor {
         self.distr.eval(m) * self.distr.smith_g1(wo, m) / (4.0 * wo.z)
     }
 
-    pub fn sample(&self, wo: Vec3, _u: f32, u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, _u: f32, u2: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }

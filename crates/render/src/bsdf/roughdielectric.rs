@@ -6,9 +6,13 @@
 //! refraction.
 
 use super::fresnel::fresnel_dielectric;
+use super::microfacet::Roughness;
 use super::microfacet::{reflect_m, refract_m, Microfacet};
 use super::{mulsign, BsdfSample};
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy)]
@@ -18,6 +22,38 @@ pub struct RoughDielectric {
     pub eta: f32,
     pub specular_reflectance: Spectrum,
     pub specular_transmittance: Spectrum,
+}
+
+/// Mitsuba `roughdielectric` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct RoughDielectricParams {
+    pub roughness: Roughness,
+    /// Relative IOR (interior / exterior).
+    pub eta: f32,
+    pub specular_reflectance: Texture,
+    pub specular_transmittance: Texture,
+}
+
+impl BsdfParams for RoughDielectricParams {
+    type Model<'a> = RoughDielectric;
+
+    #[inline]
+    fn at(&self, si: &SurfaceInteraction) -> RoughDielectric {
+        RoughDielectric {
+            distr: self.roughness.at(si),
+            eta: self.eta,
+            specular_reflectance: self.specular_reflectance.eval(si),
+            specular_transmittance: self.specular_transmittance.eval(si),
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.roughness.alpha_u, &self.roughness.alpha_v, &self.specular_reflectance, &self.specular_transmittance]
+    }
+
+    fn reads_uv(&self) -> bool {
+        self.roughness.reads_uv() || self.textures().iter().any(|t| t.constant().is_none())
+    }
 }
 
 impl RoughDielectric {
@@ -30,8 +66,15 @@ impl RoughDielectric {
         let m = (wo + wi * if reflect { 1.0 } else { eta }).normalize();
         (mulsign(m, m.z), reflect, eta)
     }
+}
 
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+impl BsdfModel for RoughDielectric {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         let (cos_o, cos_i) = (wo.z, wi.z);
         if cos_o == 0.0 || cos_i == 0.0 {
             return Spectrum::ZERO;
@@ -57,7 +100,7 @@ impl RoughDielectric {
         }
     }
 
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (cos_o, cos_i) = (wo.z, wi.z);
         if cos_o == 0.0 || cos_i == 0.0 {
             return 0.0;
@@ -76,7 +119,7 @@ impl RoughDielectric {
         prob * dwh_dwi.abs()
     }
 
-    pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let cos_o = wo.z;
         if cos_o == 0.0 {
             return None;

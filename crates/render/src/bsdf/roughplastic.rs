@@ -8,8 +8,11 @@
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{reflect_m, refract_m, Microfacet};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::{Spectrum, INV_PI};
 use crate::sampling::warp;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 /// Resolution of the transmittance table over cos θ (Mitsuba's
@@ -181,6 +184,44 @@ pub struct RoughPlastic<'a> {
     pub tables: &'a RoughPlasticTables,
 }
 
+/// Mitsuba `roughplastic` as the scene stores it (roughness is not
+/// textured: the tables depend on it).
+#[derive(Debug, Clone)]
+pub struct RoughPlasticParams {
+    pub distr: Microfacet,
+    pub eta: f32,
+    pub diffuse_reflectance: Texture,
+    pub specular_reflectance: Texture,
+    pub nonlinear: bool,
+    pub specular_sampling_weight: f32,
+    pub tables: RoughPlasticTables,
+}
+
+impl BsdfParams for RoughPlasticParams {
+    type Model<'a> = RoughPlastic<'a>;
+
+    #[inline]
+    fn at<'a>(&'a self, si: &SurfaceInteraction) -> RoughPlastic<'a> {
+        RoughPlastic {
+            distr: self.distr,
+            eta: self.eta,
+            diffuse_reflectance: self.diffuse_reflectance.eval(si),
+            specular_reflectance: self.specular_reflectance.eval(si),
+            nonlinear: self.nonlinear,
+            specular_sampling_weight: self.specular_sampling_weight,
+            tables: &self.tables,
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.diffuse_reflectance, &self.specular_reflectance]
+    }
+
+    fn reads_uv(&self) -> bool {
+        self.distr.alpha_u != self.distr.alpha_v || self.textures().iter().any(|t| t.constant().is_none())
+    }
+}
+
 impl RoughPlastic<'_> {
     /// Probability of sampling the specular lobe given t(θ_o).
     #[inline]
@@ -189,8 +230,15 @@ impl RoughPlastic<'_> {
         let d = t_o * (1.0 - self.specular_sampling_weight);
         s / (s + d)
     }
+}
 
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+impl BsdfModel for RoughPlastic<'_> {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Spectrum::ZERO;
         }
@@ -210,7 +258,7 @@ impl RoughPlastic<'_> {
         value + diffuse * (INV_PI / (self.eta * self.eta) * t_o * t_i)
     }
 
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
@@ -220,7 +268,7 @@ impl RoughPlastic<'_> {
         p_spec * spec + (1.0 - p_spec) * warp::cosine_hemisphere_pdf(wi)
     }
 
-    pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }

@@ -10,8 +10,11 @@
 
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::BsdfSample;
+use super::{BsdfModel, BsdfParams};
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
-use glam::Vec3;
+use crate::texture::Texture;
+use glam::{Vec2, Vec3};
 
 #[derive(Debug, Clone, Copy)]
 pub struct ThinDielectric {
@@ -19,6 +22,32 @@ pub struct ThinDielectric {
     pub eta: f32,
     pub specular_reflectance: Spectrum,
     pub specular_transmittance: Spectrum,
+}
+
+/// Mitsuba `thindielectric` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct ThinDielectricParams {
+    /// Relative IOR (interior / exterior).
+    pub eta: f32,
+    pub specular_reflectance: Texture,
+    pub specular_transmittance: Texture,
+}
+
+impl BsdfParams for ThinDielectricParams {
+    type Model<'a> = ThinDielectric;
+
+    #[inline]
+    fn at(&self, si: &SurfaceInteraction) -> ThinDielectric {
+        ThinDielectric {
+            eta: self.eta,
+            specular_reflectance: self.specular_reflectance.eval(si),
+            specular_transmittance: self.specular_transmittance.eval(si),
+        }
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        vec![&self.specular_reflectance, &self.specular_transmittance]
+    }
 }
 
 impl ThinDielectric {
@@ -29,11 +58,18 @@ impl ThinDielectric {
         let r = fresnel_dielectric(cos_i.abs(), self.eta).0;
         2.0 * r / (1.0 + r)
     }
+}
+
+impl BsdfModel for ThinDielectric {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        false
+    }
 
     /// Chooses reflection with probability R', straight transmission
     /// otherwise, so the weight is the tint alone. Works from both sides.
     #[inline]
-    pub fn sample(&self, wo: Vec3, u: f32) -> Option<BsdfSample> {
+    fn sample(&self, wo: Vec3, u: f32, _u2: Vec2) -> Option<BsdfSample> {
         let r = self.reflectance(wo.z);
         if u <= r {
             Some(BsdfSample { wi: reflect(wo), pdf: r, weight: self.specular_reflectance, delta: true, eta: 1.0 })
@@ -69,7 +105,7 @@ mod tests {
         let n = 100_000;
         let mut refl = 0;
         for i in 0..n {
-            let s = b.sample(wo, (i as f32 + 0.5) / n as f32).unwrap();
+            let s = b.sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO).unwrap();
             if s.wi.z > 0.0 {
                 refl += 1;
                 assert!((s.wi - Vec3::new(-0.8, 0.0, 0.6)).length() < 1e-6);

@@ -25,6 +25,7 @@
 use super::{camera_hit, Integrator, RayStats};
 use crate::film::aov::AovSample;
 use crate::geometry::Ray;
+use crate::material::Scratch;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -41,8 +42,15 @@ fn hide_emitters(integrator: &Integrator) -> bool {
 }
 
 /// The AOVs of camera ray `ray` leaving the camera at `eye` (depth is
-/// measured from there), with random numbers from `rng`.
-pub fn query(scene: &Scene, integrator: &Integrator, ray: &Ray, eye: Vec3, rng: &mut SampleStream) -> AovSample {
+/// measured from there), with random numbers from `rng` (BSDFs may allocate in `scratch`).
+pub fn query(
+    scene: &Scene,
+    integrator: &Integrator,
+    ray: &Ray,
+    eye: Vec3,
+    rng: &mut SampleStream,
+    scratch: &Scratch,
+) -> AovSample {
     let mut out = AovSample::default();
     let mut stats = RayStats::default();
     let Some(mut si) = camera_hit(scene, ray, hide_emitters(integrator), &mut stats) else {
@@ -51,7 +59,7 @@ pub fn query(scene: &Scene, integrator: &Integrator, ray: &Ray, eye: Vec3, rng: 
     out.depth = (si.p - eye).length();
     out.position = si.p.to_array();
     for _ in 0..MAX_DELTA_CHAIN {
-        let bsdf = scene.bsdf(&mut si);
+        let bsdf = scene.bsdf(&mut si, scratch);
         let wo = si.to_local(si.wo);
         let (u, u2) = (rng.next_1d(), rng.next_2d());
         if bsdf.has_smooth() {

@@ -14,6 +14,7 @@
 //! | max_depth, rr_depth, hide_emitters, throughput_threshold | | as `path` |
 
 use super::{camera_hit, RayStats, Termination};
+use crate::material::Scratch;
 use crate::math::{Spectrum, INV_2PI};
 use crate::sampling::{warp, SampleStream};
 use crate::scene::Scene;
@@ -40,6 +41,7 @@ impl BruteForceIntegrator {
         camera_ray: &crate::geometry::Ray,
         rng: &mut SampleStream,
         stats: &mut RayStats,
+        scratch: &Scratch,
     ) -> Spectrum {
         let mut l = Spectrum::ZERO;
         let mut beta = Spectrum::ONE;
@@ -68,7 +70,7 @@ impl BruteForceIntegrator {
             if depth + 1 >= self.term.max_depth {
                 break;
             }
-            let bsdf = scene.bsdf(&mut si);
+            let bsdf = scene.bsdf(&mut si, scratch);
             let wo = si.to_local(si.wo);
             let u = rng.next_1d();
             let u2 = rng.next_2d();

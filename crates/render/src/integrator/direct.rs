@@ -12,6 +12,7 @@
 //! | hide_emitters   | boolean | false (camera rays pass through emitters; environment black) |
 
 use super::{camera_hit, RayStats};
+use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
@@ -42,6 +43,7 @@ impl DirectIntegrator {
         ray: &crate::geometry::Ray,
         rng: &mut SampleStream,
         stats: &mut RayStats,
+        scratch: &Scratch,
     ) -> Spectrum {
         let Some(mut si) = camera_hit(scene, ray, self.hide_emitters, stats) else {
             return if self.hide_emitters {
@@ -57,7 +59,7 @@ impl DirectIntegrator {
             return l;
         }
         let (frac_lum, frac_bsdf) = (self.emitter_samples as f32 / total, self.bsdf_samples as f32 / total);
-        let bsdf = scene.bsdf(&mut si);
+        let bsdf = scene.bsdf(&mut si, scratch);
         let wo = si.to_local(si.wo);
 
         // Light sampling: N_s shadow rays, each averaged with weight 1/N_s.

@@ -19,6 +19,7 @@ pub use direct::DirectIntegrator;
 pub use path::PathIntegrator;
 
 use crate::geometry::Ray;
+use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
@@ -108,13 +109,21 @@ pub enum Integrator {
 }
 
 impl Integrator {
-    /// Radiance along `ray` (a camera ray).
+    /// Radiance along `ray` (a camera ray). The BSDFs of its hits may
+    /// allocate in `scratch`, which the caller resets between samples.
     #[inline]
-    pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut SampleStream, stats: &mut RayStats) -> Spectrum {
+    pub fn li(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+        scratch: &Scratch,
+    ) -> Spectrum {
         match self {
-            Integrator::Path(p) => p.li(scene, ray, rng, stats),
-            Integrator::Direct(d) => d.li(scene, ray, rng, stats),
-            Integrator::BruteForce(b) => b.li(scene, ray, rng, stats),
+            Integrator::Path(p) => p.li(scene, ray, rng, stats, scratch),
+            Integrator::Direct(d) => d.li(scene, ray, rng, stats, scratch),
+            Integrator::BruteForce(b) => b.li(scene, ray, rng, stats, scratch),
         }
     }
 }

@@ -13,6 +13,7 @@
 
 use super::{camera_hit, RayStats, Termination};
 use crate::geometry::Ray;
+use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
 use crate::sampling::SampleStream;
@@ -38,7 +39,14 @@ impl PathIntegrator {
     /// Estimates L(x, -d) = Le + ∫ f Li cos dω (the rendering equation,
     /// Kajiya 1986) with one light sample and one BSDF sample per vertex,
     /// each MIS-weighted against the other (Veach 1997, eq. 9.13).
-    pub fn li(&self, scene: &Scene, camera_ray: &Ray, rng: &mut SampleStream, stats: &mut RayStats) -> Spectrum {
+    pub fn li(
+        &self,
+        scene: &Scene,
+        camera_ray: &Ray,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+        scratch: &Scratch,
+    ) -> Spectrum {
         if self.term.max_depth == 0 {
             return Spectrum::ZERO;
         }
@@ -91,7 +99,7 @@ impl PathIntegrator {
             if depth + 1 >= self.term.max_depth {
                 break;
             }
-            let bsdf = scene.bsdf(&mut si);
+            let bsdf = scene.bsdf(&mut si, scratch);
             let wo = si.to_local(si.wo);
 
             // Light sampling (next-event estimation).

@@ -1,92 +1,60 @@
-//! Materials: Mitsuba's BSDF plugins as the scene stores them, with
-//! parameters that may be textures. At a hit, [`Material::bsdf`] evaluates
-//! the textures, resolves the wrappers (`twosided`, `mask`, `normalmap`,
-//! `bumpmap`) and returns a plain [`Bsdf`] (pbrt-v4's Material → BSDF split).
+//! Materials: the BSDF plugins as the scene stores them, and the wrappers
+//! that combine them. Each plugin's parameters live beside its model in
+//! `bsdf/<plugin>.rs`; a `Material` holds them and adds what needs whole
+//! materials: `twosided`, `mask`, `normalmap`, `bumpmap`, `blendbsdf` and
+//! `null`. At a hit, [`Material::bsdf`] evaluates the textures, resolves the
+//! wrappers and returns a plain [`Bsdf`] (pbrt-v4's Material → BSDF split);
+//! a blend's nested BSDFs are resolved at the same time into the sample's
+//! [`Scratch`] memory, so `Bsdf` never sees a `Material`.
 
 pub mod blend;
 pub mod bumpmap;
 pub mod normalmap;
-pub mod principled;
 
 use crate::bsdf::{
-    Bsdf, BsdfKind, Conductor, Dielectric, Diffuse, Microfacet, MicrofacetType, Perturbation, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, RoughPlasticTables, ThinDielectric,
+    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, Nested, Perturbation,
+    PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
+    RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
 use crate::math::Frame;
 use crate::texture::Texture;
 use glam::Vec3;
 
-/// Parameters shared by `roughconductor` and `roughdielectric`: a
-/// distribution with (possibly textured) roughness along s and t.
-#[derive(Debug, Clone)]
-pub struct Roughness {
-    pub kind: MicrofacetType,
-    pub alpha_u: Texture,
-    pub alpha_v: Texture,
-}
+/// Scratch memory for the BSDFs of one sample's hits (pbrt-v4's
+/// `ScratchBuffer`): a blend's nested BSDFs are allocated here when its
+/// hit is resolved. One per thread; reset between samples, once no `Bsdf`
+/// of the previous sample is alive. Nothing is allocated for scenes
+/// without `blendbsdf`.
+#[derive(Debug, Default)]
+pub struct Scratch(bumpalo::Bump);
 
-impl Roughness {
+impl Scratch {
+    pub fn new() -> Scratch {
+        Scratch::default()
+    }
+
+    /// Frees everything allocated since the last reset (keeping the memory).
     #[inline]
-    fn eval(&self, si: &SurfaceInteraction) -> Microfacet {
-        // Microfacet keeps the roughness positive (its `alphas` clamp).
-        Microfacet { kind: self.kind, alpha_u: self.alpha_u.eval_1(si), alpha_v: self.alpha_v.eval_1(si) }
+    pub fn reset(&mut self) {
+        self.0.reset();
     }
 }
 
 #[derive(Debug, Clone)]
 pub enum Material {
-    Diffuse {
-        reflectance: Texture,
-    },
-    Dielectric {
-        eta: f32,
-        specular_reflectance: Texture,
-        specular_transmittance: Texture,
-    },
-    ThinDielectric {
-        eta: f32,
-        specular_reflectance: Texture,
-        specular_transmittance: Texture,
-    },
-    Conductor {
-        eta: Texture,
-        k: Texture,
-        specular_reflectance: Texture,
-    },
-    RoughConductor {
-        roughness: Roughness,
-        eta: Texture,
-        k: Texture,
-        specular_reflectance: Texture,
-    },
-    RoughDielectric {
-        roughness: Roughness,
-        eta: f32,
-        specular_reflectance: Texture,
-        specular_transmittance: Texture,
-    },
-    Plastic {
-        eta: f32,
-        diffuse_reflectance: Texture,
-        specular_reflectance: Texture,
-        nonlinear: bool,
-        fdr_int: f32,
-        specular_sampling_weight: f32,
-    },
-    RoughPlastic {
-        distr: Microfacet,
-        eta: f32,
-        diffuse_reflectance: Texture,
-        specular_reflectance: Texture,
-        nonlinear: bool,
-        specular_sampling_weight: f32,
-        tables: RoughPlasticTables,
-    },
+    Diffuse(DiffuseParams),
+    Dielectric(DielectricParams),
+    ThinDielectric(ThinDielectricParams),
+    Conductor(ConductorParams),
+    RoughConductor(RoughConductorParams),
+    RoughDielectric(RoughDielectricParams),
+    Plastic(PlasticParams),
+    RoughPlastic(RoughPlasticParams),
     /// Mitsuba `principled` (the Disney BSDF).
-    Principled(Box<principled::PrincipledMaterial>),
+    Principled(Box<PrincipledParams>),
     /// Mitsuba `principledthin` (the thin-sheet Disney BSDF).
-    PrincipledThin(Box<principled::PrincipledThinMaterial>),
+    PrincipledThin(Box<PrincipledThinParams>),
     /// Mitsuba `null`: invisible to every ray (a shape that only emits).
     Null,
     /// The front material, and the one seen from the back side.
@@ -129,8 +97,9 @@ fn perturb(si: &mut SurfaceInteraction, rel: Frame) -> Option<Perturbation> {
 impl Material {
     /// The BSDF at a hit. Wrappers may replace `si.sh_frame` (a flipped
     /// frame on the back of `twosided`, a perturbed one for normal and
-    /// bump maps); integrators must use the frame after this call.
-    pub fn bsdf<'a>(&'a self, si: &mut SurfaceInteraction) -> Bsdf<'a> {
+    /// bump maps); integrators must use the frame after this call. A
+    /// blend's nested BSDFs are allocated in `scratch`.
+    pub fn bsdf<'a>(&'a self, si: &mut SurfaceInteraction, scratch: &'a Scratch) -> Bsdf<'a> {
         let mut m = self;
         let mut opacity = 1.0f32;
         let mut perturbation = None;
@@ -166,79 +135,27 @@ impl Material {
                     m = inner;
                     continue;
                 }
-                Material::Diffuse { reflectance } => BsdfKind::Diffuse(Diffuse { reflectance: reflectance.eval(si) }),
-                Material::Dielectric { eta, specular_reflectance, specular_transmittance } => {
-                    BsdfKind::Dielectric(Dielectric {
-                        eta: *eta,
-                        specular_reflectance: specular_reflectance.eval(si),
-                        specular_transmittance: specular_transmittance.eval(si),
-                    })
-                }
-                Material::ThinDielectric { eta, specular_reflectance, specular_transmittance } => {
-                    BsdfKind::ThinDielectric(ThinDielectric {
-                        eta: *eta,
-                        specular_reflectance: specular_reflectance.eval(si),
-                        specular_transmittance: specular_transmittance.eval(si),
-                    })
-                }
-                Material::Conductor { eta, k, specular_reflectance } => BsdfKind::Conductor(Conductor {
-                    eta: eta.eval(si),
-                    k: k.eval(si),
-                    specular_reflectance: specular_reflectance.eval(si),
-                }),
-                Material::RoughConductor { roughness, eta, k, specular_reflectance } => {
-                    BsdfKind::RoughConductor(RoughConductor {
-                        distr: roughness.eval(si),
-                        eta: eta.eval(si),
-                        k: k.eval(si),
-                        specular_reflectance: specular_reflectance.eval(si),
-                    })
-                }
-                Material::RoughDielectric { roughness, eta, specular_reflectance, specular_transmittance } => {
-                    BsdfKind::RoughDielectric(RoughDielectric {
-                        distr: roughness.eval(si),
-                        eta: *eta,
-                        specular_reflectance: specular_reflectance.eval(si),
-                        specular_transmittance: specular_transmittance.eval(si),
-                    })
-                }
-                Material::Plastic {
-                    eta,
-                    diffuse_reflectance,
-                    specular_reflectance,
-                    nonlinear,
-                    fdr_int,
-                    specular_sampling_weight,
-                } => BsdfKind::Plastic(Plastic {
-                    eta: *eta,
-                    diffuse_reflectance: diffuse_reflectance.eval(si),
-                    specular_reflectance: specular_reflectance.eval(si),
-                    nonlinear: *nonlinear,
-                    fdr_int: *fdr_int,
-                    specular_sampling_weight: *specular_sampling_weight,
-                }),
-                Material::RoughPlastic {
-                    distr,
-                    eta,
-                    diffuse_reflectance,
-                    specular_reflectance,
-                    nonlinear,
-                    specular_sampling_weight,
-                    tables,
-                } => BsdfKind::RoughPlastic(RoughPlastic {
-                    distr: *distr,
-                    eta: *eta,
-                    diffuse_reflectance: diffuse_reflectance.eval(si),
-                    specular_reflectance: specular_reflectance.eval(si),
-                    nonlinear: *nonlinear,
-                    specular_sampling_weight: *specular_sampling_weight,
-                    tables,
-                }),
-                Material::Principled(p) => BsdfKind::Principled(p.eval(si)),
-                Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.eval(si)),
+                Material::Diffuse(p) => BsdfKind::Diffuse(p.at(si)),
+                Material::Dielectric(p) => BsdfKind::Dielectric(p.at(si)),
+                Material::ThinDielectric(p) => BsdfKind::ThinDielectric(p.at(si)),
+                Material::Conductor(p) => BsdfKind::Conductor(p.at(si)),
+                Material::RoughConductor(p) => BsdfKind::RoughConductor(p.at(si)),
+                Material::RoughDielectric(p) => BsdfKind::RoughDielectric(p.at(si)),
+                Material::Plastic(p) => BsdfKind::Plastic(p.at(si)),
+                Material::RoughPlastic(p) => BsdfKind::RoughPlastic(p.at(si)),
+                Material::Principled(p) => BsdfKind::Principled(p.at(si)),
+                Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.at(si)),
                 Material::Null => BsdfKind::Null,
                 Material::Blend { weight, first, second } => {
-                    BsdfKind::Blend(blend::Blend { weight: weight.eval_1(si).clamp(0.0, 1.0), first, second, si: *si })
+                    let weight = weight.eval_1(si).clamp(0.0, 1.0);
+                    // Each nested material resolved at a copy of the hit,
+                    // in the frame it chooses.
+                    let nested = |m: &'a Material| -> &'a Nested<'a> {
+                        let mut nsi = *si;
+                        let bsdf = m.bsdf(&mut nsi, scratch);
+                        scratch.0.alloc(Nested::new(bsdf, si.sh_frame, nsi.sh_frame))
+                    };
+                    BsdfKind::Blend(Blend { weight, first: nested(first), second: nested(second) })
                 }
             };
             return Bsdf { kind, opacity, perturbation };
@@ -251,38 +168,24 @@ impl Material {
     /// computing them (see [`crate::geometry::Shape::interaction_with`]).
     /// Conservative: unknown cases answer true.
     pub fn reads_uv(&self) -> bool {
-        let tex = |ts: &[&Texture]| ts.iter().any(|t| t.constant().is_none());
-        let rough = |r: &Roughness| match (r.alpha_u.constant(), r.alpha_v.constant()) {
-            (Some(u), Some(v)) => u != v,
-            _ => true,
-        };
         match self {
-            Material::Diffuse { reflectance } => tex(&[reflectance]),
-            Material::Dielectric { specular_reflectance, specular_transmittance, .. }
-            | Material::ThinDielectric { specular_reflectance, specular_transmittance, .. } => {
-                tex(&[specular_reflectance, specular_transmittance])
-            }
-            Material::Conductor { eta, k, specular_reflectance } => tex(&[eta, k, specular_reflectance]),
-            Material::RoughConductor { roughness, eta, k, specular_reflectance } => {
-                rough(roughness) || tex(&[eta, k, specular_reflectance])
-            }
-            Material::RoughDielectric { roughness, specular_reflectance, specular_transmittance, .. } => {
-                rough(roughness) || tex(&[specular_reflectance, specular_transmittance])
-            }
-            Material::Plastic { diffuse_reflectance, specular_reflectance, .. } => {
-                tex(&[diffuse_reflectance, specular_reflectance])
-            }
-            Material::RoughPlastic { distr, diffuse_reflectance, specular_reflectance, .. } => {
-                distr.alpha_u != distr.alpha_v || tex(&[diffuse_reflectance, specular_reflectance])
-            }
+            Material::Diffuse(p) => p.reads_uv(),
+            Material::Dielectric(p) => p.reads_uv(),
+            Material::ThinDielectric(p) => p.reads_uv(),
+            Material::Conductor(p) => p.reads_uv(),
+            Material::RoughConductor(p) => p.reads_uv(),
+            Material::RoughDielectric(p) => p.reads_uv(),
+            Material::Plastic(p) => p.reads_uv(),
+            Material::RoughPlastic(p) => p.reads_uv(),
+            Material::Principled(p) => p.reads_uv(),
+            Material::PrincipledThin(p) => p.reads_uv(),
             Material::Null => false,
             Material::TwoSided(front, back) => front.reads_uv() || back.reads_uv(),
-            Material::Mask { opacity, inner } => tex(&[opacity]) || inner.reads_uv(),
-            Material::Blend { weight, first, second } => tex(&[weight]) || first.reads_uv() || second.reads_uv(),
-            Material::Principled(_)
-            | Material::PrincipledThin(_)
-            | Material::NormalMap { .. }
-            | Material::BumpMap { .. } => true,
+            Material::Mask { opacity, inner } => opacity.constant().is_none() || inner.reads_uv(),
+            Material::Blend { weight, first, second } => {
+                weight.constant().is_none() || first.reads_uv() || second.reads_uv()
+            }
+            Material::NormalMap { .. } | Material::BumpMap { .. } => true,
         }
     }
 

@@ -130,12 +130,13 @@ pub(crate) mod tests {
         .unwrap();
         let m = Material::NormalMap {
             normals: Texture::Bitmap(std::sync::Arc::new(tex)),
-            inner: Box::new(Material::Diffuse { reflectance: Vec3::splat(0.5).into() }),
+            inner: Box::new(Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Vec3::splat(0.5).into() })),
         };
         let wi = Vec3::new(-0.3, 0.5, 1.0).normalize();
         for w in [Vec3::new(0.1, 0.2, 1.0), Vec3::new(0.9, -0.8, 0.1)] {
             let mut si = test_si(w);
-            let bsdf = m.bsdf(&mut si);
+            let scratch = crate::material::Scratch::new();
+            let bsdf = m.bsdf(&mut si, &scratch);
             let (wo_l, wi_l) = (si.to_local(si.wo), si.to_local(wi));
             let v = bsdf.eval(wo_l, wi_l).x * wi_l.z;
             assert!((v - 0.0857258290052414).abs() < 1e-6, "{v}");

@@ -8,9 +8,12 @@ use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
-use penumbra_render::bsdf::{presets, Microfacet, MicrofacetType, RoughPlasticTables};
-use penumbra_render::material::principled::{PrincipledMaterial, PrincipledThinMaterial};
-use penumbra_render::material::{Material, Roughness};
+use penumbra_render::bsdf::{
+    presets, ConductorParams, DielectricParams, DiffuseParams, Microfacet, MicrofacetType, PlasticParams,
+    PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams, RoughPlasticParams,
+    RoughPlasticTables, Roughness, ThinDielectricParams,
+};
+use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
 
@@ -163,7 +166,7 @@ fn flagged_param(node: &Node, tex: &mut Textures, name: &str) -> Result<Option<T
 /// may be a texture.
 fn principledthin(node: &Node, tex: &mut Textures) -> Result<Material> {
     let flagged = |tex: &mut Textures, name: &str| flagged_param(node, tex, name);
-    let p = PrincipledThinMaterial {
+    let p = PrincipledThinParams {
         base_color: tex.spectrum(node, "base_color", Spectrum::splat(0.5))?,
         roughness: tex.float(node, "roughness", 0.5)?,
         anisotropic: flagged(tex, "anisotropic")?,
@@ -209,7 +212,7 @@ fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
     if !(eta > 0.0) {
         return Err(node.error(format!("principled: eta must be positive (got {eta})")));
     }
-    let p = PrincipledMaterial {
+    let p = PrincipledParams {
         base_color: tex.spectrum(node, "base_color", Spectrum::splat(0.5))?,
         roughness: tex.float(node, "roughness", 0.5)?,
         anisotropic: flagged(tex, "anisotropic")?,
@@ -232,35 +235,41 @@ fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
 pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material> {
     let one = Spectrum::ONE;
     let m = match node.plugin.as_str() {
-        "diffuse" => Material::Diffuse { reflectance: tex.spectrum(node, "reflectance", Spectrum::splat(0.5))? },
+        "diffuse" => {
+            Material::Diffuse(DiffuseParams { reflectance: tex.spectrum(node, "reflectance", Spectrum::splat(0.5))? })
+        }
         "dielectric" | "thindielectric" => {
             let eta = relative_ior(node, "bk7", false)?;
             let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
             let specular_transmittance = tex.spectrum(node, "specular_transmittance", one)?;
             if node.plugin == "dielectric" {
-                Material::Dielectric { eta, specular_reflectance, specular_transmittance }
+                Material::Dielectric(DielectricParams { eta, specular_reflectance, specular_transmittance })
             } else {
-                Material::ThinDielectric { eta, specular_reflectance, specular_transmittance }
+                Material::ThinDielectric(ThinDielectricParams { eta, specular_reflectance, specular_transmittance })
             }
         }
-        "roughdielectric" => Material::RoughDielectric {
+        "roughdielectric" => Material::RoughDielectric(RoughDielectricParams {
             eta: relative_ior(node, "bk7", true)?,
             roughness: roughness(node, tex)?,
             specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
             specular_transmittance: tex.spectrum(node, "specular_transmittance", one)?,
-        },
+        }),
         "conductor" => {
             let (eta, k) = complex_ior(node, tex)?;
-            Material::Conductor { eta, k, specular_reflectance: tex.spectrum(node, "specular_reflectance", one)? }
+            Material::Conductor(ConductorParams {
+                eta,
+                k,
+                specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
+            })
         }
         "roughconductor" => {
             let (eta, k) = complex_ior(node, tex)?;
-            Material::RoughConductor {
+            Material::RoughConductor(RoughConductorParams {
                 roughness: roughness(node, tex)?,
                 eta,
                 k,
                 specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
-            }
+            })
         }
         "plastic" | "roughplastic" => {
             let eta = relative_ior(node, "polypropylene", node.plugin == "roughplastic")?;
@@ -278,14 +287,14 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
             let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
             let specular_sampling_weight = s_mean / (d_mean + s_mean);
             if node.plugin == "plastic" {
-                Material::Plastic {
+                Material::Plastic(PlasticParams {
                     eta,
                     diffuse_reflectance,
                     specular_reflectance,
                     nonlinear,
                     fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
                     specular_sampling_weight,
-                }
+                })
             } else {
                 let r = roughness(node, tex)?;
                 let (Some(au), Some(av)) = (r.alpha_u.constant(), r.alpha_v.constant()) else {
@@ -295,7 +304,7 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
                     return Err(node.error("roughplastic does not support anisotropic roughness (as in Mitsuba)"));
                 }
                 let distr = Microfacet { kind: r.kind, alpha_u: au.x, alpha_v: av.x };
-                Material::RoughPlastic {
+                Material::RoughPlastic(RoughPlasticParams {
                     distr,
                     eta,
                     diffuse_reflectance,
@@ -303,7 +312,7 @@ pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material
                     nonlinear,
                     specular_sampling_weight,
                     tables: RoughPlasticTables::new(distr, eta),
-                }
+                })
             }
         }
         "twosided" => {

@@ -14,6 +14,7 @@ use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
 use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
+use penumbra_render::bsdf::DiffuseParams;
 use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind, MAX_MARGIN};
 use penumbra_render::geometry::{Instance, Mesh, Shape, ShapeGroup, TriangleMesh};
@@ -254,7 +255,7 @@ impl Builder {
         node.check_all_used(&[Kind::Shape])?;
         // The material is never read: hits report the member's shape id.
         let material = *self.default_bsdf.get_or_insert_with(|| {
-            self.materials.push(Material::Diffuse { reflectance: Spectrum::splat(0.5).into() });
+            self.materials.push(Material::Diffuse(DiffuseParams { reflectance: Spectrum::splat(0.5).into() }));
             (self.materials.len() - 1) as u32
         });
         Ok((Shape::Instance(Instance::new(group, to_world.as_mat4())), ShapeInfo { material, light: None }))
@@ -334,11 +335,11 @@ impl Builder {
             // emitters (checked against Mitsuba 3.9: an emitter without a BSDF
             // reflects nothing).
             None if emitter.is_some() => *self.default_emitter_bsdf.get_or_insert_with(|| {
-                self.materials.push(Material::Diffuse { reflectance: Spectrum::ZERO.into() });
+                self.materials.push(Material::Diffuse(DiffuseParams { reflectance: Spectrum::ZERO.into() }));
                 (self.materials.len() - 1) as u32
             }),
             None => *self.default_bsdf.get_or_insert_with(|| {
-                self.materials.push(Material::Diffuse { reflectance: Spectrum::splat(0.5).into() });
+                self.materials.push(Material::Diffuse(DiffuseParams { reflectance: Spectrum::splat(0.5).into() }));
                 (self.materials.len() - 1) as u32
             }),
         };
