@@ -4,7 +4,7 @@
 
 use crate::args::RenderArgs;
 use crate::checkpoint::Checkpoint;
-use crate::driver::{self, Budget, Hooks, State, Stop};
+use crate::driver::{self, Budget, Hooks, Outcome, Schedule, State, Stop};
 use crate::exrmeta::{self, ExrImage};
 use crate::part::{self, Part};
 use crate::settings::{RenderIdentity, Settings, VERSION};
@@ -265,8 +265,13 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     };
     let run_start = std::time::Instant::now();
     let seconds_before = state.seconds;
-    let (stop, stats, extras) =
-        driver::run(&job, &pool, &samples, a.max_pass_spp.max(1), &mut state, budget, hooks, &signals.cancel, a.quiet)?;
+    let opts = driver::Options {
+        schedule: Schedule { samples: samples.clone(), max_pass_spp: a.max_pass_spp.max(1) },
+        budget,
+        cancel: &signals.cancel,
+        quiet: a.quiet,
+    };
+    let Outcome { stop, stats, extras } = driver::run(&job, &pool, &opts, &mut state, hooks)?;
 
     let complete = matches!(stop, Stop::Complete | Stop::NoiseReached);
     // Cancelled: resume from here; --time: the next run goes on from here;
