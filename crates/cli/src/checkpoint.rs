@@ -1,8 +1,8 @@
 //! Checkpoint files: the film's f64 sums and weights after a whole number of
 //! passes, with what is needed to check that a resumed render is the same
-//! render. Written atomically (temporary file, fsync, rename, fsync of the
-//! directory), so a kill at any moment leaves the previous checkpoint or the
-//! new one, never a mix.
+//! render. Written atomically ([`penumbra_scene::atomic`]: `FILE.tmp`, fsync,
+//! rename, fsync of the directory), so a kill at any moment leaves the
+//! previous checkpoint or the new one, never a mix.
 //!
 //! Layout (little-endian): magic `PNMBRCKP`, format version u32, then
 //! length-prefixed (u32) UTF-8 strings penumbra version and settings, seed
@@ -17,9 +17,10 @@ use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
 use penumbra_render::film::AovKind;
 use penumbra_render::film::{Film, FilmLayers};
+use penumbra_scene::atomic;
 use std::fs;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
 const FORMAT: u32 = 2;
@@ -34,12 +35,6 @@ pub struct Checkpoint {
     pub spp: u32,
     pub seconds: f64,
     pub film: Film,
-}
-
-fn tmp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(".tmp");
-    path.with_file_name(name)
 }
 
 fn put_str(out: &mut Vec<u8>, s: &str) {
@@ -125,18 +120,9 @@ impl Checkpoint {
 
     /// Writes atomically: temporary file, fsync, rename, fsync directory.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let tmp = tmp_path(path);
-        let err = || format!("cannot write checkpoint '{}'", path.display());
-        let mut f = fs::File::create(&tmp).with_context(err)?;
-        f.write_all(&self.encode()).with_context(err)?;
-        f.sync_all().with_context(err)?;
-        drop(f);
-        fs::rename(&tmp, path).with_context(err)?;
-        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        if let Ok(d) = fs::File::open(dir) {
-            let _ = d.sync_all();
-        }
-        Ok(())
+        let bytes = self.encode();
+        atomic::write_file(path, |w| w.write_all(&bytes))
+            .with_context(|| format!("cannot write checkpoint '{}'", path.display()))
     }
 
     /// Loads `path` if it exists and checks that it belongs to this render:

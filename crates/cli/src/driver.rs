@@ -1,6 +1,6 @@
 //! The pass loop: a render proceeds in passes over the whole image, each
-//! adding a range of sample indices to every pixel. The schedule of ranges is
-//! fixed (1, 1, 2, 4, 8, ... samples, at most `max_pass_spp` per pass), and
+//! adding a range of sample indices to every pixel. The [`Schedule`] of
+//! ranges is fixed (1, 1, 2, 4, 8, ... samples, at most `max_pass_spp` per pass), and
 //! the film only ever receives whole passes in that order, so the image after
 //! k passes is bitwise the same however often the render was stopped and
 //! resumed. Between passes the loop checks the time budget, and writes
@@ -17,20 +17,35 @@ use std::time::Instant;
 
 pub const DEFAULT_MAX_PASS_SPP: u32 = 16;
 
-/// The sample indices of pass `pass` of a render of `samples`, or `None`
-/// once all are done.
-pub fn pass_range(samples: &Range<u32>, max_pass_spp: u32, pass: u32) -> Option<Range<u32>> {
-    let size =
-        |p: u32| if p == 0 { 1 } else { 1u64.checked_shl(p - 1).unwrap_or(u64::MAX).min(max_pass_spp.max(1) as u64) };
-    let mut start = samples.start as u64;
-    for p in 0..pass {
-        start += size(p);
-        if start >= samples.end as u64 {
-            return None;
+/// The fixed schedule of a render's passes: the sample indices `samples`,
+/// added in passes of 1, 1, 2, 4, 8, ... samples, at most `max_pass_spp`
+/// each (0 counts as 1).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Schedule {
+    pub samples: Range<u32>,
+    pub max_pass_spp: u32,
+}
+
+impl Schedule {
+    /// The sample indices of pass `pass`, or `None` once all are done.
+    pub fn pass(&self, pass: u32) -> Option<Range<u32>> {
+        let cap = self.max_pass_spp.max(1) as u64;
+        let size = |p: u32| if p == 0 { 1 } else { 1u64.checked_shl(p - 1).unwrap_or(u64::MAX).min(cap) };
+        let mut start = self.samples.start as u64;
+        for p in 0..pass {
+            start += size(p);
+            if start >= self.samples.end as u64 {
+                return None;
+            }
         }
+        let end = (start + size(pass)).min(self.samples.end as u64);
+        (start < end).then_some(start as u32..end as u32)
     }
-    let end = (start + size(pass)).min(samples.end as u64);
-    (start < end).then_some(start as u32..end as u32)
+
+    /// Samples per pixel once every pass is done.
+    pub fn spp(&self) -> u32 {
+        self.samples.end - self.samples.start
+    }
 }
 
 /// The state a render can be resumed from.
@@ -89,22 +104,38 @@ pub struct Hooks<'a> {
     pub after_pass: Option<&'a mut dyn FnMut(&State)>,
 }
 
-/// Renders passes of `samples` into `state` until done, out of time or cancelled.
-#[allow(clippy::too_many_arguments)]
+/// How a run proceeds: its passes, when it stops early, how it reports.
+pub struct Options<'a> {
+    pub schedule: Schedule,
+    pub budget: Budget,
+    /// Set by a signal: the pass under way is discarded and the loop stops.
+    pub cancel: &'a AtomicBool,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy)]
+pub struct Outcome {
+    pub stop: Stop,
+    /// This run's passes only.
+    pub stats: RenderStats,
+    pub extras: Extras,
+}
+
+/// Renders the passes of `opts.schedule` that `state` lacks, until done,
+/// out of time or cancelled.
 pub fn run(
     job: &RenderJob,
     pool: &rayon::ThreadPool,
-    samples: &Range<u32>,
-    max_pass_spp: u32,
+    opts: &Options,
     state: &mut State,
-    budget: Budget,
     mut hooks: Hooks,
-    cancel: &AtomicBool,
-    quiet: bool,
-) -> Result<(Stop, RenderStats, Extras)> {
+) -> Result<Outcome> {
+    let (schedule, budget, cancel) = (&opts.schedule, &opts.budget, opts.cancel);
     let pixels = job.width as u64 * job.height as u64;
-    let left = (samples.end - samples.start).saturating_sub(state.spp) as u64;
-    let progress = Progress::new(left * pixels, quiet);
+    let left = schedule.spp().saturating_sub(state.spp) as u64;
+    let progress = Progress::new(left * pixels, opts.quiet);
     let start = Instant::now();
     let base_seconds = state.seconds;
     let (mut last_checkpoint, mut last_partial) = (start, start);
@@ -114,7 +145,7 @@ pub fn run(
     let mut stats = RenderStats::default();
     let mut extras = Extras::default();
     let stop = loop {
-        let Some(range) = pass_range(samples, max_pass_spp, state.passes) else {
+        let Some(range) = schedule.pass(state.passes) else {
             break Stop::Complete;
         };
         let mut active = None;
@@ -152,7 +183,7 @@ pub fn run(
         if let Some(f) = hooks.after_pass.as_mut() {
             f(state);
         }
-        if pass_range(samples, max_pass_spp, state.passes).is_none()
+        if schedule.pass(state.passes).is_none()
             || budget.noise_threshold.is_some_and(|x| crate::adaptive::reached(&state.film, state.spp, x))
         {
             continue; // Complete: the caller writes the final image.
@@ -173,7 +204,7 @@ pub fn run(
         }
     };
     progress.finish();
-    Ok((stop, stats, extras))
+    Ok(Outcome { stop, stats, extras })
 }
 
 #[cfg(test)]
@@ -182,8 +213,8 @@ mod tests {
 
     #[test]
     fn schedule_doubles_up_to_the_cap_and_covers_the_range() {
-        let r = 3..40;
-        let passes: Vec<Range<u32>> = (0..).map_while(|p| pass_range(&r, 8, p)).collect();
+        let schedule = Schedule { samples: 3..40, max_pass_spp: 8 };
+        let passes: Vec<Range<u32>> = (0..).map_while(|p| schedule.pass(p)).collect();
         let sizes: Vec<u32> = passes.iter().map(|p| p.end - p.start).collect();
         assert_eq!(sizes, [1, 1, 2, 4, 8, 8, 8, 5]);
         assert_eq!(passes[0].start, 3);
@@ -191,7 +222,12 @@ mod tests {
             assert_eq!(w[0].end, w[1].start);
         }
         assert_eq!(passes.last().unwrap().end, 40);
-        assert_eq!(pass_range(&(0..1), 16, 1), None);
-        assert_eq!(pass_range(&(0..0), 16, 0), None);
+        assert_eq!(schedule.spp(), 37);
+        assert_eq!(Schedule { samples: 0..1, max_pass_spp: 16 }.pass(1), None);
+        assert_eq!(Schedule { samples: 0..0, max_pass_spp: 16 }.pass(0), None);
+        // A cap of 0 counts as 1.
+        let sizes: Vec<u32> =
+            (0..).map_while(|p| Schedule { samples: 0..4, max_pass_spp: 0 }.pass(p)).map(|r| r.len() as u32).collect();
+        assert_eq!(sizes, [1, 1, 1, 1]);
     }
 }

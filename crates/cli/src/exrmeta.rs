@@ -3,13 +3,14 @@
 //! sum as channel `penumbra.weight` (what `merge` needs to add parts exactly:
 //! Σ w·L = RGB·weight), and text attributes `penumbra:*` in the header.
 //! A crop window is written as EXR means it: the data window is the crop,
-//! the display window the full frame. Writes are atomic (temporary file in
-//! the same directory, then rename).
+//! the display window the full frame. Writes are atomic
+//! ([`penumbra_scene::atomic`]).
 
 use anyhow::{anyhow, bail, Context, Result};
 use exr::prelude::*;
+use penumbra_scene::atomic;
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 pub const WEIGHT_CHANNEL: &str = "penumbra.weight";
 pub const PREFIX: &str = "penumbra:";
@@ -35,12 +36,6 @@ pub struct ExrImage {
 fn text(s: &str) -> Text {
     let bytes: Vec<u8> = s.chars().map(|c| u8::try_from(c as u32).unwrap_or(b'?')).collect();
     Text::from_slice_unchecked(&bytes)
-}
-
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(format!(".tmp{}", std::process::id()));
-    path.with_file_name(name)
 }
 
 /// Writes `img` atomically.
@@ -73,15 +68,9 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
     );
     let display = IntegerBounds::from_dimensions((img.full_size.0 as usize, img.full_size.1 as usize));
     let image = Image::new(ImageAttributes::new(display), layer);
-    let tmp = temp_path(path);
-    let result = image.write().to_file(&tmp).map_err(|e| anyhow!("{e}"));
-    match result {
-        Ok(()) => std::fs::rename(&tmp, path).with_context(|| format!("cannot write '{}'", path.display())),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e.context(format!("cannot write '{}'", path.display())))
-        }
-    }
+    // The encoder's message alone: its I/O errors carry the cause in it.
+    atomic::write_file(path, |w| image.write().to_buffered(w).map_err(|e| std::io::Error::other(e.to_string())))
+        .with_context(|| format!("cannot write '{}'", path.display()))
 }
 
 /// Reads an EXR written by [`write`] (or any RGB EXR: then `meta` is empty).

@@ -1,12 +1,17 @@
-//! `penumbra render`: loads the scene, applies --crop and --part, resumes
-//! from a checkpoint, runs the pass loop (driver.rs) and writes the image
-//! with its metadata.
+//! `penumbra render`, in four steps: [`plan`] checks the arguments, loads
+//! the scene and applies --crop and --part (everything decided before the
+//! first pass); [`resume`] opens the checkpoint or starts an empty film;
+//! [`run_passes`] drives the pass loop (driver.rs) with its checkpoint,
+//! partial-image and preview hooks; [`report`] writes the image with its
+//! metadata, settles the checkpoint, prints the summary and picks the exit
+//! code.
 
 use crate::args::RenderArgs;
 use crate::checkpoint::Checkpoint;
-use crate::driver::{self, Budget, Hooks, State, Stop};
+use crate::driver::{self, Budget, Hooks, Outcome, Schedule, State, Stop};
 use crate::exrmeta::{self, ExrImage};
 use crate::part::{self, Part};
+use crate::preview::Preview;
 use crate::settings::{RenderIdentity, Settings, VERSION};
 use crate::signals::Signals;
 use anyhow::{anyhow, bail, Context, Result};
@@ -15,9 +20,9 @@ use penumbra_render::render::RenderJob;
 use penumbra_scene::image_io::{self, Format, RgbImage};
 use penumbra_scene::Overrides;
 use std::collections::BTreeMap;
-use std::ops::Range;
 use std::path::Path;
 use std::process::ExitCode;
+use std::time::Instant;
 
 /// The command line as one string, arguments with spaces or quotes quoted.
 pub fn command_line() -> String {
@@ -45,34 +50,165 @@ pub fn apply_crop(job: &mut RenderJob, c: [u32; 4]) -> Result<()> {
     Ok(())
 }
 
-/// What the output image's metadata says besides the settings.
-struct Output<'a> {
-    job: &'a RenderJob,
-    settings: &'a Settings,
+/// Everything decided before the first pass.
+struct Plan<'a> {
+    args: &'a RenderArgs,
+    /// The scene, cropped, with the box filter for --denoise.
+    job: RenderJob,
     part: Option<Part>,
-    samples: Range<u32>,
+    threads: Option<usize>,
+    layers: FilmLayers,
+    /// This part's sample indices (all of them without --part) and the pass cap.
+    schedule: Schedule,
+    /// The render's identity, in checkpoints and the image's metadata.
+    settings: Settings,
+    /// The command line, for the image's metadata.
     command: String,
-    /// Denoise the final image (--denoise).
-    denoise: bool,
 }
 
-impl Output<'_> {
-    fn write(&self, path: &Path, state: &State, complete: bool) -> Result<()> {
+/// Checks the arguments, loads the scene and settles what the render is.
+fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
+    // Check the output name before spending time on the render.
+    Format::from_path(&a.output).map_err(|e| anyhow!(e))?;
+    let env = |k: &str| std::env::var(k).ok();
+    let part = a.part.as_deref().map(|s| part::parse(s, &env)).transpose()?;
+    let threads = part::threads(a.threads, &env)?;
+    for (name, v) in [("--time", a.time), ("--write-partial-images", a.write_partial_images)] {
+        if v.is_some_and(|v| !(v >= 0.0 && v.is_finite())) {
+            bail!("{name} needs a number of seconds >= 0");
+        }
+    }
+    if !(a.checkpoint_every >= 0.0 && a.checkpoint_every.is_finite()) {
+        bail!("--checkpoint-every needs a number of seconds >= 0");
+    }
+    let layers = film_layers(a)?;
+    if a.part.is_some() {
+        for (on, name, why) in [
+            (a.noise_threshold.is_some(), "--noise-threshold", "each part would stop on its own noise"),
+            (a.denoise, "--denoise", "denoise the merged image with `penumbra denoise`"),
+        ] {
+            if on {
+                bail!("{name} cannot be combined with --part: {why}");
+            }
+        }
+    }
+    let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
+    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone(), sampler: a.sampler.clone() };
+    let mut job = penumbra_scene::load_scene(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
+    if let Some(c) = a.crop {
+        apply_crop(&mut job, c)?;
+    }
+    if a.denoise {
+        // A wide filter's splats make neighbouring pixels' noise correlated,
+        // which the denoiser keeps as detail (measured: a 16 spp Cornell box
+        // with the Gaussian went from relMSE 0.065 to only 0.062). Denoised
+        // renders use the box filter: independent noise per pixel.
+        job.filter = Filter::new(FilterKind::Box);
+    }
+    let spp = job.sampler.spp;
+    let samples = part.map_or(0..spp, |p| p.samples(spp));
+    if samples.is_empty() {
+        bail!("--part {}: with {spp} spp this part has no samples; use at most {spp} parts", part.unwrap());
+    }
+    let settings = settings(a, &scene_bytes, &job, part, &layers);
+    let schedule = Schedule { samples, max_pass_spp: a.max_pass_spp.max(1) };
+    Ok(Plan { args: a, job, part, threads, layers, schedule, settings, command: command_line() })
+}
+
+/// The film's layers: --aov, plus variance for --noise-threshold and
+/// albedo and normal for --denoise.
+fn film_layers(a: &RenderArgs) -> Result<FilmLayers> {
+    let mut layers = crate::layers::parse(a.aov.as_deref().unwrap_or(""))?;
+    if a.aov.is_some() && Format::from_path(&a.output).map_err(|e| anyhow!(e))? != Format::Exr {
+        bail!("--aov writes layers of a multi-layer EXR: name the output '*.exr', not '{}'", a.output.display());
+    }
+    if let Some(x) = a.noise_threshold {
+        if !(x > 0.0 && x.is_finite()) {
+            bail!("--noise-threshold needs a relative error > 0 (e.g. 0.01)");
+        }
+        layers.variance = true;
+    }
+    if a.denoise {
+        if cfg!(not(feature = "denoise")) {
+            bail!("--denoise: {}", crate::denoise::UNAVAILABLE);
+        }
+        let list = format!("{},albedo,normal", crate::layers::describe(&layers));
+        layers = crate::layers::parse(&list)?;
+    }
+    Ok(layers)
+}
+
+/// The render's identity: what a checkpoint must match and the image records.
+fn settings(a: &RenderArgs, scene_bytes: &[u8], job: &RenderJob, part: Option<Part>, layers: &FilmLayers) -> Settings {
+    let crop = ((job.width, job.height) != job.full_size).then(|| {
+        let (x, y) = job.crop_offset;
+        [x, y, x + job.width, y + job.height]
+    });
+    let mut settings = Settings::new(&RenderIdentity {
+        scene_bytes,
+        spp: job.sampler.spp,
+        seed: job.sampler.seed,
+        integrator: a.integrator.as_deref(),
+        defines: &a.define,
+        full_size: job.full_size,
+        crop,
+        part,
+        max_pass_spp: a.max_pass_spp.max(1),
+    });
+    // Only when used, so that other renders keep their identity.
+    if *layers != FilmLayers::default() {
+        settings.set("aov", &crate::layers::describe(layers));
+    }
+    if let Some(sampler) = &a.sampler {
+        settings.set("sampler", sampler);
+    }
+    if a.denoise {
+        settings.set("filter", "box (--denoise)");
+    }
+    if let Some(x) = a.noise_threshold {
+        settings.set("noise_threshold", &x.to_string());
+        settings.set("adaptive", &a.adaptive.to_string());
+    }
+    settings
+}
+
+impl Plan<'_> {
+    /// Saves `st` to --checkpoint, if given.
+    fn save_checkpoint(&self, st: &State) -> Result<()> {
+        let Some(path) = &self.args.checkpoint else { return Ok(()) };
+        let ck = Checkpoint {
+            version: VERSION.to_string(),
+            settings: self.settings.clone(),
+            seed: self.job.sampler.seed,
+            passes: st.passes,
+            spp: st.spp,
+            seconds: st.seconds,
+            film: st.film.clone(),
+        };
+        ck.save(path)
+    }
+
+    /// Writes the image of `state` to `path`: EXR with the metadata
+    /// (`penumbra:*`), AOV layers and, for parts, the weight channel; other
+    /// formats as plain RGB. A complete render is denoised with --denoise.
+    fn write_image(&self, path: &Path, state: &State, complete: bool) -> Result<()> {
+        let denoise = self.args.denoise;
         let pixels = state.film.develop();
         let is_exr = Format::from_path(path).map_err(|e| anyhow!(e))? == Format::Exr;
-        if !(is_exr || (self.denoise && complete)) {
+        if !(is_exr || (denoise && complete)) {
             let img = RgbImage { width: state.film.width, height: state.film.height, pixels };
             return image_io::write_image(path, &img).map_err(|e| anyhow!(e));
         }
-        let job = self.job;
-        let s = self.settings;
+        let job = &self.job;
+        let s = &self.settings;
+        let samples = &self.schedule.samples;
         let mut meta = BTreeMap::new();
         let mut put = |k: &str, v: String| {
             meta.insert(k.to_string(), v);
         };
         put("spp", state.spp.to_string());
-        put("sppTarget", (self.samples.end - self.samples.start).to_string());
-        put("samples", format!("{}..{}", self.samples.start, self.samples.start + state.spp));
+        put("sppTarget", self.schedule.spp().to_string());
+        put("samples", format!("{}..{}", samples.start, samples.start + state.spp));
         put("complete", if complete { "yes" } else { "no" }.into());
         put("passes", state.passes.to_string());
         put("seed", job.sampler.seed.to_string());
@@ -98,7 +234,7 @@ impl Output<'_> {
             layers: crate::layers::channels(&state.film, self.part.is_some()),
             meta,
         };
-        if self.denoise && complete {
+        if denoise && complete {
             crate::denoise::denoise_image(&mut img)?;
         }
         if !is_exr {
@@ -109,133 +245,40 @@ impl Output<'_> {
     }
 }
 
-pub fn run(a: &RenderArgs) -> Result<ExitCode> {
-    // Check the output name before spending time on the render.
-    Format::from_path(&a.output).map_err(|e| anyhow!(e))?;
-    let env = |k: &str| std::env::var(k).ok();
-    let part = a.part.as_deref().map(|s| part::parse(s, &env)).transpose()?;
-    let threads = part::threads(a.threads, &env)?;
-    for (name, v) in [("--time", a.time), ("--write-partial-images", a.write_partial_images)] {
-        if v.is_some_and(|v| !(v >= 0.0 && v.is_finite())) {
-            bail!("{name} needs a number of seconds >= 0");
-        }
+/// The state to go on from: the checkpoint's if it matches this render,
+/// else an empty film (--fresh deletes the checkpoint first).
+fn resume(plan: &Plan) -> Result<State> {
+    let (a, job, layers) = (plan.args, &plan.job, &plan.layers);
+    let empty = State { film: Film::with_layers(job.width, job.height, layers), passes: 0, spp: 0, seconds: 0.0 };
+    let Some(ck) = &a.checkpoint else { return Ok(empty) };
+    if a.fresh {
+        let _ = std::fs::remove_file(ck);
+        return Ok(empty);
     }
-    if !(a.checkpoint_every >= 0.0 && a.checkpoint_every.is_finite()) {
-        bail!("--checkpoint-every needs a number of seconds >= 0");
+    let Some(c) = Checkpoint::load_matching(ck, &plan.settings)? else { return Ok(empty) };
+    eprintln!("resuming from '{}': {} passes, {} spp, {:.2} s", ck.display(), c.passes, c.spp, c.seconds);
+    if c.film.layers() != *layers || (c.film.width, c.film.height) != (job.width, job.height) {
+        bail!("checkpoint '{}' holds other image layers or another size; use --fresh", ck.display());
     }
-    let mut layers = crate::layers::parse(a.aov.as_deref().unwrap_or(""))?;
-    if a.aov.is_some() && Format::from_path(&a.output).map_err(|e| anyhow!(e))? != Format::Exr {
-        bail!("--aov writes layers of a multi-layer EXR: name the output '*.exr', not '{}'", a.output.display());
-    }
-    if let Some(x) = a.noise_threshold {
-        if !(x > 0.0 && x.is_finite()) {
-            bail!("--noise-threshold needs a relative error > 0 (e.g. 0.01)");
-        }
-        layers.variance = true;
-    }
-    if a.denoise {
-        if cfg!(not(feature = "denoise")) {
-            bail!("--denoise: {}", crate::denoise::UNAVAILABLE);
-        }
-        let list = format!("{},albedo,normal", crate::layers::describe(&layers));
-        layers = crate::layers::parse(&list)?;
-    }
-    if a.part.is_some() {
-        for (on, name, why) in [
-            (a.noise_threshold.is_some(), "--noise-threshold", "each part would stop on its own noise"),
-            (a.denoise, "--denoise", "denoise the merged image with `penumbra denoise`"),
-        ] {
-            if on {
-                bail!("{name} cannot be combined with --part: {why}");
-            }
-        }
-    }
-    let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
-    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone(), sampler: a.sampler.clone() };
-    let mut job = penumbra_scene::load_scene(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
-    if let Some(c) = a.crop {
-        apply_crop(&mut job, c)?;
-    }
-    if a.denoise {
-        // A wide filter's splats make neighbouring pixels' noise correlated,
-        // which the denoiser keeps as detail (measured: a 16 spp Cornell box
-        // with the Gaussian went from relMSE 0.065 to only 0.062). Denoised
-        // renders use the box filter: independent noise per pixel.
-        job.filter = Filter::new(FilterKind::Box);
-    }
-    let crop = ((job.width, job.height) != job.full_size).then(|| {
-        let (x, y) = job.crop_offset;
-        [x, y, x + job.width, y + job.height]
-    });
-    let spp = job.sampler.spp;
-    let samples = part.map_or(0..spp, |p| p.samples(spp));
-    if samples.is_empty() {
-        bail!("--part {}: with {spp} spp this part has no samples; use at most {spp} parts", part.unwrap());
-    }
-    let settings = Settings::new(&RenderIdentity {
-        scene_bytes: &scene_bytes,
-        spp,
-        seed: job.sampler.seed,
-        integrator: a.integrator.as_deref(),
-        defines: &a.define,
-        full_size: job.full_size,
-        crop,
-        part,
-        max_pass_spp: a.max_pass_spp.max(1),
-    });
-    let mut settings = settings;
-    // Only when used, so that other renders keep their identity.
-    if layers != FilmLayers::default() {
-        settings.set("aov", &crate::layers::describe(&layers));
-    }
-    if let Some(sampler) = &a.sampler {
-        settings.set("sampler", sampler);
-    }
-    if a.denoise {
-        settings.set("filter", "box (--denoise)");
-    }
-    if let Some(x) = a.noise_threshold {
-        settings.set("noise_threshold", &x.to_string());
-        settings.set("adaptive", &a.adaptive.to_string());
-    }
-    let settings = settings;
-    let out = Output {
-        job: &job,
-        settings: &settings,
-        part,
-        samples: samples.clone(),
-        command: command_line(),
-        denoise: a.denoise,
-    };
+    Ok(State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds })
+}
 
-    let mut state = State { film: Film::with_layers(job.width, job.height, &layers), passes: 0, spp: 0, seconds: 0.0 };
-    if let Some(ck) = &a.checkpoint {
-        if a.fresh {
-            let _ = std::fs::remove_file(ck);
-        } else if let Some(c) = Checkpoint::load_matching(ck, &settings)? {
-            eprintln!("resuming from '{}': {} passes, {} spp, {:.2} s", ck.display(), c.passes, c.spp, c.seconds);
-            if c.film.layers() != layers || (c.film.width, c.film.height) != (job.width, job.height) {
-                bail!("checkpoint '{}' holds other image layers or another size; use --fresh", ck.display());
-            }
-            state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds };
-        }
-    }
-    let save_checkpoint = |st: &State| -> Result<()> {
-        let Some(path) = &a.checkpoint else { return Ok(()) };
-        let ck = Checkpoint {
-            version: VERSION.to_string(),
-            settings: settings.clone(),
-            seed: job.sampler.seed,
-            passes: st.passes,
-            spp: st.spp,
-            seconds: st.seconds,
-            film: st.film.clone(),
-        };
-        ck.save(path)
-    };
+/// What the pass loop leaves for the report.
+struct Run {
+    outcome: Outcome,
+    signals: Signals,
+    preview: Option<Preview>,
+    /// When the loop began, and the render time before it (from the checkpoint).
+    start: Instant,
+    seconds_before: f64,
+}
 
+/// Renders the passes `state` lacks, with checkpoints, partial images and
+/// the preview window between them, until done, out of time or cancelled.
+fn run_passes(plan: &Plan, state: &mut State) -> Result<Run> {
+    let (a, job) = (plan.args, &plan.job);
     let signals = Signals::install()?;
-    let pool = crate::thread_pool(threads)?;
+    let pool = crate::thread_pool(plan.threads)?;
     let budget = Budget {
         time: a.time,
         checkpoint_every: a.checkpoint.as_ref().map(|_| a.checkpoint_every),
@@ -243,13 +286,13 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         noise_threshold: a.noise_threshold,
         adaptive: a.adaptive,
     };
-    let mut ck_hook = |st: &State| save_checkpoint(st);
-    let mut partial_hook = |st: &State| out.write(&a.output, st, false);
+    let mut ck_hook = |st: &State| plan.save_checkpoint(st);
+    let mut partial_hook = |st: &State| plan.write_image(&a.output, st, false);
     let mut preview = a.preview.then(|| {
         let name = a.scene.file_name().map_or("scene".into(), |n| n.to_string_lossy().into_owned());
-        crate::preview::Preview::open(&name, job.width, job.height)
+        Preview::open(&name, job.width, job.height)
     });
-    let target = samples.end - samples.start;
+    let target = plan.schedule.spp();
     if let Some(p) = preview.as_mut().filter(|_| state.spp > 0) {
         p.show(&state.film.develop(), state.spp, target); // resumed
     }
@@ -263,30 +306,52 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
         partial: &mut partial_hook,
         after_pass: if a.preview { Some(&mut preview_hook) } else { None },
     };
-    let run_start = std::time::Instant::now();
+    let start = Instant::now();
     let seconds_before = state.seconds;
-    let (stop, stats, extras) =
-        driver::run(&job, &pool, &samples, a.max_pass_spp.max(1), &mut state, budget, hooks, &signals.cancel, a.quiet)?;
+    let opts = driver::Options { schedule: plan.schedule.clone(), budget, cancel: &signals.cancel, quiet: a.quiet };
+    let outcome = driver::run(job, &pool, &opts, state, hooks)?;
+    Ok(Run { outcome, signals, preview, start, seconds_before })
+}
 
+/// Writes the image and settles the checkpoint, keeps the preview window
+/// open if asked, prints the summary and returns the exit code: 128 + the
+/// signal's number when one stopped the render.
+fn report(plan: &Plan, state: &State, mut run: Run) -> Result<ExitCode> {
+    let a = plan.args;
+    let stop = run.outcome.stop;
     let complete = matches!(stop, Stop::Complete | Stop::NoiseReached);
     // Cancelled: resume from here; --time: the next run goes on from here;
     // complete: only if asked to keep it.
     if !complete || a.keep_checkpoint {
-        save_checkpoint(&state)?;
+        plan.save_checkpoint(state)?;
     }
     if state.spp > 0 {
-        out.write(&a.output, &state, complete)?;
+        plan.write_image(&a.output, state, complete)?;
     }
     if complete && !a.keep_checkpoint {
         if let Some(ck) = &a.checkpoint {
             let _ = std::fs::remove_file(ck);
         }
     }
-    if let Some(p) = preview.as_mut() {
-        p.hold(&signals.cancel);
+    if let Some(p) = run.preview.as_mut() {
+        p.hold(&run.signals.cancel);
     }
-    let secs = run_start.elapsed().as_secs_f64().max(1e-9);
-    let this_run = state.seconds - seconds_before;
+    print_summary(plan, state, &run, complete);
+    Ok(match (stop, run.signals.received()) {
+        (Stop::Cancelled, Some(sig)) => ExitCode::from((128 + sig) as u8),
+        (Stop::Cancelled, None) => ExitCode::from(130),
+        _ => ExitCode::SUCCESS,
+    })
+}
+
+/// The lines on stderr after a render: what was rendered, how fast, the
+/// time spent on checkpoints and partial images, warnings.
+fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
+    let a = plan.args;
+    let Outcome { stop, stats, extras } = run.outcome;
+    let target = plan.schedule.spp();
+    let secs = run.start.elapsed().as_secs_f64().max(1e-9);
+    let this_run = state.seconds - run.seconds_before;
     let rays = stats.rays.rays + stats.rays.shadow_rays;
     let what = match stop {
         Stop::Complete => "rendered".to_string(),
@@ -301,10 +366,10 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
     eprintln!(
         "{what} {} ({}x{}, {} spp{}) in {:.2} s (this run {:.2} s): {:.3} M samples/s, {:.2} M rays/s{}",
         a.output.display(),
-        job.width,
-        job.height,
+        plan.job.width,
+        plan.job.height,
         state.spp,
-        part.map_or(String::new(), |p| format!(", part {p}")),
+        plan.part.map_or(String::new(), |p| format!(", part {p}")),
         state.seconds,
         this_run,
         stats.samples as f64 / secs / 1e6,
@@ -338,9 +403,11 @@ pub fn run(a: &RenderArgs) -> Result<ExitCode> {
             eprintln!("checkpoint: '{}' (run the same command again to go on)", ck.display());
         }
     }
-    Ok(match (stop, signals.received()) {
-        (Stop::Cancelled, Some(sig)) => ExitCode::from((128 + sig) as u8),
-        (Stop::Cancelled, None) => ExitCode::from(130),
-        _ => ExitCode::SUCCESS,
-    })
+}
+
+pub fn run(a: &RenderArgs) -> Result<ExitCode> {
+    let plan = plan(a)?;
+    let mut state = resume(&plan)?;
+    let run = run_passes(&plan, &mut state)?;
+    report(&plan, &state, run)
 }

@@ -1,11 +1,12 @@
 //! Image output by file extension: `.exr` (linear float RGB), `.png`
 //! (sRGB-encoded 8-bit, clamped), `.pfm` (linear float, bottom row first),
-//! `.hdr` (Radiance RGBE). Files are written to a temporary name and renamed,
+//! `.hdr` (Radiance RGBE). Files are written atomically ([`crate::atomic`]),
 //! so a reader never sees a half-written image and a failure leaves nothing.
 
-use std::fs;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use crate::atomic;
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write};
+use std::path::Path;
 
 /// A linear RGB image, row-major, top row first.
 #[derive(Debug, Clone)]
@@ -49,37 +50,23 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     }
 }
 
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(format!(".tmp{}", std::process::id()));
-    path.with_file_name(name)
-}
-
 /// Writes `img` to `path` in the format its extension names.
 pub fn write_image(path: &Path, img: &RgbImage) -> Result<(), String> {
     let format = Format::from_path(path)?;
-    let tmp = temp_path(path);
-    let result = write_format(&tmp, format, img);
-    match result {
-        Ok(()) => fs::rename(&tmp, path).map_err(|e| format!("cannot write '{}': {e}", path.display())),
-        Err(e) => {
-            let _ = fs::remove_file(&tmp);
-            Err(format!("cannot write '{}': {e}", path.display()))
-        }
-    }
+    atomic::write_file(path, |w| encode(w, format, img)).map_err(|e| format!("cannot write '{}': {e}", path.display()))
 }
 
-fn write_format(path: &Path, format: Format, img: &RgbImage) -> Result<(), String> {
+fn encode(out: &mut BufWriter<File>, format: Format, img: &RgbImage) -> io::Result<()> {
     let (w, h) = (img.width as usize, img.height as usize);
     match format {
         Format::Exr => {
             use exr::prelude::*;
             let px = &img.pixels;
-            write_rgb_file(path, w, h, |x, y| {
+            let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
                 let p = px[y * w + x];
                 (p[0], p[1], p[2])
-            })
-            .map_err(|e| e.to_string())
+            });
+            Image::from_channels((w, h), channels).write().to_buffered(out).map_err(io::Error::other)
         }
         Format::Png => {
             let mut buf = Vec::with_capacity(w * h * 3);
@@ -89,38 +76,35 @@ fn write_format(path: &Path, format: Format, img: &RgbImage) -> Result<(), Strin
                     buf.push((v * 255.0 + 0.5) as u8);
                 }
             }
-            image::save_buffer_with_format(
-                path,
+            image::write_buffer_with_format(
+                out,
                 &buf,
                 img.width,
                 img.height,
                 image::ColorType::Rgb8,
                 image::ImageFormat::Png,
             )
-            .map_err(|e| e.to_string())
+            .map_err(io::Error::other)
         }
         Format::Pfm => {
-            let f = fs::File::create(path).map_err(|e| e.to_string())?;
-            let mut out = BufWriter::new(f);
             // Negative scale: little-endian floats; rows run bottom to top.
-            write!(out, "PF\n{w} {h}\n-1.0\n").map_err(|e| e.to_string())?;
+            write!(out, "PF\n{w} {h}\n-1.0\n")?;
             for y in (0..h).rev() {
                 for p in &img.pixels[y * w..(y + 1) * w] {
                     for c in p {
-                        out.write_all(&c.to_le_bytes()).map_err(|e| e.to_string())?;
+                        out.write_all(&c.to_le_bytes())?;
                     }
                 }
             }
-            out.flush().map_err(|e| e.to_string())
+            Ok(())
         }
         Format::Hdr => {
-            let f = fs::File::create(path).map_err(|e| e.to_string())?;
             let pixels: Vec<image::Rgb<f32>> = img
                 .pixels
                 .iter()
                 .map(|p| image::Rgb(p.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
                 .collect();
-            image::codecs::hdr::HdrEncoder::new(BufWriter::new(f)).encode(&pixels, w, h).map_err(|e| e.to_string())
+            image::codecs::hdr::HdrEncoder::new(out).encode(&pixels, w, h).map_err(io::Error::other)
         }
     }
 }

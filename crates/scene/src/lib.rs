@@ -1,6 +1,7 @@
 //! Scene loading for Penumbra: Mitsuba 3 XML → format-neutral description
-//! (`desc`) → render job (`build`), plus mesh readers and image output.
+//! (`desc`) → render job (`build`), plus mesh readers, image output and atomic file writes.
 
+pub mod atomic;
 pub mod build;
 pub mod desc;
 pub mod error;
