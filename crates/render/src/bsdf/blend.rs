@@ -13,7 +13,7 @@
 //! cosines are taken in the nested frame, as Mitsuba's nested BSDFs do.
 
 use super::{Bsdf, BsdfModel, BsdfSample};
-use crate::math::{Frame, Spectrum};
+use crate::math::{Frame, Spectrum, ONE_MINUS_EPS};
 use glam::{Vec2, Vec3};
 
 /// The per-hit blend: two nested BSDFs and the second one's weight.
@@ -129,5 +129,3 @@ impl BsdfModel for Blend<'_> {
         Some(BsdfSample { wi, pdf, weight, delta: s.delta, eta: s.eta })
     }
 }
-
-const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;

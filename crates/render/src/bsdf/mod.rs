@@ -246,7 +246,11 @@ impl Bsdf<'_> {
             }
             None => (self.opacity, p),
         };
-        (f * scale, p * self.opacity)
+        let (f, p) = (f * scale, p * self.opacity);
+        debug_assert!(p >= 0.0 && !p.is_nan(), "BSDF pdf {p} is negative or NaN");
+        // (Values are not checked: a NaN texture makes them NaN, and the
+        // render drops such samples and counts them.)
+        (f, p)
     }
 
     /// Samples `wi` given `wo`; `u` picks a lobe, `u2` the direction.
@@ -278,6 +282,8 @@ impl Bsdf<'_> {
             }
             s.weight *= g;
         }
+        debug_assert!(s.pdf >= 0.0 && s.pdf.is_finite(), "BSDF sample pdf {} is negative or not finite", s.pdf);
+        debug_assert!((s.wi.length() - 1.0).abs() < 1e-3, "BSDF sample direction {} is not unit", s.wi);
         Some(s)
     }
 }

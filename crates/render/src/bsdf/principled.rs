@@ -16,7 +16,7 @@
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{reflect_m, refract_m, Microfacet, MicrofacetType};
 use super::BsdfSample;
-use super::{BsdfModel, BsdfParams};
+use super::{mulsign, BsdfModel, BsdfParams};
 use crate::geometry::SurfaceInteraction;
 use crate::math::{luminance, safe_sqrt, Spectrum};
 use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -122,8 +122,6 @@ impl BsdfParams for PrincipledParams {
         true
     }
 }
-
-pub(super) use super::mulsign;
 
 /// (1 − cos)⁵ clamped, Mitsuba's `schlick_weight`.
 #[inline]

@@ -12,7 +12,8 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{reflect_m, Microfacet, MicrofacetType};
-use super::principled::{calc_schlick, mac_mic, mulsign, schlick_weight};
+use super::mulsign;
+use super::principled::{calc_schlick, mac_mic, schlick_weight};
 use super::BsdfSample;
 use super::{BsdfModel, BsdfParams};
 use crate::geometry::SurfaceInteraction;

@@ -14,6 +14,7 @@
 use super::{camera_hit, RayStats};
 use crate::material::Scratch;
 use crate::math::Spectrum;
+use crate::sampling::mis::power_heuristic;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
 
@@ -22,18 +23,6 @@ pub struct DirectIntegrator {
     pub emitter_samples: u32,
     pub bsdf_samples: u32,
     pub hide_emitters: bool,
-}
-
-/// Power heuristic of fractions-weighted densities, 0 where undefined.
-#[inline]
-fn mis(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    let w = a2 / (a2 + b2);
-    if w.is_finite() {
-        w
-    } else {
-        0.0
-    }
 }
 
 impl DirectIntegrator {
@@ -76,7 +65,7 @@ impl DirectIntegrator {
                 if scene.occluded(&si, ls.wi, ls.dist) {
                     continue;
                 }
-                let w = if ls.delta { 1.0 } else { mis(ls.pdf * frac_lum, bsdf.pdf(wo, wi) * frac_bsdf) };
+                let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf * frac_lum, bsdf.pdf(wo, wi) * frac_bsdf) };
                 l += f * ls.li * (w / (ls.pdf * self.emitter_samples as f32));
             }
         }
@@ -95,7 +84,7 @@ impl DirectIntegrator {
             if le == Spectrum::ZERO {
                 continue;
             }
-            let w = if bs.delta { 1.0 } else { mis(bs.pdf * frac_bsdf, light_pdf * frac_lum) };
+            let w = if bs.delta { 1.0 } else { power_heuristic(bs.pdf * frac_bsdf, light_pdf * frac_lum) };
             l += bs.weight * le * (w / self.bsdf_samples as f32);
         }
         l

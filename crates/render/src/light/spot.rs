@@ -10,7 +10,7 @@
 //! | beam_width   | float     | 3/4 of cutoff_angle (degrees) |
 
 use super::LightSample;
-use crate::math::{Mat4, Spectrum, PI};
+use crate::math::{safe_acos, Mat4, Spectrum, PI};
 use glam::Vec3;
 
 #[derive(Debug, Clone)]
@@ -48,7 +48,7 @@ impl SpotLight {
         } else if cos_theta >= self.cos_beam {
             1.0
         } else {
-            (self.cutoff - cos_theta.clamp(-1.0, 1.0).acos()) * self.inv_transition
+            (self.cutoff - safe_acos(cos_theta)) * self.inv_transition
         }
     }
 

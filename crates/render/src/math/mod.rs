@@ -30,7 +30,23 @@ pub fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()
 }
 
-/// Rec. 709 luminance of a linear-sRGB colour.
+/// acos of `x` clamped to [-1, 1] (rounding may push a cosine just outside).
+#[inline]
+pub fn safe_acos(x: f32) -> f32 {
+    x.clamp(-1.0, 1.0).acos()
+}
+
+/// asin of `x` clamped to [-1, 1].
+#[inline]
+pub fn safe_asin(x: f32) -> f32 {
+    x.clamp(-1.0, 1.0).asin()
+}
+
+/// The largest f32 below 1: clamps a uniform number to [0, 1) (Mitsuba's
+/// `OneMinusEpsilon`).
+pub const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Rec. 709 luminance of a linear-sRGB colour, with Mitsuba's coefficients.
 #[inline]
 pub fn luminance(c: Spectrum) -> f32 {
     0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z

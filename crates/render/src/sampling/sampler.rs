@@ -10,6 +10,7 @@
 
 use super::rng::{hash_words, mix64, permute, to_unit_f32};
 use super::sequences;
+use crate::math::ONE_MINUS_EPS;
 use glam::Vec2;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -275,8 +276,6 @@ impl SampleStream {
         }
     }
 }
-
-const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {

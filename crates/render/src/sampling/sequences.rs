@@ -6,7 +6,7 @@
 use super::rng::{mix64, permute};
 use glam::Vec2;
 
-const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+use crate::math::ONE_MINUS_EPS;
 
 /// Correlated multi-jittered 1D sample: sample `i` of `n`, strata shuffled by
 /// `seed`, offset `jitter` in [0, 1) inside its stratum.

@@ -5,7 +5,7 @@
 //! row y = 0 is the *first* row of the file (the top of the picture), so v
 //! grows downwards. `to_uv` is applied to the uv first. Data are linear RGB.
 
-use super::luminance;
+use crate::math::luminance;
 use crate::math::Spectrum;
 use glam::{Affine2, Vec2};
 

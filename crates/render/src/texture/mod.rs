@@ -26,12 +26,6 @@ pub enum Texture {
     MeshAttribute(Arc<MeshAttribute>),
 }
 
-/// Rec. 709 luminance of linear RGB, with Mitsuba's coefficients.
-#[inline]
-pub fn luminance(c: Spectrum) -> f32 {
-    c.x * 0.212671 + c.y * 0.715160 + c.z * 0.072169
-}
-
 impl Texture {
     /// The colour at a surface point (linear RGB).
     #[inline]
