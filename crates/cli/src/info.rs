@@ -38,6 +38,11 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         for (kind, n) in &analytic {
             write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
         }
+        // Shape-group members are counted once above, however often placed.
+        let n = job.scene.instances.len();
+        if n > 0 {
+            write!(geometry, ", {n} instance{}", if n == 1 { "" } else { "s" })?;
+        }
         writeln!(out, "geometry: {geometry}")?;
         let mut lights = BTreeMap::<&str, usize>::new();
         for l in &job.scene.lights {

@@ -2,7 +2,6 @@
 
 pub mod bounds;
 pub mod cylinder;
-pub mod instance;
 pub mod interaction;
 pub mod mesh;
 pub mod ray;
@@ -11,7 +10,6 @@ pub mod triangle;
 
 pub use bounds::Aabb;
 pub use cylinder::Cylinder;
-pub use instance::{Instance, ShapeGroup};
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};

@@ -2,7 +2,7 @@
 //! the geometric questions (bounds of its primitives, the interaction at a
 //! hit, area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Cylinder, Instance, Ray, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Cylinder, Ray, SurfaceInteraction, TriangleMesh};
 use crate::math::{fast, safe_sqrt, Frame, Mat3, Mat4, PI};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -77,12 +77,6 @@ pub enum Shape {
     },
     /// Mitsuba `cylinder`: an open tube (see [`Cylinder`]).
     Cylinder(Cylinder),
-    /// Mitsuba `instance`: a `shapegroup` placed by a transform (see [`Instance`]).
-    Instance(Instance),
-    /// A member of a `shapegroup`: it holds a scene-wide shape id (for its
-    /// material) but no geometry of its own; the group's instances are
-    /// what rays hit. Never in the scene's BVH.
-    GroupMember,
 }
 
 impl Shape {
@@ -108,7 +102,6 @@ impl Shape {
     pub fn prim_count(&self) -> usize {
         match self {
             Shape::Mesh(m) => m.mesh.indices.len(),
-            Shape::GroupMember => 0,
             _ => 1,
         }
     }
@@ -127,8 +120,6 @@ impl Shape {
                 Aabb::from_points(&pts)
             }
             Shape::Cylinder(c) => c.bounds(),
-            Shape::Instance(i) => i.bounds(),
-            Shape::GroupMember => Aabb::EMPTY,
         }
     }
 
@@ -138,8 +129,6 @@ impl Shape {
             Shape::Sphere { radius, .. } => 4.0 * PI * radius * radius,
             Shape::Disk { area, .. } => *area,
             Shape::Cylinder(c) => c.area(),
-            // Never emitters (Mitsuba forbids emitters in shape groups).
-            Shape::Instance(_) | Shape::GroupMember => 0.0,
         }
     }
 
@@ -159,16 +148,14 @@ impl Shape {
                 (p.x * p.x + p.y * p.y <= 1.0).then_some((t, Vec2::new(p.x, p.y)))
             }
             Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
-            Shape::Instance(i) => i.intersect(ray).map(|h| (h.t, h.uv)),
-            Shape::Mesh(_) | Shape::GroupMember => None,
+            Shape::Mesh(_) => None,
         }
     }
 
     /// Completes a hit on primitive `prim` at distance `t`; `uv` holds the
     /// triangle barycentrics (b1, b2), or the disk's local (x, y). Fills in
-    /// Mitsuba's uv, dp/du, dp/dv and a shading frame aligned with dp/du.
-    /// For an instance, `prim` indexes its group's BVH primitives, and
-    /// `shape` in the result is the hit member's scene-wide id.
+    /// Mitsuba's uv, dp/du, dp/dv and a shading frame aligned with dp/du;
+    /// `shape_id` becomes the result's `shape`.
     pub fn interaction(&self, shape_id: u32, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
         self.interaction_with(shape_id, prim, ray, t, uv, true)
     }
@@ -277,10 +264,6 @@ impl Shape {
                 let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);
                 (p, n, n, tex, dpdu, dpdv)
             }
-            Shape::Instance(_) => {
-                unreachable!("instance hits are resolved by Scene::intersect (Instance::interaction)")
-            }
-            Shape::GroupMember => unreachable!("group members are hit through their instances"),
         };
         SurfaceInteraction {
             p,
@@ -319,7 +302,6 @@ impl Shape {
                 (world_from_object.transform_point3(Vec3::new(q.x, q.y, 0.0)), *n, 1.0 / area)
             }
             Shape::Cylinder(c) => c.sample_area(u),
-            Shape::Instance(_) | Shape::GroupMember => unreachable!("instances are never emitters"),
         }
     }
 
