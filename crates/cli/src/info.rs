@@ -30,7 +30,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
                     meshes += 1;
                     triangles += m.mesh.indices.len();
                 }
-                Shape::Sphere { .. } => *analytic.entry("sphere").or_default() += 1,
+                Shape::Sphere(_) => *analytic.entry("sphere").or_default() += 1,
                 _ => *analytic.entry("other").or_default() += 1,
             }
         }

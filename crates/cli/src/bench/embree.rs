@@ -70,8 +70,9 @@ pub fn with_embree_shapes<R>(
                 positions.extend(m.mesh.positions.iter().map(|p| p.to_array()));
                 indices.extend(m.mesh.indices.iter().map(|t| t.map(|i| i + base)));
             }
-            Shape::Sphere { center, radius, .. } => spheres.push([center.x, center.y, center.z, *radius]),
-            Shape::Disk { world_from_object, .. } => {
+            Shape::Sphere(s) => spheres.push([s.center.x, s.center.y, s.center.z, s.radius]),
+            Shape::Disk(d) => {
+                let world_from_object = &d.world_from_object;
                 positions.push(world_from_object.transform_point3(Vec3::ZERO).to_array());
                 for k in 0..DISK_SEGMENTS {
                     let phi = std::f32::consts::TAU * k as f32 / DISK_SEGMENTS as f32;

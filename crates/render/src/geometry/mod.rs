@@ -2,15 +2,19 @@
 
 pub mod bounds;
 pub mod cylinder;
+pub mod disk;
 pub mod interaction;
 pub mod mesh;
 pub mod ray;
 pub mod shape;
+pub mod sphere;
 pub mod triangle;
 
 pub use bounds::Aabb;
 pub use cylinder::Cylinder;
+pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};
 pub use shape::{Mesh, Shape, ShapeSample};
+pub use sphere::Sphere;
