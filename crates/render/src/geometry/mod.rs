@@ -1,4 +1,4 @@
-//! Geometric primitives: rays, boxes, triangles, spheres, disks and meshes.
+//! Geometric primitives: rays, boxes, triangles, meshes, spheres, disks and cylinders.
 
 pub mod bounds;
 pub mod cylinder;
