@@ -30,13 +30,18 @@ pub fn run(a: &InfoArgs) -> Result<()> {
                     meshes += 1;
                     triangles += m.mesh.indices.len();
                 }
-                Shape::Sphere { .. } => *analytic.entry("sphere").or_default() += 1,
+                Shape::Sphere(_) => *analytic.entry("sphere").or_default() += 1,
                 _ => *analytic.entry("other").or_default() += 1,
             }
         }
         let mut geometry = format!("{triangles} triangles in {meshes} meshes");
         for (kind, n) in &analytic {
             write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
+        }
+        // Shape-group members are counted once above, however often placed.
+        let n = job.scene.instances.len();
+        if n > 0 {
+            write!(geometry, ", {n} instance{}", if n == 1 { "" } else { "s" })?;
         }
         writeln!(out, "geometry: {geometry}")?;
         let mut lights = BTreeMap::<&str, usize>::new();

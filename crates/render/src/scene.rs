@@ -1,7 +1,7 @@
 //! The scene as integrators see it: ray queries, the BSDF at a hit, and
 //! light sampling (selection included). Nothing else is exposed to them.
 
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit, Instance, Primitive};
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::bvh::LightBvh;
@@ -49,8 +49,16 @@ pub enum LightSelection {
 
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// Every shape, by id: those placed directly, in world space, and the
+    /// members of shape groups, in object space (placed by `instances`).
     pub shapes: Vec<Shape>,
+    /// Per shape id.
     pub shape_info: Vec<ShapeInfo>,
+    /// Shape groups placed by transforms.
+    pub instances: Vec<Instance>,
+    /// What `accel` is built over, in scene order: the shapes placed
+    /// directly and the instances.
+    pub placed: Vec<Primitive>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
     /// Indices of lights at infinity (hit by escaping rays).
@@ -75,15 +83,32 @@ fn log_ray(log: &RayLog, ray: Ray, shadow: bool) {
 }
 
 impl Scene {
-    /// Assembles a scene and builds its acceleration structure.
+    /// Assembles a scene of `shapes`, each placed as it is, and builds its
+    /// acceleration structure.
     pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
+        let placed: Vec<Primitive> = (0..shapes.len() as u32).map(Primitive::Shape).collect();
+        Scene::with_instances(shapes, shape_info, Vec::new(), placed, materials, lights)
+    }
+
+    /// Assembles a scene whose BVH holds `placed`: shapes placed directly
+    /// and instances (the other shapes are members of the instances' groups).
+    pub fn with_instances(
+        shapes: Vec<Shape>,
+        shape_info: Vec<ShapeInfo>,
+        instances: Vec<Instance>,
+        placed: Vec<Primitive>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+    ) -> Scene {
         assert_eq!(shapes.len(), shape_info.len());
-        let accel = Accel::build(&shapes);
+        let accel = Accel::build(&placed, &shapes, &instances);
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
         let reads_uv = materials.iter().map(Material::reads_uv).collect();
         Scene {
             shapes,
             shape_info,
+            instances,
+            placed,
             materials,
             lights,
             env_lights,
@@ -119,16 +144,16 @@ impl Scene {
         if let Some(log) = &self.ray_log {
             log_ray(log, *ray, false);
         }
-        let hit = self.accel.intersect(ray, &self.shapes)?;
-        let (m, i, t, uv) = (hit.member as usize, hit.index as usize, hit.t, hit.uv);
+        let hit = self.accel.intersect(ray, &self.shapes, &self.instances)?;
+        let (id, i, t, uv) = (hit.shape, hit.index as usize, hit.t, hit.uv);
+        let material = self.shape_info[id as usize].material as usize;
+        let param = self.reads_uv.get(material).copied().unwrap_or(true);
+        let shape = &self.shapes[id as usize];
         // Instances and their flattened geometry take the same path (the same frames).
-        let param = |id: u32| {
-            let material = self.shape_info[id as usize].material as usize;
-            self.reads_uv.get(material).copied().unwrap_or(true)
-        };
-        Some(match &self.shapes[hit.shape as usize] {
-            Shape::Instance(inst) => inst.interaction_with(m, i, ray, t, uv, param(inst.group.ids[m])),
-            s => s.interaction_with(hit.shape, i, ray, t, uv, param(hit.shape)),
+        Some(if hit.instance == Hit::NOT_INSTANCED {
+            shape.interaction_with(id, i, ray, t, uv, param)
+        } else {
+            self.instances[hit.instance as usize].interaction_with(shape, id, i, ray, t, uv, param)
         })
     }
 
@@ -142,7 +167,7 @@ impl Scene {
         if let Some(log) = &self.ray_log {
             log_ray(log, ray, true);
         }
-        self.accel.occluded(&ray, &self.shapes)
+        self.accel.occluded(&ray, &self.shapes, &self.instances)
     }
 
     /// A ray leaving `si` in direction `wi`.

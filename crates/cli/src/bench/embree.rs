@@ -5,6 +5,7 @@
 use super::rays::Tracer;
 use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene};
 use glam::Vec3;
+use penumbra_render::accel::Primitive;
 use penumbra_render::geometry::{Ray as PenumbraRay, Shape, TriangleMesh};
 use std::time::Instant;
 
@@ -48,20 +49,30 @@ pub fn with_embree<R>(mesh: &TriangleMesh, f: impl FnOnce(&dyn Tracer, f64) -> R
 /// Segments per disk: a disk becomes a fan of this many triangles.
 const DISK_SEGMENTS: u32 = 256;
 
-/// Embree over a scene's shapes: meshes as triangles, spheres as Embree's
-/// sphere points, disks as fine triangle fans. Cylinders and instances have
-/// no counterpart here; they return an error naming them.
-pub fn with_embree_shapes<R>(shapes: &[Shape], f: impl FnOnce(&dyn Tracer) -> R) -> Result<R, String> {
+/// Embree over a scene's placed primitives (`placed`, naming `shapes`):
+/// meshes as triangles, spheres as Embree's sphere points, disks as fine
+/// triangle fans. Cylinders and instances have no counterpart here; they
+/// return an error naming them.
+pub fn with_embree_shapes<R>(
+    placed: &[Primitive],
+    shapes: &[Shape],
+    f: impl FnOnce(&dyn Tracer) -> R,
+) -> Result<R, String> {
     let (mut positions, mut indices, mut spheres) = (Vec::<[f32; 3]>::new(), Vec::<[u32; 3]>::new(), Vec::new());
-    for shape in shapes {
+    for prim in placed {
+        let shape = match *prim {
+            Primitive::Shape(id) => &shapes[id as usize],
+            Primitive::Instance(_) => return Err("an instance has no Embree counterpart here".into()),
+        };
         let base = positions.len() as u32;
         match shape {
             Shape::Mesh(m) => {
                 positions.extend(m.mesh.positions.iter().map(|p| p.to_array()));
                 indices.extend(m.mesh.indices.iter().map(|t| t.map(|i| i + base)));
             }
-            Shape::Sphere { center, radius, .. } => spheres.push([center.x, center.y, center.z, *radius]),
-            Shape::Disk { world_from_object, .. } => {
+            Shape::Sphere(s) => spheres.push([s.center.x, s.center.y, s.center.z, s.radius]),
+            Shape::Disk(d) => {
+                let world_from_object = &d.world_from_object;
                 positions.push(world_from_object.transform_point3(Vec3::ZERO).to_array());
                 for k in 0..DISK_SEGMENTS {
                     let phi = std::f32::consts::TAU * k as f32 / DISK_SEGMENTS as f32;
@@ -70,9 +81,7 @@ pub fn with_embree_shapes<R>(shapes: &[Shape], f: impl FnOnce(&dyn Tracer) -> R)
                     indices.push([base, base + 1 + k, base + 1 + (k + 1) % DISK_SEGMENTS]);
                 }
             }
-            Shape::GroupMember => {}
             Shape::Cylinder(_) => return Err("a cylinder has no Embree counterpart here".into()),
-            Shape::Instance(_) => return Err("an instance has no Embree counterpart here".into()),
         }
     }
     with_geometry(&positions, &indices, &spheres, |t, _| f(t)).ok_or_else(|| "Embree's device failed".into())

@@ -11,7 +11,7 @@
 //! Any-hit rays are shadow segments between two random surface points.
 
 use glam::{Vec2, Vec3};
-use penumbra_render::accel::Accel;
+use penumbra_render::accel::{Accel, Instance};
 use penumbra_render::geometry::{Mesh, Ray, Shape, TriangleMesh};
 use penumbra_render::sampling::rng::{hash_words, to_unit_f32};
 use penumbra_render::sampling::warp;
@@ -111,17 +111,19 @@ pub trait Tracer: Sync {
     fn occluded(&self, rays: &[Ray]) -> u64;
 }
 
-/// Penumbra's BVH over its shapes: the benchmark mesh's, or a scene's.
+/// Penumbra's BVH over its shapes: the benchmark mesh's, or a scene's
+/// (with its instances).
 pub struct Bvh<'a> {
     pub accel: &'a Accel,
     pub shapes: &'a [Shape],
+    pub instances: &'a [Instance],
 }
 
 /// The benchmark mesh as a shape, its BVH, and the build time in seconds.
 fn build_bvh(mesh: &TriangleMesh) -> (Vec<Shape>, Accel, f64) {
     let shapes = vec![Shape::Mesh(Mesh::new(mesh.clone(), false))];
     let start = Instant::now();
-    let accel = Accel::build(&shapes);
+    let accel = Accel::build_shapes(&shapes);
     let secs = start.elapsed().as_secs_f64();
     (shapes, accel, secs)
 }
@@ -130,7 +132,7 @@ impl Tracer for Bvh<'_> {
     fn closest(&self, rays: &[Ray]) -> (u64, f64) {
         let (mut n, mut ts) = (0u64, 0f64);
         for r in rays {
-            if let Some(h) = self.accel.intersect(r, self.shapes) {
+            if let Some(h) = self.accel.intersect(r, self.shapes, self.instances) {
                 n += 1;
                 ts += h.t as f64;
             }
@@ -138,7 +140,7 @@ impl Tracer for Bvh<'_> {
         (n, ts)
     }
     fn occluded(&self, rays: &[Ray]) -> u64 {
-        rays.iter().filter(|r| self.accel.occluded(r, self.shapes)).count() as u64
+        rays.iter().filter(|r| self.accel.occluded(r, self.shapes, self.instances)).count() as u64
     }
 }
 
@@ -155,7 +157,11 @@ pub fn with_embree<R>(_: &TriangleMesh, _: impl FnOnce(&dyn Tracer, f64) -> R) -
 
 /// Embree is not compiled in: no column.
 #[cfg(not(feature = "embree"))]
-pub fn with_embree_shapes<R>(_: &[Shape], _: impl FnOnce(&dyn Tracer) -> R) -> Result<R, String> {
+pub fn with_embree_shapes<R>(
+    _: &[penumbra_render::accel::Primitive],
+    _: &[Shape],
+    _: impl FnOnce(&dyn Tracer) -> R,
+) -> Result<R, String> {
     Err("Embree is not compiled in (build with --features embree)".into())
 }
 
@@ -221,7 +227,7 @@ pub fn table(pool: &rayon::ThreadPool, triangles: usize, rays: usize) {
             built = Some((shapes, accel));
         }
         let (shapes, accel) = built.expect("built");
-        let pen = Bvh { accel: &accel, shapes: &shapes };
+        let pen = Bvh { accel: &accel, shapes: &shapes, instances: &[] };
         let (nodes, blocks, fill) = pen.accel.stats();
         eprintln!(
             "penumbra BVH: {nodes} nodes ({fill:.2} children each), {blocks} triangle blocks ({:.2} triangles each), {:.1} bytes/triangle",

@@ -57,7 +57,7 @@ pub fn measure(job: &RenderJob, pool: &rayon::ThreadPool, record_spp: u32) -> Tr
     let rays_of = |v: Vec<LoggedRay>| -> Vec<Ray> { v.into_iter().map(|l| l.ray).collect() };
     let (closest, shadow) = (rays_of(closest), rays_of(shadow));
     let rays = (closest.len() + shadow.len()) as f64 * scale;
-    let ours = Bvh { accel: &job.scene.accel, shapes: &job.scene.shapes };
+    let ours = Bvh { accel: &job.scene.accel, shapes: &job.scene.shapes, instances: &job.scene.instances };
     let (mut pen, mut emb, mut counts) = (Vec::new(), Vec::new(), [[0; 2]; 2]);
     let mut round = |t: &dyn Tracer, times: &mut Vec<f64>, k: usize| {
         let (secs, n) = replay(t, &closest, &shadow);
@@ -66,7 +66,7 @@ pub fn measure(job: &RenderJob, pool: &rayon::ThreadPool, record_spp: u32) -> Tr
     };
     let embree = pool.install(|| {
         replay(&ours, &closest[..closest.len().min(20_000)], &[]);
-        super::rays::with_embree_shapes(&job.scene.shapes, |theirs| {
+        super::rays::with_embree_shapes(&job.scene.placed, &job.scene.shapes, |theirs| {
             replay(theirs, &closest[..closest.len().min(20_000)], &[]);
             for _ in 0..ROUNDS {
                 round(&ours, &mut pen, 0);

@@ -7,12 +7,16 @@ use crate::geometry::Aabb;
 use glam::{UVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 
-/// What a build primitive refers to.
+/// What a build primitive refers to. The build itself only tells
+/// triangles from the rest: they share 4-wide blocks, the others do not.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ItemKind {
+    /// Triangle `index` of the mesh with shape id `id`.
     Triangle,
-    /// A sphere, disk, cylinder or instance: intersected through its shape.
-    Other,
+    /// The sphere, disk or cylinder with shape id `id`.
+    Shape,
+    /// Instance `id`.
+    Instance,
 }
 
 /// A primitive to build over: its box and reference (36 bytes; the
@@ -22,7 +26,7 @@ pub enum ItemKind {
 pub struct Item {
     pub bounds: Aabb,
     pub kind: ItemKind,
-    pub shape: u32,
+    pub id: u32,
     pub index: u32,
 }
 
@@ -41,12 +45,13 @@ impl Item {
     fn weight(&self) -> u32 {
         match self.kind {
             ItemKind::Triangle => 1,
-            ItemKind::Other => 4,
+            ItemKind::Shape | ItemKind::Instance => 4,
         }
     }
 }
 
-/// A node of the binary tree; leaves hold a range of the item array, all of one kind.
+/// A node of the binary tree; leaves hold a range of the item array, all
+/// triangles or none.
 pub enum BNode {
     Leaf { bounds: Aabb, first: usize, count: usize },
     Inner { bounds: Aabb, children: Box<[BNode; 2]> },
@@ -210,7 +215,8 @@ fn build_rec(items: &mut [Item], first: usize, block_cost: f32) -> BNode {
     BNode::Inner { bounds, children: Box::new([left, right]) }
 }
 
-/// A leaf, or two when triangles and other primitives meet (a leaf holds one kind).
+/// A leaf, or two when triangles and other primitives meet (a leaf holds
+/// triangles only or none).
 fn make_leaf(items: &mut [Item], first: usize, bounds: Aabb) -> BNode {
     let tris = partition(items, |p| p.kind == ItemKind::Triangle);
     if tris == 0 || tris == items.len() {

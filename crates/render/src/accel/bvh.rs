@@ -5,6 +5,7 @@
 //! subtrees that begin beyond the closest hit found so far.
 
 use super::build::{build_binary, wide_children, BNode, Item, ItemKind};
+use super::instance::Instance;
 use super::lanes8::F8;
 use super::memory::HugeArray;
 use super::tri4::{intersect4, RayLanes, Tri4};
@@ -15,13 +16,15 @@ use crate::geometry::{Aabb, Ray, Shape};
 use glam::{Vec2, Vec3};
 use std::mem::MaybeUninit;
 
-/// A primitive other than a triangle, as stored in leaf order.
-#[derive(Debug, Clone, Copy)]
-pub enum Prim {
-    /// A sphere, disk or cylinder, intersected through its shape.
-    Analytic { shape: u32 },
-    /// An instance of a shape group (a BVH of its own, in object space).
-    Instance { shape: u32 },
+/// What a BVH is built over: a shape by its id (a mesh contributes each
+/// of its triangles, an analytic shape itself) or an instance by its index.
+/// Leaves store the analytic shapes and instances they hold as these too.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Primitive {
+    /// `shapes[id]`; in a leaf, a sphere, disk or cylinder, intersected through its shape.
+    Shape(u32),
+    /// `instances[i]`: a shape group (a BVH of its own, in object space) placed by a transform.
+    Instance(u32),
 }
 
 /// Children per node. Incoherent rays are bound by the latency of each
@@ -55,9 +58,9 @@ struct Node {
 
 /// `info` of a child slot: 0 for an inner node (`child` is its index), the
 /// number of triangle blocks for a triangle leaf (`child` is the first
-/// block), or `OTHER | count` for a leaf of other primitives (`child` is
-/// the first index into `prims`). Leaves hold at most `MAX_LEAF` items, so
-/// counts fit beside the flag in a byte.
+/// block), or `OTHER | count` for a leaf of analytic shapes and instances
+/// (`child` is the first index into `prims`). Leaves hold at most
+/// `MAX_LEAF` items, so counts fit beside the flag in a byte.
 const OTHER: u32 = 0x80;
 
 impl Node {
@@ -151,21 +154,27 @@ pub struct Hit {
     pub t: f32,
     /// Triangle barycentrics (b1, b2) or the analytic shape's local coordinates.
     pub uv: Vec2,
-    /// The shape hit (for an instance: the instance's shape).
+    /// The id of the shape hit (inside an instance: the group member's).
     pub shape: u32,
     /// The triangle index within the mesh (0 for analytic shapes).
     pub index: u32,
-    /// For an instance hit, the group member hit (its index in the group); else 0.
-    pub member: u32,
+    /// The index of the instance hit, or [`Hit::NOT_INSTANCED`] for a shape placed directly.
+    pub instance: u32,
+}
+
+impl Hit {
+    /// [`Hit::instance`] of a hit outside every instance.
+    pub const NOT_INSTANCED: u32 = u32::MAX;
 }
 
 #[derive(Debug, Clone, Default)]
 pub struct Accel {
     nodes: HugeArray<Node>,
     tris: HugeArray<Tri4>,
-    /// (shape, triangle index) of each lane of `tris`.
+    /// (shape id, triangle index) of each lane of `tris`.
     tri_ids: HugeArray<[[u32; 2]; 4]>,
-    pub prims: Vec<Prim>,
+    /// The analytic shapes and instances of the leaves, in leaf order.
+    pub prims: Vec<Primitive>,
     /// The root slot, `None` when there is nothing to hit.
     root: Option<(u32, u32)>,
     pub bounds: Aabb,
@@ -186,7 +195,7 @@ struct Emitter {
     nodes: HugeArray<Node>,
     tris: HugeArray<Tri4>,
     tri_ids: HugeArray<[[u32; 2]; 4]>,
-    prims: Vec<Prim>,
+    prims: Vec<Primitive>,
     n_nodes: usize,
     n_blocks: usize,
 }
@@ -215,11 +224,11 @@ impl Emitter {
                         let mut verts = [[Vec3::ZERO; 3]; 4];
                         let mut ids = [[u32::MAX; 2]; 4];
                         for (l, p) in block.iter().enumerate() {
-                            let Shape::Mesh(m) = &shapes[p.shape as usize] else {
+                            let Shape::Mesh(m) = &shapes[p.id as usize] else {
                                 unreachable!("triangle items come from meshes")
                             };
                             verts[l] = m.vertices(p.index as usize);
-                            ids[l] = [p.shape, p.index];
+                            ids[l] = [p.id, p.index];
                         }
                         self.tris[self.n_blocks] = Tri4::new(&verts[..block.len()]);
                         self.tri_ids[self.n_blocks] = ids;
@@ -229,9 +238,9 @@ impl Emitter {
                 } else {
                     let start = self.prims.len() as u32;
                     for p in leaf {
-                        self.prims.push(match shapes[p.shape as usize] {
-                            Shape::Instance(_) => Prim::Instance { shape: p.shape },
-                            _ => Prim::Analytic { shape: p.shape },
+                        self.prims.push(match p.kind {
+                            ItemKind::Instance => Primitive::Instance(p.id),
+                            ItemKind::Shape | ItemKind::Triangle => Primitive::Shape(p.id),
                         });
                     }
                     (start, OTHER | leaf.len() as u32)
@@ -259,32 +268,40 @@ impl Emitter {
 }
 
 impl Accel {
-    /// Builds the BVH over every primitive of every shape.
-    pub fn build(shapes: &[Shape]) -> Accel {
+    /// Builds the BVH over every shape of `shapes`, each placed as it is.
+    pub fn build_shapes(shapes: &[Shape]) -> Accel {
+        let prims: Vec<Primitive> = (0..shapes.len() as u32).map(Primitive::Shape).collect();
+        Accel::build(&prims, shapes, &[])
+    }
+
+    /// Builds the BVH over `prims`, which refer to `shapes` and `instances`
+    /// (shapes that no primitive names, such as the members of shape
+    /// groups, stay out of it). Queries take the same two slices.
+    pub fn build(prims: &[Primitive], shapes: &[Shape], instances: &[Instance]) -> Accel {
         let mut items = Vec::new();
-        for (si, shape) in shapes.iter().enumerate() {
-            let other = |b: Aabb| Item { bounds: b, kind: ItemKind::Other, shape: si as u32, index: 0 };
-            match shape {
-                Shape::Mesh(m) => {
-                    items.reserve(m.mesh.indices.len());
-                    for i in 0..m.mesh.indices.len() {
-                        let v = m.vertices(i);
-                        // Degenerate triangles can never be hit; leave them out.
-                        if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() == 0.0 {
-                            continue;
+        for &prim in prims {
+            match prim {
+                Primitive::Shape(id) => match &shapes[id as usize] {
+                    Shape::Mesh(m) => {
+                        items.reserve(m.mesh.indices.len());
+                        for i in 0..m.mesh.indices.len() {
+                            let v = m.vertices(i);
+                            // Degenerate triangles can never be hit; leave them out.
+                            if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() == 0.0 {
+                                continue;
+                            }
+                            let b = Aabb::from_points(&v);
+                            items.push(Item { bounds: b, kind: ItemKind::Triangle, id, index: i as u32 });
                         }
-                        let b = Aabb::from_points(&v);
-                        items.push(Item { bounds: b, kind: ItemKind::Triangle, shape: si as u32, index: i as u32 });
                     }
-                }
-                Shape::GroupMember => {}
-                Shape::Instance(i) => {
-                    let b = i.bounds();
+                    shape => items.push(Item { bounds: shape.prim_bounds(0), kind: ItemKind::Shape, id, index: 0 }),
+                },
+                Primitive::Instance(id) => {
+                    let b = instances[id as usize].bounds();
                     if b.min.x <= b.max.x {
-                        items.push(other(b));
+                        items.push(Item { bounds: b, kind: ItemKind::Instance, id, index: 0 });
                     }
                 }
-                _ => items.push(other(shape.prim_bounds(0))),
             }
         }
         if items.is_empty() {
@@ -317,25 +334,26 @@ impl Accel {
         }
     }
 
-    /// Closest hit with 0 < t < ray.t_max.
+    /// Closest hit with 0 < t < ray.t_max, given the shapes and instances
+    /// the tree was built over.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, shapes: &[Shape]) -> Option<Hit> {
+    pub fn intersect(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> Option<Hit> {
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, false>(ray, &shear, shapes),
-            1 => self.traverse::<1, false>(ray, &shear, shapes),
-            _ => self.traverse::<2, false>(ray, &shear, shapes),
+            0 => self.traverse::<0, false>(ray, &shear, shapes, instances),
+            1 => self.traverse::<1, false>(ray, &shear, shapes, instances),
+            _ => self.traverse::<2, false>(ray, &shear, shapes, instances),
         }
     }
 
     /// Whether anything blocks the ray before `ray.t_max`.
     #[inline]
-    pub fn occluded(&self, ray: &Ray, shapes: &[Shape]) -> bool {
+    pub fn occluded(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> bool {
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, true>(ray, &shear, shapes),
-            1 => self.traverse::<1, true>(ray, &shear, shapes),
-            _ => self.traverse::<2, true>(ray, &shear, shapes),
+            0 => self.traverse::<0, true>(ray, &shear, shapes, instances),
+            1 => self.traverse::<1, true>(ray, &shear, shapes, instances),
+            _ => self.traverse::<2, true>(ray, &shear, shapes, instances),
         }
         .is_some()
     }
@@ -343,7 +361,13 @@ impl Accel {
     /// Walks the tree. `ANY`: stop at the first hit (its fields other than
     /// `t` are then meaningless).
     #[inline(always)]
-    fn traverse<const KZ: usize, const ANY: bool>(&self, ray: &Ray, shear: &RayShear, shapes: &[Shape]) -> Option<Hit> {
+    fn traverse<const KZ: usize, const ANY: bool>(
+        &self,
+        ray: &Ray,
+        shear: &RayShear,
+        shapes: &[Shape],
+        instances: &[Instance],
+    ) -> Option<Hit> {
         let (root_child, root_info) = self.root?;
         let mut ray = *ray;
         let inv_d = ray.d.recip();
@@ -421,7 +445,13 @@ impl Accel {
                     let (mut mask, t, b1, b2) = intersect4::<KZ>(&lanes, ray.t_max, &self.tris[blk as usize]);
                     if mask != 0 {
                         if ANY {
-                            return Some(Hit { t: ray.t_max, uv: Vec2::ZERO, shape: 0, index: 0, member: 0 });
+                            return Some(Hit {
+                                t: ray.t_max,
+                                uv: Vec2::ZERO,
+                                shape: 0,
+                                index: 0,
+                                instance: Hit::NOT_INSTANCED,
+                            });
                         }
                         let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
                         let mut l = mask.trailing_zeros() as usize;
@@ -435,31 +465,38 @@ impl Accel {
                         }
                         let [shape, index] = self.tri_ids[blk as usize][l];
                         ray.t_max = t[l];
-                        best = Some(Hit { t: t[l], uv: Vec2::new(b1[l], b2[l]), shape, index, member: 0 });
+                        best = Some(Hit {
+                            t: t[l],
+                            uv: Vec2::new(b1[l], b2[l]),
+                            shape,
+                            index,
+                            instance: Hit::NOT_INSTANCED,
+                        });
                     }
                 }
             } else {
                 let first = cur.child as usize;
                 for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
-                    let found = match *prim {
-                        Prim::Analytic { shape } => shapes[shape as usize]
-                            .intersect_analytic(&ray)
-                            .map(|(t, uv)| Hit { t, uv, shape, index: 0, member: 0 }),
-                        Prim::Instance { shape } => {
-                            let Shape::Instance(inst) = &shapes[shape as usize] else { unreachable!() };
-                            if ANY {
-                                inst.occluded(&ray).then_some(Hit {
-                                    t: ray.t_max,
-                                    uv: Vec2::ZERO,
-                                    shape,
-                                    index: 0,
-                                    member: 0,
-                                })
-                            } else {
-                                inst.intersect(&ray).map(|h| Hit { shape, member: h.shape, ..h })
+                    let found =
+                        match *prim {
+                            Primitive::Shape(shape) => shapes[shape as usize]
+                                .intersect_analytic(&ray)
+                                .map(|(t, uv)| Hit { t, uv, shape, index: 0, instance: Hit::NOT_INSTANCED }),
+                            Primitive::Instance(i) => {
+                                let inst = &instances[i as usize];
+                                if ANY {
+                                    inst.occluded(&ray, shapes).then_some(Hit {
+                                        t: ray.t_max,
+                                        uv: Vec2::ZERO,
+                                        shape: 0,
+                                        index: 0,
+                                        instance: i,
+                                    })
+                                } else {
+                                    inst.intersect(&ray, shapes).map(|h| Hit { instance: i, ..h })
+                                }
                             }
-                        }
-                    };
+                        };
                     if let Some(h) = found {
                         if ANY {
                             return Some(h);
@@ -591,7 +628,7 @@ impl Accel {
         std::mem::size_of_val(&self.nodes[..])
             + std::mem::size_of_val(&self.tris[..])
             + std::mem::size_of_val(&self.tri_ids[..])
-            + self.prims.capacity() * std::mem::size_of::<Prim>()
+            + self.prims.capacity() * std::mem::size_of::<Primitive>()
     }
 }
 
@@ -629,7 +666,7 @@ mod tests {
 
     fn agrees_with_brute_force(n: usize) {
         let shapes = random_soup(n);
-        let accel = Accel::build(&shapes);
+        let accel = Accel::build_shapes(&shapes);
         accel.validate().unwrap();
         assert_eq!(accel.triangle_count(), n);
         for i in 0..2000u64 {
@@ -647,9 +684,9 @@ mod tests {
             if let Some(h) = shapes[1].intersect_analytic(&ray) {
                 brute = brute.min(h.0);
             }
-            let hit = accel.intersect(&ray, &shapes);
+            let hit = accel.intersect(&ray, &shapes, &[]);
             assert_eq!(hit.map(|h| h.t), brute.is_finite().then_some(brute), "ray {i}");
-            assert_eq!(accel.occluded(&ray, &shapes), brute.is_finite(), "ray {i}");
+            assert_eq!(accel.occluded(&ray, &shapes, &[]), brute.is_finite(), "ray {i}");
         }
     }
 
@@ -660,7 +697,7 @@ mod tests {
     fn analytic_shapes_get_leaves_of_their_own() {
         let shapes: Vec<Shape> =
             (0..4).map(|k| Shape::sphere(Vec3::new(3.0 * k as f32, 0.0, 0.0), 1.0, false)).collect();
-        let accel = Accel::build(&shapes);
+        let accel = Accel::build_shapes(&shapes);
         accel.validate().unwrap();
         let mut leaves = Vec::new();
         let mut todo = vec![accel.root.unwrap()];
@@ -679,9 +716,9 @@ mod tests {
 
     #[test]
     fn empty_scene_hits_nothing() {
-        let accel = Accel::build(&[]);
+        let accel = Accel::build_shapes(&[]);
         let ray = Ray::new(Vec3::ZERO, Vec3::X, f32::INFINITY);
-        assert!(accel.intersect(&ray, &[]).is_none());
-        assert!(!accel.occluded(&ray, &[]));
+        assert!(accel.intersect(&ray, &[], &[]).is_none());
+        assert!(!accel.occluded(&ray, &[], &[]));
     }
 }

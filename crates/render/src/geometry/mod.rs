@@ -1,18 +1,20 @@
-//! Geometric primitives: rays, boxes, triangles, spheres, disks and meshes.
+//! Geometric primitives: rays, boxes, triangles, meshes, spheres, disks and cylinders.
 
 pub mod bounds;
 pub mod cylinder;
-pub mod instance;
+pub mod disk;
 pub mod interaction;
 pub mod mesh;
 pub mod ray;
 pub mod shape;
+pub mod sphere;
 pub mod triangle;
 
 pub use bounds::Aabb;
 pub use cylinder::Cylinder;
-pub use instance::{Instance, ShapeGroup};
+pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};
 pub use shape::{Mesh, Shape, ShapeSample};
+pub use sphere::Sphere;

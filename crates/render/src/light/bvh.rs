@@ -296,10 +296,8 @@ fn shape_bounds(shape: &Shape) -> Aabb {
 /// normals when they shade, since emission follows the shading normal).
 fn normal_cone(shape: &Shape) -> DirectionCone {
     match shape {
-        Shape::Sphere { .. } | Shape::Cylinder(_) | Shape::Instance(_) | Shape::GroupMember => {
-            DirectionCone::ENTIRE_SPHERE
-        }
-        Shape::Disk { n, .. } => DirectionCone { w: *n, cos_theta: 1.0 },
+        Shape::Sphere(_) | Shape::Cylinder(_) => DirectionCone::ENTIRE_SPHERE,
+        Shape::Disk(d) => DirectionCone { w: d.n, cos_theta: 1.0 },
         Shape::Mesh(m) => mesh_normal_cone(m),
     }
 }

@@ -14,10 +14,11 @@ use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
 use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
+use penumbra_render::accel::{Instance, Primitive, ShapeGroup};
 use penumbra_render::bsdf::DiffuseParams;
 use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind, MAX_MARGIN};
-use penumbra_render::geometry::{Instance, Mesh, Shape, ShapeGroup, TriangleMesh};
+use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
 use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
 };
@@ -135,7 +136,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
         (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
     };
     b.textures.finish_mesh_attributes(b.shapes.len());
-    let mut scene = Scene::new(b.shapes, b.infos, b.materials, b.lights);
+    let mut scene = Scene::with_instances(b.shapes, b.infos, b.instances, b.placed, b.materials, b.lights);
     let radius = scene.bounds().bounding_radius();
     for l in &mut scene.lights {
         if let Light::Directional(d) = l {
@@ -158,8 +159,13 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
 
 #[derive(Default)]
 struct Builder {
+    /// Every shape by id, shape-group members included.
     shapes: Vec<Shape>,
     infos: Vec<ShapeInfo>,
+    instances: Vec<Instance>,
+    /// What the scene's BVH holds, in file order: the shapes placed
+    /// directly and the instances.
+    placed: Vec<Primitive>,
     materials: Vec<Material>,
     textures: Textures,
     lights: Vec<Light>,
@@ -184,28 +190,35 @@ impl Builder {
         Ok(i)
     }
 
+    /// A top-level shape: placed directly, placed by an instance, or a
+    /// shape group (placed only by instances).
     fn shape(&mut self, node: &Rc<Node>) -> Result<()> {
-        let (shape, info) = match node.plugin.as_str() {
+        match node.plugin.as_str() {
             "shapegroup" => {
                 self.shape_group(node)?;
-                return Ok(());
             }
-            "instance" => self.instance(node)?,
-            _ => self.plain_shape(node)?,
-        };
-        self.shapes.push(shape);
-        self.infos.push(info);
+            "instance" => {
+                let instance = self.instance(node)?;
+                self.placed.push(Primitive::Instance(self.instances.len() as u32));
+                self.instances.push(instance);
+            }
+            _ => {
+                let id = self.plain_shape(node)?;
+                self.placed.push(Primitive::Shape(id));
+            }
+        }
         Ok(())
     }
 
-    /// Mitsuba's `shapegroup`: its shapes are built once (scene-wide ids
-    /// hold their materials) into a group that instances place.
+    /// Mitsuba's `shapegroup`: its shapes are built once, as shapes of the
+    /// scene (with ids, materials and object-space geometry), into a group
+    /// that instances place.
     fn shape_group(&mut self, node: &Rc<Node>) -> Result<Arc<ShapeGroup>> {
         let key = Rc::as_ptr(node);
         if let Some(g) = self.groups.get(&key) {
             return Ok(g.clone());
         }
-        let (mut shapes, mut ids) = (Vec::new(), Vec::new());
+        let mut members = Vec::new();
         for child in &node.children {
             let c = &child.node;
             if c.kind != Kind::Shape {
@@ -223,23 +236,19 @@ impl Builder {
                     "emitters inside a shapegroup are not allowed (Mitsuba 3 forbids them too)",
                 ));
             }
-            let (shape, info) = self.plain_shape(c)?;
-            ids.push(self.shapes.len() as u32);
-            self.shapes.push(Shape::GroupMember);
-            self.infos.push(info);
-            shapes.push(shape);
+            members.push(self.plain_shape(c)?);
         }
         node.check_all_used(&[Kind::Shape])?;
-        if shapes.is_empty() {
+        if members.is_empty() {
             return Err(node.error("the shapegroup holds no shapes"));
         }
-        let group = Arc::new(ShapeGroup::new(shapes, ids));
+        let group = Arc::new(ShapeGroup::new(members, &self.shapes));
         self.groups.insert(key, group.clone());
         Ok(group)
     }
 
     /// Mitsuba's `instance`: a shapegroup (by reference) placed by `to_world`.
-    fn instance(&mut self, node: &Rc<Node>) -> Result<(Shape, ShapeInfo)> {
+    fn instance(&mut self, node: &Rc<Node>) -> Result<Instance> {
         let to_world = node.transform("to_world")?;
         if node.single_child(Kind::Emitter)?.is_some() || node.single_child(Kind::Bsdf)?.is_some() {
             return Err(node.error("an instance takes no emitter or bsdf; its shapegroup's shapes carry their own"));
@@ -253,16 +262,12 @@ impl Builder {
             return Err(LoadError::at(node.loc_of("to_world"), "the instance's to_world is singular"));
         }
         node.check_all_used(&[Kind::Shape])?;
-        // The material is never read: hits report the member's shape id.
-        let material = *self.default_bsdf.get_or_insert_with(|| {
-            self.materials.push(Material::Diffuse(DiffuseParams { reflectance: Spectrum::splat(0.5).into() }));
-            (self.materials.len() - 1) as u32
-        });
-        Ok((Shape::Instance(Instance::new(group, to_world.as_mat4())), ShapeInfo { material, light: None }))
+        Ok(Instance::new(group, to_world.as_mat4()))
     }
 
     /// Every other shape: geometry, BSDF and an optional area emitter.
-    fn plain_shape(&mut self, node: &Rc<Node>) -> Result<(Shape, ShapeInfo)> {
+    /// Adds it to the scene's shapes; returns its id.
+    fn plain_shape(&mut self, node: &Rc<Node>) -> Result<u32> {
         let to_world = node.transform("to_world")?;
         let flip = node.bool("flip_normals", false)?;
         // Mitsuba's mesh attributes (PLY vertex colours and other properties).
@@ -367,7 +372,9 @@ impl Builder {
             None => None,
         };
         node.check_all_used(&[Kind::Bsdf, Kind::Emitter])?;
-        Ok((shape, ShapeInfo { material: bsdf, light }))
+        self.shapes.push(shape);
+        self.infos.push(ShapeInfo { material: bsdf, light });
+        Ok(shape_id)
     }
 
     /// Emitters declared at the top level (not attached to a shape).

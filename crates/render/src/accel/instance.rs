@@ -1,28 +1,31 @@
-//! Mitsuba's `shapegroup` and `instance`: geometry stored once in its own
-//! BVH (object space) and placed any number of times by a transform. The
-//! scene's BVH holds each instance as one primitive; rays entering it are
-//! carried into object space (the ray parameter t is unchanged by an affine
-//! map, so hits compare across levels) and the hit is carried back.
+//! Mitsuba's `shapegroup` and `instance`: shapes stored once, in object
+//! space, with a BVH of their own, and placed any number of times by a
+//! transform. The scene's BVH holds each instance as one [`Primitive`];
+//! rays entering it are carried into object space (the ray parameter t is
+//! unchanged by an affine map, so hits compare across levels) and the hit
+//! is carried back.
 
-use super::{Aabb, Ray, Shape, SurfaceInteraction};
-use crate::accel::{Accel, Hit};
+use super::{Accel, Hit, Primitive};
+use crate::geometry::{Aabb, Ray, Shape, SurfaceInteraction};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::sync::Arc;
 
-/// Shapes stored once, with their own BVH. `ids[i]` is the scene-wide
-/// shape id of member `i` (where its material is found; see [`Shape::GroupMember`]).
+/// Shapes of the scene, by id, that only instances place: their geometry
+/// (in object space) and materials are the scene's like any shape's, and
+/// the group's BVH over them is built once. Queries take the scene's shapes.
 #[derive(Debug)]
 pub struct ShapeGroup {
-    pub shapes: Vec<Shape>,
-    pub ids: Vec<u32>,
+    /// The members' shape ids.
+    pub members: Vec<u32>,
     pub accel: Accel,
 }
 
 impl ShapeGroup {
-    pub fn new(shapes: Vec<Shape>, ids: Vec<u32>) -> ShapeGroup {
-        assert_eq!(shapes.len(), ids.len());
-        let accel = Accel::build(&shapes);
-        ShapeGroup { shapes, ids, accel }
+    /// The group of `shapes[id]` for each id of `members`.
+    pub fn new(members: Vec<u32>, shapes: &[Shape]) -> ShapeGroup {
+        let prims: Vec<Primitive> = members.iter().map(|&id| Primitive::Shape(id)).collect();
+        let accel = Accel::build(&prims, shapes, &[]);
+        ShapeGroup { members, accel }
     }
 }
 
@@ -75,37 +78,49 @@ impl Instance {
         )
     }
 
-    /// Closest hit, with `shape` the member's index in the group (`t` is
-    /// the world ray's: the object-space ray keeps its unnormalised direction).
+    /// Closest hit, with `shape` the id of the member hit (`t` is the world
+    /// ray's: the object-space ray keeps its unnormalised direction).
+    /// `shapes` are the scene's, which hold the group's members.
     #[inline]
-    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+    pub fn intersect(&self, ray: &Ray, shapes: &[Shape]) -> Option<Hit> {
         let r = self.object_ray(ray);
-        self.group.accel.intersect(&r, &self.group.shapes)
+        self.group.accel.intersect(&r, shapes, &[])
     }
 
     #[inline]
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        self.group.accel.occluded(&self.object_ray(ray), &self.group.shapes)
+    pub fn occluded(&self, ray: &Ray, shapes: &[Shape]) -> bool {
+        self.group.accel.occluded(&self.object_ray(ray), shapes, &[])
     }
 
-    /// The interaction at a hit on triangle `index` of group member
-    /// `member`, in world space; `si.shape` is the member's scene-wide id.
-    pub fn interaction(&self, member: usize, index: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
-        self.interaction_with(member, index, ray, t, uv, true)
+    /// The interaction, in world space, at a hit on primitive `prim` of
+    /// `shape`, the group member with id `shape_id` (arguments as in
+    /// [`Shape::interaction`], with the world ray).
+    pub fn interaction(
+        &self,
+        shape: &Shape,
+        shape_id: u32,
+        prim: usize,
+        ray: &Ray,
+        t: f32,
+        uv: Vec2,
+    ) -> SurfaceInteraction {
+        self.interaction_with(shape, shape_id, prim, ray, t, uv, true)
     }
 
     /// [`Instance::interaction`], with `param` as in [`Shape::interaction_with`].
+    #[allow(clippy::too_many_arguments)]
     pub fn interaction_with(
         &self,
-        member: usize,
-        index: usize,
+        shape: &Shape,
+        shape_id: u32,
+        prim: usize,
         ray: &Ray,
         t: f32,
         uv: Vec2,
         param: bool,
     ) -> SurfaceInteraction {
         let r = self.object_ray(ray);
-        let mut si = self.group.shapes[member].interaction_with(0, index, &r, t, uv, param);
+        let mut si = shape.interaction_with(shape_id, prim, &r, t, uv, param);
         let m = &self.world_from_object;
         si.p = m.transform_point3(si.p);
         si.n = (self.normal_m * si.n).normalize();
@@ -114,7 +129,6 @@ impl Instance {
         let sh_n = (self.normal_m * si.sh_frame.n).normalize();
         si.sh_frame = SurfaceInteraction::frame_from_dpdu(sh_n, si.dpdu);
         si.wo = -ray.d.normalize();
-        si.shape = self.group.ids[member];
         si
     }
 }
@@ -134,9 +148,9 @@ mod tests {
     fn instances_agree_with_flattened_geometry() {
         let mut cube = TriangleMesh::cube();
         cube.transform(&Mat4::from_scale(Vec3::new(0.5, 0.3, 0.4)));
-        let members =
+        let shapes =
             vec![Shape::Mesh(Mesh::new(cube.clone(), false)), Shape::sphere(Vec3::new(1.0, 0.0, 0.0), 0.4, false)];
-        let group = Arc::new(ShapeGroup::new(members, vec![7, 8]));
+        let group = Arc::new(ShapeGroup::new(vec![0, 1], &shapes));
         let placements = [
             Mat4::from_translation(Vec3::new(0.0, 0.0, 0.0)),
             Mat4::from_translation(Vec3::new(-2.0, 1.0, 0.5))
@@ -144,22 +158,22 @@ mod tests {
                 * Mat4::from_scale(Vec3::splat(1.5)),
             Mat4::from_translation(Vec3::new(1.5, -1.5, -1.0)) * Mat4::from_rotation_x(-0.5),
         ];
-        let instanced: Vec<Shape> =
-            placements.iter().map(|m| Shape::Instance(Instance::new(group.clone(), *m))).collect();
+        let instances: Vec<Instance> = placements.iter().map(|m| Instance::new(group.clone(), *m)).collect();
+        let placed: Vec<Primitive> = (0..instances.len() as u32).map(Primitive::Instance).collect();
         let mut flat = Vec::new();
         let mut flat_ids = Vec::new();
         for m in &placements {
             let mut c = cube.clone();
             c.transform(m);
             flat.push(Shape::Mesh(Mesh::new(c, false)));
-            flat_ids.push(7);
+            flat_ids.push(0);
             // The sphere's uv follows its rotated frame, as inside the instance.
             let scale = m.transform_vector3(Vec3::X).length();
             let rot = Mat3::from_mat4(*m) * (1.0 / scale);
             flat.push(Shape::sphere_rotated(m.transform_point3(Vec3::X), 0.4 * scale, rot, false));
-            flat_ids.push(8);
+            flat_ids.push(1);
         }
-        let (a_top, a_flat) = (Accel::build(&instanced), Accel::build(&flat));
+        let (a_top, a_flat) = (Accel::build(&placed, &shapes, &instances), Accel::build_shapes(&flat));
         a_top.validate().unwrap();
         let mut hits = 0;
         for i in 0..3000u64 {
@@ -168,15 +182,17 @@ mod tests {
             let target = Vec3::new(rnd(i, 3), rnd(i, 4), rnd(i, 5)) * 4.0 - 2.0;
             let d = (target - o).normalize();
             let ray = Ray::new(o, d, if i % 3 == 0 { 3.0 } else { f32::INFINITY });
-            let (h1, h2) = (a_top.intersect(&ray, &instanced), a_flat.intersect(&ray, &flat));
-            assert_eq!(a_top.occluded(&ray, &instanced), h2.is_some(), "ray {i}");
+            let (h1, h2) = (a_top.intersect(&ray, &shapes, &instances), a_flat.intersect(&ray, &flat, &[]));
+            assert_eq!(a_top.occluded(&ray, &shapes, &instances), h2.is_some(), "ray {i}");
             match (h1, h2) {
                 (None, None) => {}
                 (Some(h1), Some(h2)) => {
                     hits += 1;
                     assert!((h1.t - h2.t).abs() < 1e-4 * h2.t.max(1.0), "ray {i}: {} vs {}", h1.t, h2.t);
-                    let Shape::Instance(inst) = &instanced[h1.shape as usize] else { panic!() };
-                    let si1 = inst.interaction(h1.member as usize, h1.index as usize, &ray, h1.t, h1.uv);
+                    assert_eq!(h2.instance, Hit::NOT_INSTANCED);
+                    let inst = &instances[h1.instance as usize];
+                    let si1 =
+                        inst.interaction(&shapes[h1.shape as usize], h1.shape, h1.index as usize, &ray, h1.t, h1.uv);
                     let si2 = flat[h2.shape as usize].interaction(0, h2.index as usize, &ray, h2.t, h2.uv);
                     assert_eq!(si1.shape, flat_ids[h2.shape as usize]);
                     assert!((si1.p - si2.p).length() < 1e-4, "ray {i}: p {} vs {}", si1.p, si2.p);
