@@ -109,7 +109,7 @@ impl Scene {
                     self.lights.iter().map(|l| luminance(l.power(&self.shapes, radius)).max(0.0)).collect();
                 self.power_distrib = Distribution1D::new(&w);
             }
-            LightSelection::Bvh => self.light_bvh = Some(LightBvh::build(&self.lights, &self.shapes, radius)),
+            LightSelection::Bvh => self.light_bvh = Some(LightBvh::build(&self.lights, &self.shapes)),
         }
     }
 
@@ -226,7 +226,7 @@ impl Scene {
     pub fn light_pdf(&self, p_ref: Vec3, n_ref: Vec3, si: &SurfaceInteraction) -> f32 {
         match self.shape_info[si.shape as usize].light {
             Some(l) => {
-                self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n)
+                self.lights[l as usize].pdf_li(p_ref, -si.wo, Some(si), &self.shapes)
                     * self.light_pmf(p_ref, n_ref, l as usize)
             }
             None => 0.0,

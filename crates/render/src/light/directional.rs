@@ -3,7 +3,8 @@
 //!
 //! | parameter  | type      | default |
 //! |------------|-----------|---------|
-//! | direction  | vector    | (or local +z of `to_world`): the direction light travels |
+//! | direction  | vector    | local +z of `to_world` (normalised): the direction light travels |
+//! | to_world   | transform | identity (not together with `direction`) |
 //! | irradiance | rgb       | 1 (W/m²) |
 
 use super::LightSample;
