@@ -4,11 +4,9 @@
 use crate::accel::Accel;
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
-use crate::light::bvh::LightBvh;
-use crate::light::{Light, LightSample};
+use crate::light::{Light, LightSample, LightSampler, LightSelection};
 use crate::material::Material;
-use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
-use crate::sampling::Distribution1D;
+use crate::math::{Spectrum, SHADOW_EPSILON};
 use glam::{Vec2, Vec3};
 use std::sync::{Arc, Mutex};
 
@@ -34,19 +32,6 @@ pub struct ShapeInfo {
     pub light: Option<u32>,
 }
 
-/// How `sample_light` picks one light (the `light_selection` parameter).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum LightSelection {
-    /// Every light with the same probability (Mitsuba's choice).
-    #[default]
-    Uniform,
-    /// Proportional to each light's emitted power (luminance of its flux).
-    Power,
-    /// Proportional to each light's estimated contribution at the receiver,
-    /// through a light BVH (pbrt-v4's BVH light sampler).
-    Bvh,
-}
-
 #[derive(Debug, Clone)]
 pub struct Scene {
     pub shapes: Vec<Shape>,
@@ -56,11 +41,8 @@ pub struct Scene {
     /// Indices of lights at infinity (hit by escaping rays).
     pub env_lights: Vec<u32>,
     pub accel: Accel,
-    pub light_selection: LightSelection,
-    /// Selection probabilities by power (None when selection is uniform or
-    /// no light has positive power).
-    power_distrib: Option<Distribution1D>,
-    light_bvh: Option<LightBvh>,
+    /// How `sample_light` picks a light (see [`Scene::set_light_selection`]).
+    light_sampler: LightSampler,
     /// [`Material::reads_uv`] per material: hits on the others skip the
     /// surface parameterisation.
     reads_uv: Vec<bool>,
@@ -75,42 +57,26 @@ fn log_ray(log: &RayLog, ray: Ray, shadow: bool) {
 }
 
 impl Scene {
-    /// Assembles a scene and builds its acceleration structure.
+    /// Assembles a scene and builds its acceleration structure. Lights are
+    /// selected uniformly until [`Scene::set_light_selection`].
     pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
         let reads_uv = materials.iter().map(Material::reads_uv).collect();
-        Scene {
-            shapes,
-            shape_info,
-            materials,
-            lights,
-            env_lights,
-            accel,
-            light_selection: LightSelection::Uniform,
-            power_distrib: None,
-            light_bvh: None,
-            reads_uv,
-            ray_log: None,
-        }
+        let light_sampler = LightSampler::Uniform { count: lights.len() };
+        Scene { shapes, shape_info, materials, lights, env_lights, accel, light_sampler, reads_uv, ray_log: None }
     }
 
     /// Chooses the light-selection strategy (precomputing what it needs).
     pub fn set_light_selection(&mut self, selection: LightSelection) {
-        self.light_selection = selection;
         let radius = self.accel.bounds.bounding_radius().max(1e-3);
-        self.power_distrib = None;
-        self.light_bvh = None;
-        match selection {
-            LightSelection::Uniform => {}
-            LightSelection::Power => {
-                let w: Vec<f32> =
-                    self.lights.iter().map(|l| luminance(l.power(&self.shapes, radius)).max(0.0)).collect();
-                self.power_distrib = Distribution1D::new(&w);
-            }
-            LightSelection::Bvh => self.light_bvh = Some(LightBvh::build(&self.lights, &self.shapes)),
-        }
+        self.light_sampler = LightSampler::build(selection, &self.lights, &self.shapes, radius);
+    }
+
+    /// The light-selection strategy with its tables.
+    pub fn light_sampler(&self) -> &LightSampler {
+        &self.light_sampler
     }
 
     /// Closest surface hit.
@@ -162,37 +128,14 @@ impl Scene {
     /// `p` with normal `n` (`Vec3::ZERO` when there is none, e.g. the camera).
     #[inline]
     pub fn light_pmf(&self, p: Vec3, n: Vec3, i: usize) -> f32 {
-        if let Some(bvh) = &self.light_bvh {
-            return bvh.pmf(p, n, i);
-        }
-        match &self.power_distrib {
-            Some(d) => d.pmf(i),
-            None => 1.0 / self.lights.len() as f32,
-        }
+        self.light_sampler.pmf(p, n, i)
     }
 
     /// Picks a light for a receiver at (`p`, `n`) with `u` in [0, 1):
-    /// (index, probability).
+    /// (index, probability); see [`LightSampler::sample`].
     #[inline]
     pub fn select_light(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
-        if self.lights.is_empty() {
-            return None;
-        }
-        if let Some(bvh) = &self.light_bvh {
-            // `None` means no light is picked for this sample (the BVH found
-            // zero importance); retrying would bias the estimate.
-            return bvh.sample(p, n, u);
-        }
-        match &self.power_distrib {
-            Some(d) => {
-                let (i, pmf, _) = d.sample_discrete(u);
-                Some((i, pmf))
-            }
-            None => {
-                let n = self.lights.len();
-                Some((((u * n as f32) as usize).min(n - 1), 1.0 / n as f32))
-            }
-        }
+        self.light_sampler.sample(p, n, u)
     }
 
     /// Picks a light with `u` and samples a direction towards it with `u2`,

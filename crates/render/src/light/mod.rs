@@ -1,6 +1,6 @@
 //! Emitters. Integrators reach them through [`crate::scene::Scene`]'s
 //! `sample_light` / `light_pdf` / `emitted` / `environment` calls, which add
-//! light selection.
+//! light selection ([`LightSampler`]).
 //!
 //! The contract every light fulfils, through [`Light`]:
 //! - [`Light::sample_li`] picks a direction towards the light from a
@@ -26,6 +26,7 @@ pub mod constant;
 pub mod directional;
 pub mod envmap;
 pub mod point;
+pub mod sampler;
 pub mod spot;
 
 pub use area::AreaLight;
@@ -34,6 +35,7 @@ pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
 pub use envmap::EnvMapLight;
 pub use point::PointLight;
+pub use sampler::{LightSampler, LightSelection};
 pub use spot::SpotLight;
 
 use crate::geometry::{Shape, SurfaceInteraction};

@@ -20,12 +20,14 @@ use penumbra_render::geometry::{Instance, Mesh, Shape, ShapeGroup, TriangleMesh}
 use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
 };
-use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
+use penumbra_render::light::{
+    AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, LightSelection, PointLight, SpotLight,
+};
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::{Sampler, SamplerKind};
-use penumbra_render::scene::{LightSelection, Scene, ShapeInfo};
+use penumbra_render::scene::{Scene, ShapeInfo};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
