@@ -60,8 +60,21 @@ impl Scene {
     /// Assembles a scene and builds its acceleration structure. Lights are
     /// selected uniformly until [`Scene::set_light_selection`].
     pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
-        assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&shapes);
+        Scene::with_accel(accel, shapes, shape_info, materials, lights)
+    }
+
+    /// [`Scene::new`] with `accel` already built by `Accel::build(&shapes)`,
+    /// for callers that need its bounds first (the scene builder makes
+    /// directional lights with the scene's bounding radius).
+    pub fn with_accel(
+        accel: Accel,
+        shapes: Vec<Shape>,
+        shape_info: Vec<ShapeInfo>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+    ) -> Scene {
+        assert_eq!(shapes.len(), shape_info.len());
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
         let reads_uv = materials.iter().map(Material::reads_uv).collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };

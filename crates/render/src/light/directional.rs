@@ -16,7 +16,9 @@ pub struct DirectionalLight {
     /// Unit direction in which the light travels.
     pub direction: Vec3,
     pub irradiance: Spectrum,
-    /// Radius of the scene's bounding sphere (for `power`).
+    /// Radius of the scene's bounding sphere (for `power`), given at
+    /// construction: the scene builder makes lights once the geometry's
+    /// bounds are known.
     pub scene_radius: f32,
 }
 
