@@ -19,3 +19,10 @@ for s in scenes/*.xml tests/scenes/*.xml tools/bitwise-scenes/*.xml; do
     n=$(basename "$s" .xml)
     "$bin" render "$s" -o "$out/$n.pfm" --spp 16 --seed 3 --threads 2 --quiet 2>/dev/null
 done
+# Light selection by power and through the light BVH (scenes use uniform).
+for s in many_lights spot_light envmap_sun point_light; do
+    for sel in power bvh; do
+        "$bin" render "tests/scenes/$s.xml" -o "$out/${s}_$sel.pfm" --spp 16 --seed 3 --threads 2 \
+            --integrator "path:light_selection=$sel" --quiet 2>/dev/null
+    done
+done

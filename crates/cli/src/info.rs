@@ -4,7 +4,6 @@
 use crate::args::InfoArgs;
 use anyhow::{anyhow, Result};
 use penumbra_render::geometry::Shape;
-use penumbra_render::light::Light;
 use penumbra_scene::desc::{Kind, Node, SceneDesc, Value};
 use penumbra_scene::Overrides;
 use std::collections::BTreeMap;
@@ -46,17 +45,8 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         writeln!(out, "geometry: {geometry}")?;
         let mut lights = BTreeMap::<&str, usize>::new();
         for l in &job.scene.lights {
-            let kind = match l {
-                Light::Area(_) => "area",
-                Light::Constant(_) => "constant",
-                Light::Point(_) => "point",
-                Light::Spot(_) => "spot",
-                Light::Directional(_) => "directional",
-                Light::EnvMap(_) => "envmap",
-                #[allow(unreachable_patterns)]
-                _ => "other",
-            };
-            *lights.entry(kind).or_default() += 1;
+            // `Light::name` matches every kind of light, so a new one is counted by its own name.
+            *lights.entry(l.name()).or_default() += 1;
         }
         let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
         writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;

@@ -4,11 +4,9 @@
 use crate::accel::{Accel, Hit, Instance, Primitive};
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
-use crate::light::bvh::LightBvh;
-use crate::light::{Light, LightSample};
+use crate::light::{Light, LightSample, LightSampler, LightSelection};
 use crate::material::{Material, Scratch};
-use crate::math::{luminance, Spectrum, SHADOW_EPSILON};
-use crate::sampling::Distribution1D;
+use crate::math::{Spectrum, SHADOW_EPSILON};
 use glam::{Vec2, Vec3};
 use std::sync::{Arc, Mutex};
 
@@ -34,19 +32,6 @@ pub struct ShapeInfo {
     pub light: Option<u32>,
 }
 
-/// How `sample_light` picks one light (the `light_selection` parameter).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum LightSelection {
-    /// Every light with the same probability (Mitsuba's choice).
-    #[default]
-    Uniform,
-    /// Proportional to each light's emitted power (luminance of its flux).
-    Power,
-    /// Proportional to each light's estimated contribution at the receiver,
-    /// through a light BVH (pbrt-v4's BVH light sampler).
-    Bvh,
-}
-
 #[derive(Debug, Clone)]
 pub struct Scene {
     /// Every shape, by id: those placed directly, in world space, and the
@@ -64,11 +49,8 @@ pub struct Scene {
     /// Indices of lights at infinity (hit by escaping rays).
     pub env_lights: Vec<u32>,
     pub accel: Accel,
-    pub light_selection: LightSelection,
-    /// Selection probabilities by power (None when selection is uniform or
-    /// no light has positive power).
-    power_distrib: Option<Distribution1D>,
-    light_bvh: Option<LightBvh>,
+    /// How `sample_light` picks a light (see [`Scene::set_light_selection`]).
+    light_sampler: LightSampler,
     /// [`Material::reads_uv`] per material: hits on the others skip the
     /// surface parameterisation.
     reads_uv: Vec<bool>,
@@ -84,7 +66,8 @@ fn log_ray(log: &RayLog, ray: Ray, shadow: bool) {
 
 impl Scene {
     /// Assembles a scene of `shapes`, each placed as it is, and builds its
-    /// acceleration structure.
+    /// acceleration structure. Lights are selected uniformly until
+    /// [`Scene::set_light_selection`].
     pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
         let placed: Vec<Primitive> = (0..shapes.len() as u32).map(Primitive::Shape).collect();
         Scene::with_instances(shapes, shape_info, Vec::new(), placed, materials, lights)
@@ -100,10 +83,27 @@ impl Scene {
         materials: Vec<Material>,
         lights: Vec<Light>,
     ) -> Scene {
-        assert_eq!(shapes.len(), shape_info.len());
         let accel = Accel::build(&placed, &shapes, &instances);
+        Scene::with_accel(accel, shapes, shape_info, instances, placed, materials, lights)
+    }
+
+    /// [`Scene::with_instances`] with `accel` already built by
+    /// `Accel::build(&placed, &shapes, &instances)`, for callers that need
+    /// its bounds first (the scene builder makes directional lights with the
+    /// scene's bounding radius).
+    pub fn with_accel(
+        accel: Accel,
+        shapes: Vec<Shape>,
+        shape_info: Vec<ShapeInfo>,
+        instances: Vec<Instance>,
+        placed: Vec<Primitive>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+    ) -> Scene {
+        assert_eq!(shapes.len(), shape_info.len());
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
         let reads_uv = materials.iter().map(Material::reads_uv).collect();
+        let light_sampler = LightSampler::Uniform { count: lights.len() };
         Scene {
             shapes,
             shape_info,
@@ -113,9 +113,7 @@ impl Scene {
             lights,
             env_lights,
             accel,
-            light_selection: LightSelection::Uniform,
-            power_distrib: None,
-            light_bvh: None,
+            light_sampler,
             reads_uv,
             ray_log: None,
         }
@@ -123,19 +121,13 @@ impl Scene {
 
     /// Chooses the light-selection strategy (precomputing what it needs).
     pub fn set_light_selection(&mut self, selection: LightSelection) {
-        self.light_selection = selection;
         let radius = self.accel.bounds.bounding_radius().max(1e-3);
-        self.power_distrib = None;
-        self.light_bvh = None;
-        match selection {
-            LightSelection::Uniform => {}
-            LightSelection::Power => {
-                let w: Vec<f32> =
-                    self.lights.iter().map(|l| luminance(l.power(&self.shapes, radius)).max(0.0)).collect();
-                self.power_distrib = Distribution1D::new(&w);
-            }
-            LightSelection::Bvh => self.light_bvh = Some(LightBvh::build(&self.lights, &self.shapes, radius)),
-        }
+        self.light_sampler = LightSampler::build(selection, &self.lights, &self.shapes, radius);
+    }
+
+    /// The light-selection strategy with its tables.
+    pub fn light_sampler(&self) -> &LightSampler {
+        &self.light_sampler
     }
 
     /// Closest surface hit.
@@ -187,37 +179,14 @@ impl Scene {
     /// `p` with normal `n` (`Vec3::ZERO` when there is none, e.g. the camera).
     #[inline]
     pub fn light_pmf(&self, p: Vec3, n: Vec3, i: usize) -> f32 {
-        if let Some(bvh) = &self.light_bvh {
-            return bvh.pmf(p, n, i);
-        }
-        match &self.power_distrib {
-            Some(d) => d.pmf(i),
-            None => 1.0 / self.lights.len() as f32,
-        }
+        self.light_sampler.pmf(p, n, i)
     }
 
     /// Picks a light for a receiver at (`p`, `n`) with `u` in [0, 1):
-    /// (index, probability).
+    /// (index, probability); see [`LightSampler::sample`].
     #[inline]
     pub fn select_light(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
-        if self.lights.is_empty() {
-            return None;
-        }
-        if let Some(bvh) = &self.light_bvh {
-            // `None` means no light is picked for this sample (the BVH found
-            // zero importance); retrying would bias the estimate.
-            return bvh.sample(p, n, u);
-        }
-        match &self.power_distrib {
-            Some(d) => {
-                let (i, pmf, _) = d.sample_discrete(u);
-                Some((i, pmf))
-            }
-            None => {
-                let n = self.lights.len();
-                Some((((u * n as f32) as usize).min(n - 1), 1.0 / n as f32))
-            }
-        }
+        self.light_sampler.sample(p, n, u)
     }
 
     /// Picks a light with `u` and samples a direction towards it with `u2`,
@@ -251,7 +220,7 @@ impl Scene {
     pub fn light_pdf(&self, p_ref: Vec3, n_ref: Vec3, si: &SurfaceInteraction) -> f32 {
         match self.shape_info[si.shape as usize].light {
             Some(l) => {
-                self.shapes[si.shape as usize].pdf_direction(p_ref, si.p, si.n)
+                self.lights[l as usize].pdf_li(p_ref, -si.wo, Some(si), &self.shapes)
                     * self.light_pmf(p_ref, n_ref, l as usize)
             }
             None => 0.0,

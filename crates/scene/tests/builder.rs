@@ -74,3 +74,25 @@ fn stratified_sample_counts_round_up_to_squares_as_mitsuba() {
         assert_eq!(j.sampler.spp, expect, "{n}");
     }
 }
+
+#[test]
+fn lights_keep_their_order_and_the_directional_light_knows_the_scene_radius() {
+    // The directional light comes first, before the geometry that sets the radius.
+    let xml = r#"<scene version="3.0.0">
+        <emitter type="directional"><vector name="direction" value="0, -2, 0"/></emitter>
+        <shape type="sphere"><float name="radius" value="2"/>
+            <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+        <emitter type="point"><point name="position" value="0, 5, 0"/></emitter>
+        <shape type="sphere"><point name="center" value="10, 0, 0"/></shape>
+        <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+    </scene>"#;
+    let job = build(&parse_str(xml, Path::new("test.xml"), &[]).unwrap(), &Overrides::default()).unwrap();
+    let scene = &job.scene;
+    let names: Vec<&str> = scene.lights.iter().map(|l| l.name()).collect();
+    assert_eq!(names, ["directional", "area", "point"]);
+    assert_eq!(scene.shape_info[0].light, Some(1));
+    let penumbra_render::light::Light::Directional(d) = &scene.lights[0] else { unreachable!() };
+    assert_eq!(d.direction, -glam::Vec3::Y);
+    assert_eq!(d.scene_radius, scene.bounds().bounding_radius());
+    assert!(d.scene_radius > 6.0, "{}", d.scene_radius);
+}

@@ -17,9 +17,9 @@
 //! unordered middle split; a spot light's φ is 4π I as in pbrt rather than its
 //! cone's flux, so that it compares with point lights of the same intensity.
 
-use super::{Light, SpotLight};
-use crate::geometry::{Aabb, Mesh, Shape};
-use crate::math::{luminance, safe_sqrt, Mat3, PI};
+use super::Light;
+use crate::geometry::{Aabb, Shape};
+use crate::math::{safe_acos, safe_asin, safe_sqrt, PI};
 use glam::{Quat, Vec3};
 
 /// Largest f32 below 1.
@@ -32,16 +32,6 @@ const BUCKETS: usize = 12;
 /// leaves stay within 32 + log2(n) ≤ 64 levels and a bit trail fits a u64.
 const SAH_MAX_DEPTH: u32 = 32;
 
-#[inline]
-fn safe_acos(x: f32) -> f32 {
-    x.clamp(-1.0, 1.0).acos()
-}
-
-#[inline]
-fn safe_asin(x: f32) -> f32 {
-    x.clamp(-1.0, 1.0).asin()
-}
-
 /// Angle between unit vectors, accurate for nearly (anti)parallel ones (pbrt-v4 §3.3.2).
 fn angle_between(a: Vec3, b: Vec3) -> f32 {
     if a.dot(b) < 0.0 {
@@ -53,13 +43,13 @@ fn angle_between(a: Vec3, b: Vec3) -> f32 {
 
 /// A cone of directions: unit axis `w` and the cosine of its half-angle (pbrt-v4 §3.8.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct DirectionCone {
-    w: Vec3,
-    cos_theta: f32,
+pub(crate) struct DirectionCone {
+    pub(crate) w: Vec3,
+    pub(crate) cos_theta: f32,
 }
 
 impl DirectionCone {
-    const ENTIRE_SPHERE: DirectionCone = DirectionCone { w: Vec3::Z, cos_theta: -1.0 };
+    pub(crate) const ENTIRE_SPHERE: DirectionCone = DirectionCone { w: Vec3::Z, cos_theta: -1.0 };
 
     /// The cone bounding both `a` and `b` (pbrt-v4 §3.8.4, `Union`).
     fn union(a: DirectionCone, b: DirectionCone) -> DirectionCone {
@@ -104,39 +94,16 @@ pub struct LightBounds {
 }
 
 impl LightBounds {
-    /// Bounds for light `light` of the scene (None for lights at infinity,
-    /// which the BVH does not hold, and for lights with zero power).
-    pub fn of(light: &Light, shapes: &[Shape], scene_radius: f32) -> Option<LightBounds> {
-        let (bounds, cone, cos_theta_e, phi) = match light {
-            Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => return None,
-            // Diffuse emission from the front side: θ_e = π/2 around the normals.
-            Light::Area(a) => {
-                let shape = &shapes[a.shape as usize];
-                (shape_bounds(shape), normal_cone(shape), 0.0, luminance(light.power(shapes, scene_radius)))
-            }
-            Light::Point(p) => (
-                Aabb { min: p.position, max: p.position },
-                DirectionCone::ENTIRE_SPHERE,
-                0.0,
-                luminance(light.power(shapes, scene_radius)),
-            ),
-            Light::Spot(s) => {
-                let cos_cutoff = spot_cos_cutoff(s)?;
-                let (cone, cos_theta_e) = match spot_axis(s) {
-                    Some(w) => (DirectionCone { w, cos_theta: 1.0 }, cos_cutoff),
-                    None => (DirectionCone::ENTIRE_SPHERE, 0.0),
-                };
-                (Aabb { min: s.position, max: s.position }, cone, cos_theta_e, 4.0 * PI * luminance(s.intensity))
-            }
-        };
-        (phi > 0.0 && phi.is_finite() && !bounds.is_empty()).then_some(LightBounds {
-            bounds,
-            w: cone.w,
-            phi,
-            cos_theta_o: cone.cos_theta,
-            cos_theta_e,
-            two_sided: false,
-        })
+    /// Bounds of one-sided emission from points of `bounds` in directions
+    /// within acos(`cos_theta_e`) of the directions of `cone`, with power `phi`.
+    pub(crate) fn new(bounds: Aabb, cone: DirectionCone, cos_theta_e: f32, phi: f32) -> LightBounds {
+        LightBounds { bounds, w: cone.w, phi, cos_theta_o: cone.cos_theta, cos_theta_e, two_sided: false }
+    }
+
+    /// Whether the bounds hold a light the tree can pick: positive, finite
+    /// power and a nonempty box.
+    pub fn emits(&self) -> bool {
+        self.phi > 0.0 && self.phi.is_finite() && !self.bounds.is_empty()
     }
 
     /// pbrt's importance of these bounds for a receiver at p with normal n
@@ -285,89 +252,6 @@ impl PreparedBounds {
     }
 }
 
-/// Bounding box of all of a shape's primitives.
-fn shape_bounds(shape: &Shape) -> Aabb {
-    (0..shape.prim_count()).fold(Aabb::EMPTY, |b, i| b.union(shape.prim_bounds(i)))
-}
-
-/// Cone bounding a shape's front-facing normals: the normal for a disk, the
-/// whole sphere for a sphere, and for a mesh the cone around its
-/// area-weighted mean normal that holds every face normal (and the vertex
-/// normals when they shade, since emission follows the shading normal).
-fn normal_cone(shape: &Shape) -> DirectionCone {
-    match shape {
-        Shape::Sphere(_) | Shape::Cylinder(_) => DirectionCone::ENTIRE_SPHERE,
-        Shape::Disk(d) => DirectionCone { w: d.n, cos_theta: 1.0 },
-        Shape::Mesh(m) => mesh_normal_cone(m),
-    }
-}
-
-fn mesh_normal_cone(m: &Mesh) -> DirectionCone {
-    let faces: Vec<Vec3> = (0..m.mesh.indices.len())
-        .filter_map(|i| {
-            let [p0, p1, p2] = m.vertices(i);
-            let c = (p1 - p0).cross(p2 - p0);
-            (c.length_squared() > 0.0 && c.is_finite()).then_some(c)
-        })
-        .collect();
-    // Area-weighted mean normal (cross products have length 2 × area).
-    let sum: Vec3 = faces.iter().sum();
-    let total: f32 = faces.iter().map(|c| c.length()).sum();
-    if !sum.is_finite() || sum.length() <= 1e-4 * total {
-        return DirectionCone::ENTIRE_SPHERE;
-    }
-    let w = sum.normalize();
-    let shading: &[Vec3] = if m.face_normals { &[] } else { &m.mesh.normals };
-    let cos_theta = faces
-        .iter()
-        .map(|c| c.normalize())
-        .chain(shading.iter().filter(|n| n.length_squared() > 0.0).map(|n| n.normalize()))
-        .map(|n| w.dot(n))
-        .fold(1.0f32, f32::min);
-    DirectionCone { w, cos_theta: cos_theta.max(-1.0) }
-}
-
-/// World-space beam axis of a spot light, or None when its transform is not
-/// a rotation times a uniform scale (the beam is then not a circular cone).
-fn spot_axis(s: &SpotLight) -> Option<Vec3> {
-    let m = Mat3::from_mat4(s.light_from_world);
-    let g = m * m.transpose();
-    let s2 = (g.x_axis.x + g.y_axis.y + g.z_axis.z) / 3.0;
-    let dev = (g - Mat3::from_diagonal(Vec3::splat(s2))).to_cols_array().iter().fold(0.0f32, |a, x| a.max(x.abs()));
-    // With M Mᵀ = s² I, local z of M d is cos(d, Mᵀ ẑ) |Mᵀ ẑ|.
-    (s2 > 0.0 && dev <= 1e-4 * s2).then(|| m.transpose().mul_vec3(Vec3::Z).normalize())
-}
-
-/// cos of a spot light's cutoff angle, recovered by bisection from its
-/// public falloff (the angle itself is private): the returned cosine has zero
-/// falloff, larger ones up to 1 have positive falloff. None if it emits nothing.
-fn spot_cos_cutoff(s: &SpotLight) -> Option<f32> {
-    let emits = s.falloff(1.0) > 0.0;
-    if !emits {
-        return None;
-    }
-    if s.falloff(-1.0) > 0.0 {
-        return Some(-1.0);
-    }
-    let (mut lo, mut hi) = (-1.0f32, 1.0f32);
-    loop {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            return Some(lo);
-        }
-        if s.falloff(mid) > 0.0 {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-}
-
-/// Whether a light is kept outside the tree (pbrt: lights without bounds).
-fn is_infinite(light: &Light) -> bool {
-    light.is_environment() || matches!(light, Light::Directional(_))
-}
-
 #[derive(Debug, Clone, Copy)]
 struct Node {
     bounds: PreparedBounds,
@@ -401,11 +285,12 @@ pub struct LightBvh {
 }
 
 impl LightBvh {
-    /// Builds over all lights of the scene. Lights at infinity (constant,
-    /// envmap, and directional ones too) are kept outside the tree and sampled
-    /// with a fixed probability as pbrt does: p_inf = n_inf / (n_inf + 1), or 1
-    /// when the tree is empty. Finite lights of zero power get probability 0.
-    pub fn build(lights: &[Light], shapes: &[Shape], scene_radius: f32) -> LightBvh {
+    /// Builds over all lights of the scene. Lights at infinity (those
+    /// without [`Light::bounds`]: constant, envmap, and directional ones too)
+    /// are kept outside the tree and sampled with a fixed probability as pbrt
+    /// does: p_inf = n_inf / (n_inf + 1), or 1 when the tree is empty. Finite
+    /// lights of zero power get probability 0.
+    pub fn build(lights: &[Light], shapes: &[Shape]) -> LightBvh {
         let mut bvh = LightBvh {
             nodes: Vec::new(),
             infinite: Vec::new(),
@@ -416,11 +301,13 @@ impl LightBvh {
         };
         let mut items = Vec::new();
         for (i, light) in lights.iter().enumerate() {
-            if is_infinite(light) {
-                bvh.slots[i] = Slot::Infinite;
-                bvh.infinite.push(i as u32);
-            } else if let Some(b) = LightBounds::of(light, shapes, scene_radius) {
-                items.push((i as u32, b));
+            match light.bounds(shapes) {
+                None => {
+                    bvh.slots[i] = Slot::Infinite;
+                    bvh.infinite.push(i as u32);
+                }
+                Some(b) if b.emits() => items.push((i as u32, b)),
+                Some(_) => {}
             }
         }
         if !items.is_empty() {
@@ -650,9 +537,9 @@ fn median_split(items: &mut [(u32, LightBounds)]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::TriangleMesh;
-    use crate::light::{AreaLight, ConstantLight, DirectionalLight, PointLight};
-    use crate::math::{look_at, Mat4, Spectrum};
+    use crate::geometry::{Mesh, TriangleMesh};
+    use crate::light::{AreaLight, ConstantLight, DirectionalLight, PointLight, SpotLight};
+    use crate::math::{look_at, luminance, Mat4, Spectrum};
     use crate::sampling::rng::{hash_words, to_unit_f32};
     use crate::testing::chi2::alpha;
     use glam::Vec2;
@@ -843,7 +730,7 @@ mod tests {
             irradiance: Spectrum::ONE,
             scene_radius: 20.0,
         }));
-        let bvh = LightBvh::build(&lights, &shapes, 20.0);
+        let bvh = LightBvh::build(&lights, &shapes);
         assert_eq!(bvh.tree_len(), 40);
         let recv = receivers(13, 16);
         for (r, &(p, n)) in recv.iter().enumerate() {
@@ -856,7 +743,7 @@ mod tests {
         // where both children are unimportant (as pbrt's); then Σ pmf =
         // 1 - P(none) and the remaining probability yields no light.
         let (lights, shapes) = mixed_scene(7);
-        let bvh = LightBvh::build(&lights, &shapes, 20.0);
+        let bvh = LightBvh::build(&lights, &shapes);
         assert_eq!(bvh.tree_len(), 49);
         assert!(bvh.depth() <= 20, "depth {}", bvh.depth());
         let mut full = 0;
@@ -876,7 +763,7 @@ mod tests {
     #[test]
     fn lights_that_reach_a_receiver_have_positive_pmf() {
         let (lights, shapes) = mixed_scene(3);
-        let bvh = LightBvh::build(&lights, &shapes, 20.0);
+        let bvh = LightBvh::build(&lights, &shapes);
         let mut reached = 0;
         for &(p, n) in &receivers(5, 64) {
             for (i, light) in lights.iter().enumerate() {
@@ -899,7 +786,7 @@ mod tests {
     fn one_sided_lights_are_unimportant_from_behind() {
         let shapes = vec![rectangle(Vec3::ZERO, Vec3::Z, Vec2::splat(0.5))];
         let light = Light::Area(AreaLight { shape: 0, radiance: Spectrum::ONE });
-        let b = LightBounds::of(&light, &shapes, 1.0).unwrap();
+        let b = light.bounds(&shapes).unwrap();
         assert!((b.w - Vec3::Z).length() < 1e-5 && b.cos_theta_o > 0.99999 && !b.two_sided);
         let (front, back) = (Vec3::new(0.3, 0.2, 3.0), Vec3::new(0.3, 0.2, -3.0));
         assert!(b.importance(front, Vec3::ZERO) > 0.0);
@@ -911,14 +798,14 @@ mod tests {
         // Receivers are two-sided, as in pbrt.
         assert_eq!(b.importance(Vec3::new(0.0, 0.0, 5.0), Vec3::X), b.importance(Vec3::new(0.0, 0.0, 5.0), -Vec3::X));
 
-        let bvh = LightBvh::build(std::slice::from_ref(&light), &shapes, 1.0);
+        let bvh = LightBvh::build(std::slice::from_ref(&light), &shapes);
         assert_eq!(bvh.pmf(front, Vec3::ZERO, 0), 1.0);
         assert_eq!(bvh.sample(front, Vec3::ZERO, 0.7), Some((0, 1.0)));
         assert_eq!(bvh.pmf(back, Vec3::ZERO, 0), 0.0);
         assert_eq!(bvh.sample(back, Vec3::ZERO, 0.7), None);
 
         // A spot light seen from outside its beam.
-        let s = LightBounds::of(&spot(Vec3::ZERO, Vec3::Z, 1.0, 20.0), &[], 1.0).unwrap();
+        let s = spot(Vec3::ZERO, Vec3::Z, 1.0, 20.0).bounds(&[]).unwrap();
         assert!((s.w - Vec3::Z).length() < 1e-5);
         assert!((s.cos_theta_e - 20f32.to_radians().cos()).abs() < 1e-5, "{}", s.cos_theta_e);
         assert!(s.importance(Vec3::new(0.0, 0.5, 3.0), Vec3::ZERO) > 0.0);
@@ -934,7 +821,7 @@ mod tests {
         let points = [Vec3::new(0.0, 3.0, 0.0), Vec3::new(0.0, -30.0, 0.0)]
             .map(|c| Light::Point(PointLight { position: c, intensity: Spectrum::ONE }));
         let lights = vec![near, far, points[0].clone(), points[1].clone()];
-        let bvh = LightBvh::build(&lights, &shapes, 30.0);
+        let bvh = LightBvh::build(&lights, &shapes);
         for n in [Vec3::ZERO, Vec3::new(0.0, 0.6, 0.8)] {
             let pmf: Vec<f32> = (0..4).map(|i| bvh.pmf(Vec3::ZERO, n, i)).collect();
             assert!(pmf[0] > 10.0 * pmf[1] && pmf[1] > 0.0, "{pmf:?}");
@@ -946,12 +833,12 @@ mod tests {
     #[test]
     fn degenerate_light_sets() {
         // No light at all.
-        let bvh = LightBvh::build(&[], &[], 1.0);
+        let bvh = LightBvh::build(&[], &[]);
         assert_eq!(bvh.sample(Vec3::ZERO, Vec3::Z, 0.3), None);
         assert_eq!(bvh.pmf(Vec3::ZERO, Vec3::Z, 0), 0.0);
         // One point light.
         let point = Light::Point(PointLight { position: Vec3::X, intensity: Spectrum::ONE });
-        let bvh = LightBvh::build(std::slice::from_ref(&point), &[], 1.0);
+        let bvh = LightBvh::build(std::slice::from_ref(&point), &[]);
         assert_eq!((bvh.tree_len(), bvh.depth()), (1, 0));
         for u in [0.0, 0.5, ONE_MINUS_EPSILON] {
             assert_eq!(bvh.sample(Vec3::ZERO, Vec3::ZERO, u), Some((0, 1.0)));
@@ -965,7 +852,7 @@ mod tests {
         let constant = Light::Constant(ConstantLight { radiance: Spectrum::ONE });
         let sun =
             Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Spectrum::ONE, scene_radius: 1.0 });
-        let bvh = LightBvh::build(&[constant.clone(), sun.clone()], &[], 1.0);
+        let bvh = LightBvh::build(&[constant.clone(), sun.clone()], &[]);
         assert_eq!(bvh.pmf(Vec3::ZERO, Vec3::ZERO, 0), 0.5);
         assert_eq!(bvh.pmf(Vec3::ZERO, Vec3::ZERO, 1), 0.5);
         assert_eq!(bvh.sample(Vec3::ZERO, Vec3::ZERO, 0.2), Some((0, 0.5)));
@@ -973,7 +860,7 @@ mod tests {
         // Infinite plus finite: the tree counts as one more.
         let dark = Light::Point(PointLight { position: Vec3::Y, intensity: Spectrum::ZERO });
         let lights = [constant, dark, sun, point];
-        let bvh = LightBvh::build(&lights, &[], 1.0);
+        let bvh = LightBvh::build(&lights, &[]);
         let pmf: Vec<f32> = (0..4).map(|i| bvh.pmf(Vec3::ZERO, Vec3::ZERO, i)).collect();
         assert_eq!(pmf, [1.0 / 3.0, 0.0, 1.0 / 3.0, 1.0 - 2.0 / 3.0]);
         for k in 0..1000 {
@@ -993,42 +880,12 @@ mod tests {
         ] {
             let lights: Vec<Light> =
                 (0..3000).map(|k| Light::Point(PointLight { position: f(k), intensity: Spectrum::ONE })).collect();
-            let bvh = LightBvh::build(&lights, &[], 1.0);
+            let bvh = LightBvh::build(&lights, &[]);
             assert!(bvh.depth() <= 64, "{name}: depth {}", bvh.depth());
             let p = Vec3::new(5.0, 1.0, 0.0);
             let sum: f64 = (0..lights.len()).map(|i| bvh.pmf(p, Vec3::ZERO, i) as f64).sum();
             assert!((sum - 1.0).abs() < 1e-4, "{name}: Σ pmf = {sum}");
         }
-    }
-
-    #[test]
-    fn normal_cones_bound_the_emitters() {
-        // A tilted planar mesh: its normal, θ_o ≈ 0.
-        let n = Vec3::new(1.0, 2.0, -0.5).normalize();
-        let c = normal_cone(&rectangle(Vec3::ONE, n, Vec2::new(2.0, 0.3)));
-        assert!((c.w - n).length() < 1e-5 && c.cos_theta > 0.99999, "{c:?}");
-        // Two faces at a right angle: θ_o = 45°.
-        let bent = TriangleMesh {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, 1.0)],
-            indices: vec![[0, 1, 2], [0, 2, 3]],
-            ..Default::default()
-        };
-        let c = normal_cone(&Shape::Mesh(Mesh::new(bent, false)));
-        assert!(
-            (c.cos_theta - 0.5f32.sqrt()).abs() < 1e-5 && (c.w - Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-5
-        );
-        // Closed shapes: every direction.
-        assert_eq!(normal_cone(&mesh_shape(TriangleMesh::cube(), Mat4::IDENTITY)).cos_theta, -1.0);
-        assert_eq!(normal_cone(&Shape::sphere(Vec3::ZERO, 1.0, false)).cos_theta, -1.0);
-        // A flipped disk faces -z.
-        let c = normal_cone(&Shape::disk(Mat4::IDENTITY, true));
-        assert_eq!((c.w, c.cos_theta), (-Vec3::Z, 1.0));
-        // Vertex normals that shade widen the cone.
-        let mut m = TriangleMesh::rectangle();
-        m.normals[0] = Vec3::new(1.0, 0.0, 1.0).normalize();
-        let c = normal_cone(&Shape::Mesh(Mesh::new(m.clone(), false)));
-        assert!((c.cos_theta - 0.5f32.sqrt()).abs() < 1e-5);
-        assert_eq!(normal_cone(&Shape::Mesh(Mesh::new(m, true))).cos_theta, 1.0);
     }
 
     #[test]
@@ -1054,14 +911,14 @@ mod tests {
     #[test]
     fn spot_bounds_follow_its_transform() {
         let s = spot(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, -5.0, 3.0), 2.0, 35.0);
-        let b = LightBounds::of(&s, &[], 1.0).unwrap();
+        let b = s.bounds(&[]).unwrap();
         assert!((b.w + Vec3::Y).length() < 1e-5 && b.cos_theta_o == 1.0);
         assert!((b.cos_theta_e - 35f32.to_radians().cos()).abs() < 1e-5);
         assert!((b.phi - 8.0 * PI).abs() < 1e-4);
         // A non-uniformly scaled spot loses its direction bound, not its light.
         let Light::Spot(mut sl) = s else { unreachable!() };
         sl.light_from_world = Mat4::from_scale(Vec3::new(1.0, 3.0, 1.0)) * sl.light_from_world;
-        let b = LightBounds::of(&Light::Spot(sl), &[], 1.0).unwrap();
+        let b = Light::Spot(sl).bounds(&[]).unwrap();
         assert_eq!((b.cos_theta_o, b.cos_theta_e), (-1.0, 0.0));
     }
 }

@@ -6,7 +6,7 @@
 //! | radiance  | rgb  | 1       |
 
 use super::LightSample;
-use crate::math::Spectrum;
+use crate::math::{Spectrum, PI};
 use crate::sampling::warp;
 use glam::Vec2;
 
@@ -20,7 +20,15 @@ impl ConstantLight {
         let wi = warp::sample_uniform_sphere(u2);
         Some(LightSample { wi, dist: f32::INFINITY, pdf: warp::uniform_sphere_pdf(), li: self.radiance, delta: false })
     }
+
+    /// Solid-angle density of `sample_li`, the same for every direction.
     pub fn pdf(&self) -> f32 {
         warp::uniform_sphere_pdf()
+    }
+
+    /// Φ = π (π r²) L through the scene's bounding disk, from every
+    /// direction: 4π² r² L, for a scene of bounding radius `scene_radius`.
+    pub fn power(&self, scene_radius: f32) -> Spectrum {
+        4.0 * PI * PI * scene_radius * scene_radius * self.radiance
     }
 }

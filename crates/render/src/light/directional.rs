@@ -3,7 +3,8 @@
 //!
 //! | parameter  | type      | default |
 //! |------------|-----------|---------|
-//! | direction  | vector    | (or local +z of `to_world`): the direction light travels |
+//! | direction  | vector    | local +z of `to_world` (normalised): the direction light travels |
+//! | to_world   | transform | identity (not together with `direction`) |
 //! | irradiance | rgb       | 1 (W/m²) |
 
 use super::LightSample;
@@ -15,7 +16,9 @@ pub struct DirectionalLight {
     /// Unit direction in which the light travels.
     pub direction: Vec3,
     pub irradiance: Spectrum,
-    /// Radius of the scene's bounding sphere (for `power`).
+    /// Radius of the scene's bounding sphere (for `power`), given at
+    /// construction: the scene builder makes lights once the geometry's
+    /// bounds are known.
     pub scene_radius: f32,
 }
 

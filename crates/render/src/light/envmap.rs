@@ -227,6 +227,13 @@ impl EnvMapLight {
     pub fn mean_radiance(&self) -> Spectrum {
         self.mean
     }
+
+    /// Φ = π (π r²) L̄ through the scene's bounding disk, from every
+    /// direction: 4π² r² L̄ with L̄ the mean radiance, for a scene of
+    /// bounding radius `scene_radius`.
+    pub fn power(&self, scene_radius: f32) -> Spectrum {
+        4.0 * PI * PI * scene_radius * scene_radius * self.mean_radiance()
+    }
 }
 
 #[cfg(test)]

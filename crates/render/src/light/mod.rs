@@ -1,11 +1,24 @@
 //! Emitters. Integrators reach them through [`crate::scene::Scene`]'s
-//! `sample_light` / `light_pdf` / `emitted` calls, which add light selection.
+//! `sample_light` / `light_pdf` / `emitted` / `environment` calls, which add
+//! light selection ([`LightSampler`]).
 //!
-//! Contract: `pdf` values are densities per unit solid angle at the reference
-//! point; `li` is the radiance arriving along `-wi`, unoccluded. For delta
-//! lights (`delta` = true) `pdf` is 1 and `li` is the delta's weight (I/d² for
-//! point and spot lights, E for directional ones), so `f · li · cos / pdf` is
-//! the contribution in every case.
+//! The contract every light fulfils, through [`Light`]:
+//! - [`Light::sample_li`] picks a direction towards the light from a
+//!   reference point; [`Light::pdf_li`] is the solid-angle density with which
+//!   it picks a given one. `li` is the radiance arriving along `-wi`,
+//!   unoccluded. For delta lights ([`Light::is_delta`]) the sample's `pdf` is
+//!   1 and `li` is the delta's weight (I/d² for point and spot lights, E for
+//!   directional ones), so `f · li · cos / pdf` is the contribution in every
+//!   case, and `pdf_li` is 0 (no other direction finds them).
+//! - [`Light::power`] (flux, for selection by power) and [`Light::bounds`]
+//!   (where and in which directions it emits, for the light BVH).
+//! - Lights at infinity that escaping rays see ([`Light::is_environment`])
+//!   give their radiance through [`Light::environment`].
+//! - [`Light::name`]: the Mitsuba plugin.
+//!
+//! Adding a light: its own file with its parameters documented, a variant
+//! here and its arm in each `match` below (the compiler lists them), and its
+//! plugin in the scene builder (`crates/scene/src/build`).
 
 pub mod area;
 pub mod bvh;
@@ -13,16 +26,19 @@ pub mod constant;
 pub mod directional;
 pub mod envmap;
 pub mod point;
+pub mod sampler;
 pub mod spot;
 
 pub use area::AreaLight;
+pub use bvh::LightBounds;
 pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
 pub use envmap::EnvMapLight;
 pub use point::PointLight;
+pub use sampler::{LightSampler, LightSelection};
 pub use spot::SpotLight;
 
-use crate::geometry::Shape;
+use crate::geometry::{Shape, SurfaceInteraction};
 use crate::math::Spectrum;
 use glam::{Vec2, Vec3};
 
@@ -31,7 +47,7 @@ use glam::{Vec2, Vec3};
 pub struct LightSample {
     /// Unit direction from the reference point towards the light.
     pub wi: Vec3,
-    /// Distance to the sampled point (infinite for environment lights).
+    /// Distance to the sampled point (infinite for lights at infinity).
     pub dist: f32,
     /// Density per unit solid angle (not including light selection).
     pub pdf: f32,
@@ -52,6 +68,20 @@ pub enum Light {
 }
 
 impl Light {
+    /// The Mitsuba plugin this light implements.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Light::Area(_) => "area",
+            Light::Constant(_) => "constant",
+            Light::Point(_) => "point",
+            Light::Spot(_) => "spot",
+            Light::Directional(_) => "directional",
+            Light::EnvMap(_) => "envmap",
+        }
+    }
+
+    /// Samples a direction towards the light from `p_ref` with `u2` in
+    /// [0, 1)² (the pdf excludes selection). No visibility test.
     pub fn sample_li(&self, p_ref: Vec3, u2: Vec2, shapes: &[Shape]) -> Option<LightSample> {
         match self {
             Light::Area(a) => a.sample_li(p_ref, u2, &shapes[a.shape as usize]),
@@ -63,19 +93,39 @@ impl Light {
         }
     }
 
-    /// Whether this light is at infinity (hit by rays that escape the scene).
+    /// Solid-angle density at `p_ref` with which [`Self::sample_li`] picks
+    /// the unit direction `wi` (selection excluded). `hit` is where `wi`
+    /// meets the light's surface, for lights on shapes (an area light's pdf
+    /// is 0 without it); lights at infinity need only `wi`. 0 for delta lights.
+    #[inline]
+    pub fn pdf_li(&self, p_ref: Vec3, wi: Vec3, hit: Option<&SurfaceInteraction>, shapes: &[Shape]) -> f32 {
+        match self {
+            Light::Area(a) => hit.map_or(0.0, |hit| a.pdf_li(p_ref, hit, &shapes[a.shape as usize])),
+            Light::Constant(c) => c.pdf(),
+            Light::EnvMap(e) => e.pdf(wi),
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => 0.0,
+        }
+    }
+
+    /// Whether this light is at infinity and seen by rays that escape the
+    /// scene (constant, envmap; a directional light is at infinity too, but
+    /// a delta that no ray hits).
     pub fn is_environment(&self) -> bool {
-        matches!(self, Light::Constant(_) | Light::EnvMap(_))
+        match self {
+            Light::Constant(_) | Light::EnvMap(_) => true,
+            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => false,
+        }
     }
 
     /// Radiance from direction `wi` for lights at infinity (zero otherwise),
-    /// and the solid-angle density with which `sample_li` picks `wi`.
+    /// and the solid-angle density with which `sample_li` picks `wi`: the
+    /// `pdf_li` of environment lights, sharing their work with the radiance.
     #[inline]
     pub fn environment(&self, wi: Vec3) -> (Spectrum, f32) {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
-            _ => (Spectrum::ZERO, 0.0),
+            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => (Spectrum::ZERO, 0.0),
         }
     }
 
@@ -86,28 +136,140 @@ impl Light {
         match self {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
-            _ => Spectrum::ZERO,
+            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => Spectrum::ZERO,
         }
     }
 
     /// Dirac-delta lights (point, spot, directional): reachable only by light sampling.
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Directional(_))
+        match self {
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => true,
+            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) => false,
+        }
     }
 
-    /// Emitted flux (luminance is used to weight power-based selection).
-    /// `scene_radius` bounds the scene, for lights at infinity.
+    /// Emitted flux (its luminance weights selection by power).
+    /// `scene_radius` bounds the scene, for the environment lights' flux
+    /// through it (a directional light holds the radius it was built with).
     pub fn power(&self, shapes: &[Shape], scene_radius: f32) -> Spectrum {
-        use crate::math::PI;
         match self {
-            // Φ = π A L for a one-sided diffuse emitter.
-            Light::Area(a) => PI * shapes[a.shape as usize].area() * a.radiance,
-            // Φ = π (π r²) L through the scene's bounding disk, from every direction: 4π² r² L.
-            Light::Constant(c) => 4.0 * PI * PI * scene_radius * scene_radius * c.radiance,
+            Light::Area(a) => a.power(&shapes[a.shape as usize]),
+            Light::Constant(c) => c.power(scene_radius),
             Light::Point(p) => p.power(),
             Light::Spot(s) => s.power(),
             Light::Directional(d) => d.power(),
-            Light::EnvMap(e) => 4.0 * PI * PI * scene_radius * scene_radius * e.mean_radiance(),
+            Light::EnvMap(e) => e.power(scene_radius),
         }
+    }
+
+    /// Where and in which directions the light emits, for the light BVH;
+    /// None for lights at infinity (constant, envmap, directional), which
+    /// stay outside the tree. Bounds with φ = 0 mark a light that emits
+    /// nothing.
+    pub fn bounds(&self, shapes: &[Shape]) -> Option<LightBounds> {
+        match self {
+            Light::Area(a) => Some(a.bounds(&shapes[a.shape as usize])),
+            Light::Point(p) => Some(p.bounds()),
+            Light::Spot(s) => Some(s.bounds()),
+            Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Ray;
+    use crate::material::Material;
+    use crate::math::Mat4;
+    use crate::scene::{Scene, ShapeInfo};
+
+    /// One light of each kind; the area lights on a sphere and a disk.
+    fn every_light() -> Scene {
+        let disk =
+            Mat4::from_translation(Vec3::new(0.0, 3.0, 0.0)) * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let shapes = vec![Shape::sphere(Vec3::new(2.0, 1.0, -1.0), 0.5, false), Shape::disk(disk, false)];
+        let info = vec![ShapeInfo { material: 0, light: Some(0) }, ShapeInfo { material: 0, light: Some(1) }];
+        let texels: Vec<[f32; 3]> = (0..8 * 5).map(|k| [1.0 + (k % 7) as f32, 0.5, 0.2 * (k / 8) as f32]).collect();
+        let lights = vec![
+            Light::Area(AreaLight { shape: 0, radiance: Spectrum::splat(2.0) }),
+            Light::Area(AreaLight { shape: 1, radiance: Spectrum::ONE }),
+            Light::Constant(ConstantLight { radiance: Spectrum::splat(0.5) }),
+            Light::EnvMap(EnvMapLight::new(8, 5, texels, Mat4::from_rotation_y(0.3), 1.0).unwrap()),
+            Light::Point(PointLight { position: Vec3::new(0.0, 2.0, 1.0), intensity: Spectrum::ONE }),
+            Light::Spot(SpotLight::new(Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)), Spectrum::ONE, 60.0, 30.0)),
+            Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Spectrum::ONE, scene_radius: 3.0 }),
+        ];
+        Scene::new(
+            shapes,
+            info,
+            vec![Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Spectrum::splat(0.5).into() })],
+            lights,
+        )
+    }
+
+    #[test]
+    fn names_are_mitsubas_plugins() {
+        let names: Vec<&str> = every_light().lights.iter().map(Light::name).collect();
+        assert_eq!(names, ["area", "area", "constant", "envmap", "point", "spot", "directional"]);
+    }
+
+    /// `pdf_li` is the density `sample_li` reports (at the emitter point the
+    /// sampled direction hits, for area lights), 0 for delta lights, and
+    /// `environment` gives the same density bit for bit.
+    #[test]
+    fn pdf_li_is_the_sampled_density() {
+        let scene = every_light();
+        let p_ref = Vec3::new(0.1, 0.2, 0.3);
+        let mut checked = [0usize; 7];
+        for (i, light) in scene.lights.iter().enumerate() {
+            for k in 0..256 {
+                let u = Vec2::new((k % 16) as f32 + 0.5, (k / 16) as f32 + 0.5) / 16.0;
+                let Some(s) = light.sample_li(p_ref, u, &scene.shapes) else { continue };
+                assert_eq!(s.delta, light.is_delta());
+                let pdf = if light.is_delta() {
+                    light.pdf_li(p_ref, s.wi, None, &scene.shapes)
+                } else if light.is_environment() {
+                    let pdf = light.pdf_li(p_ref, s.wi, None, &scene.shapes);
+                    assert_eq!(light.environment(s.wi).1.to_bits(), pdf.to_bits());
+                    pdf
+                } else {
+                    let si = scene.intersect(&Ray::new(p_ref, s.wi, f32::INFINITY)).expect("sampled point is hit");
+                    assert_eq!(scene.shape_info[si.shape as usize].light, Some(i as u32));
+                    assert_eq!(light.pdf_li(p_ref, s.wi, None, &scene.shapes), 0.0);
+                    light.pdf_li(p_ref, s.wi, Some(&si), &scene.shapes)
+                };
+                if light.is_delta() {
+                    assert_eq!(pdf, 0.0, "{}", light.name());
+                } else {
+                    assert!((pdf - s.pdf).abs() <= 1e-3 * s.pdf, "{}: pdf_li {pdf} vs sampled {}", light.name(), s.pdf);
+                }
+                checked[i] += 1;
+            }
+        }
+        assert!(checked.iter().all(|&n| n > 0), "{checked:?}");
+    }
+
+    /// Lights at infinity have no bounds; the others are bounded with their
+    /// power (4π I for a spot light, as pbrt).
+    #[test]
+    fn bounds_hold_the_finite_lights() {
+        let scene = every_light();
+        for light in &scene.lights {
+            let b = light.bounds(&scene.shapes);
+            let at_infinity = matches!(light, Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_));
+            assert_eq!(b.is_none(), at_infinity, "{}", light.name());
+            if let Some(b) = b {
+                assert!(b.emits(), "{}", light.name());
+                let phi = match light {
+                    Light::Spot(s) => 4.0 * crate::math::PI * crate::math::luminance(s.intensity),
+                    _ => crate::math::luminance(light.power(&scene.shapes, 1.0)),
+                };
+                assert_eq!(b.phi, phi, "{}", light.name());
+            }
+        }
+        let Light::Area(sphere) = &scene.lights[0] else { unreachable!() };
+        let b = scene.lights[0].bounds(&scene.shapes).unwrap();
+        assert_eq!(b.bounds, scene.shapes[sphere.shape as usize].prim_bounds(0));
     }
 }

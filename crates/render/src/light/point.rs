@@ -1,13 +1,16 @@
 //! Mitsuba `point`: an isotropic point light, a Dirac delta in position:
 //! only light sampling can reach it (a BSDF-sampled ray never hits it).
 //!
-//! | parameter | type | default |
-//! |-----------|------|---------|
-//! | position  | point | (or the translation of `to_world`) |
-//! | intensity | rgb  | 1 (W/sr) |
+//! | parameter | type      | default |
+//! |-----------|-----------|---------|
+//! | position  | point     | the translation of `to_world` |
+//! | to_world  | transform | identity (not together with `position`) |
+//! | intensity | rgb       | 1 (W/sr) |
 
+use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
-use crate::math::{Spectrum, PI};
+use crate::geometry::Aabb;
+use crate::math::{luminance, Spectrum, PI};
 use glam::Vec3;
 
 /// Unit direction and distance from `from` to `to` (None if they coincide).
@@ -35,5 +38,11 @@ impl PointLight {
     /// Radiant flux Φ = 4π I.
     pub fn power(&self) -> Spectrum {
         4.0 * PI * self.intensity
+    }
+
+    /// Its position, emitting in every direction.
+    pub fn bounds(&self) -> LightBounds {
+        let at = Aabb { min: self.position, max: self.position };
+        LightBounds::new(at, DirectionCone::ENTIRE_SPHERE, 0.0, luminance(self.power()))
     }
 }

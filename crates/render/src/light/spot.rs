@@ -8,9 +8,13 @@
 //! | intensity    | rgb       | 1 (W/sr) |
 //! | cutoff_angle | float     | 20 (degrees) |
 //! | beam_width   | float     | 3/4 of cutoff_angle (degrees) |
+//!
+//! The angles must satisfy 0 ≤ beam_width < cutoff_angle ≤ 180.
 
+use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
-use crate::math::{safe_acos, Mat4, Spectrum, PI};
+use crate::geometry::Aabb;
+use crate::math::{luminance, safe_acos, Mat3, Mat4, Spectrum, PI};
 use glam::Vec3;
 
 #[derive(Debug, Clone)]
@@ -40,7 +44,7 @@ impl SpotLight {
         }
     }
 
-    /// Angular falloff for a local direction `d` (unit).
+    /// Angular falloff at `cos_theta` from the beam axis (light-local z).
     #[inline]
     pub fn falloff(&self, cos_theta: f32) -> f32 {
         if cos_theta <= self.cos_cutoff {
@@ -73,6 +77,62 @@ impl SpotLight {
             acc += self.falloff(t.cos()) * t.sin();
         }
         self.intensity * (2.0 * PI * acc * self.cutoff / n as f32)
+    }
+
+    /// Its position and beam: the cone of axes is the beam axis alone
+    /// (θ_o = 0) and emission spreads up to the cutoff angle around it (θ_e).
+    /// φ is 4π I as in pbrt, not the cone's flux, so that a spot light
+    /// compares with a point light of the same intensity. Without a circular
+    /// beam (a non-uniformly scaled `to_world`) the bounds hold every
+    /// direction; a spot light that emits nothing gets φ = 0.
+    pub fn bounds(&self) -> LightBounds {
+        let at = Aabb { min: self.position, max: self.position };
+        let Some(cos_cutoff) = self.cos_cutoff_bound() else {
+            return LightBounds::new(at, DirectionCone::ENTIRE_SPHERE, 0.0, 0.0);
+        };
+        let (cone, cos_theta_e) = match self.beam_axis() {
+            Some(w) => (DirectionCone { w, cos_theta: 1.0 }, cos_cutoff),
+            None => (DirectionCone::ENTIRE_SPHERE, 0.0),
+        };
+        LightBounds::new(at, cone, cos_theta_e, 4.0 * PI * luminance(self.intensity))
+    }
+
+    /// World-space beam axis, or None when the transform is not a rotation
+    /// times a uniform scale (the beam is then not a circular cone).
+    fn beam_axis(&self) -> Option<Vec3> {
+        let m = Mat3::from_mat4(self.light_from_world);
+        let g = m * m.transpose();
+        let s2 = (g.x_axis.x + g.y_axis.y + g.z_axis.z) / 3.0;
+        let dev = (g - Mat3::from_diagonal(Vec3::splat(s2))).to_cols_array().iter().fold(0.0f32, |a, x| a.max(x.abs()));
+        // With M Mᵀ = s² I, local z of M d is cos(d, Mᵀ ẑ) |Mᵀ ẑ|.
+        (s2 > 0.0 && dev <= 1e-4 * s2).then(|| m.transpose().mul_vec3(Vec3::Z).normalize())
+    }
+
+    /// The cosine where `falloff` turns positive, found by bisection on
+    /// `falloff` as evaluated (the tightest bound; it can lie a few ulps above
+    /// `cos_cutoff` where acos rounds): the returned cosine has zero falloff,
+    /// larger ones up to 1 have positive falloff. None if the light emits
+    /// nothing.
+    fn cos_cutoff_bound(&self) -> Option<f32> {
+        let emits = self.falloff(1.0) > 0.0;
+        if !emits {
+            return None;
+        }
+        if self.falloff(-1.0) > 0.0 {
+            return Some(-1.0);
+        }
+        let (mut lo, mut hi) = (-1.0f32, 1.0f32);
+        loop {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                return Some(lo);
+            }
+            if self.falloff(mid) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
     }
 }
 

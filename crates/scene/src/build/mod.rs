@@ -14,7 +14,7 @@ use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
 use crate::{image_io, obj, ply};
 use glam::{DMat4, DVec3, Vec3};
-use penumbra_render::accel::{Instance, Primitive, ShapeGroup};
+use penumbra_render::accel::{Accel, Instance, Primitive, ShapeGroup};
 use penumbra_render::bsdf::DiffuseParams;
 use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind, MAX_MARGIN};
@@ -22,12 +22,14 @@ use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
 use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
 };
-use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
+use penumbra_render::light::{
+    AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, LightSelection, PointLight, SpotLight,
+};
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::{Sampler, SamplerKind};
-use penumbra_render::scene::{LightSelection, Scene, ShapeInfo};
+use penumbra_render::scene::{Scene, ShapeInfo};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -136,13 +138,11 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
         (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
     };
     b.textures.finish_mesh_attributes(b.shapes.len());
-    let mut scene = Scene::with_instances(b.shapes, b.infos, b.instances, b.placed, b.materials, b.lights);
-    let radius = scene.bounds().bounding_radius();
-    for l in &mut scene.lights {
-        if let Light::Directional(d) = l {
-            d.scene_radius = radius;
-        }
-    }
+    // Lights are made once the geometry's bounds are known.
+    let accel = Accel::build(&b.placed, &b.shapes, &b.instances);
+    let radius = accel.bounds.bounding_radius();
+    let lights = b.lights.into_iter().map(|light| light(radius)).collect();
+    let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
     scene.set_light_selection(selection);
     Ok(RenderJob {
         scene,
@@ -157,6 +157,16 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     })
 }
 
+/// A light as declared (parsed and checked where the scene declares it),
+/// made once the geometry's bounding radius is known: a directional light's
+/// flux is that through the scene's bounding disk.
+type PendingLight = Box<dyn FnOnce(f32) -> Light>;
+
+/// A light that needs nothing from the rest of the scene.
+fn ready(light: Light) -> PendingLight {
+    Box::new(move |_| light)
+}
+
 #[derive(Default)]
 struct Builder {
     /// Every shape by id, shape-group members included.
@@ -168,7 +178,8 @@ struct Builder {
     placed: Vec<Primitive>,
     materials: Vec<Material>,
     textures: Textures,
-    lights: Vec<Light>,
+    /// In scene order: area lights with their shapes, top-level emitters as declared.
+    lights: Vec<PendingLight>,
     /// BSDF nodes already built, by node identity (shared through `<ref>`).
     bsdf_index: HashMap<*const Node, u32>,
     default_bsdf: Option<u32>,
@@ -366,7 +377,7 @@ impl Builder {
                 if shape.area() <= 0.0 {
                     return Err(node.error("an area emitter's shape has zero area"));
                 }
-                self.lights.push(Light::Area(AreaLight { shape: shape_id, radiance: rgb(radiance) }));
+                self.lights.push(ready(Light::Area(AreaLight { shape: shape_id, radiance: rgb(radiance) })));
                 Some((self.lights.len() - 1) as u32)
             }
             None => None,
@@ -378,11 +389,11 @@ impl Builder {
     }
 
     /// Emitters declared at the top level (not attached to a shape).
-    fn top_level_emitter(&mut self, node: &Node) -> Result<Light> {
-        let light = match node.plugin.as_str() {
+    fn top_level_emitter(&mut self, node: &Node) -> Result<PendingLight> {
+        let light: PendingLight = match node.plugin.as_str() {
             "constant" => {
                 let radiance = node.get_rgb("radiance")?.unwrap_or([1.0; 3]);
-                Light::Constant(ConstantLight { radiance: rgb(radiance) })
+                ready(Light::Constant(ConstantLight { radiance: rgb(radiance) }))
             }
             "point" => {
                 let to_world = node.transform("to_world")?;
@@ -397,7 +408,7 @@ impl Builder {
                     None => to_world.transform_point3(DVec3::ZERO),
                 };
                 let intensity = rgb(node.get_rgb("intensity")?.unwrap_or([1.0; 3]));
-                Light::Point(PointLight { position: position.as_vec3(), intensity })
+                ready(Light::Point(PointLight { position: position.as_vec3(), intensity }))
             }
             "spot" => {
                 let to_world = node.transform("to_world")?;
@@ -407,7 +418,7 @@ impl Builder {
                 if !(cutoff > 0.0 && cutoff <= 180.0 && beam >= 0.0 && beam < cutoff) {
                     return Err(node.error("spot light: need 0 <= beam_width < cutoff_angle <= 180 (degrees)"));
                 }
-                Light::Spot(SpotLight::new(to_world.as_mat4(), intensity, cutoff as f32, beam as f32))
+                ready(Light::Spot(SpotLight::new(to_world.as_mat4(), intensity, cutoff as f32, beam as f32)))
             }
             "directional" => {
                 let to_world = node.transform("to_world")?;
@@ -422,11 +433,9 @@ impl Builder {
                     return Err(node.error("directional light: the direction must not be zero"));
                 }
                 let irradiance = rgb(node.get_rgb("irradiance")?.unwrap_or([1.0; 3]));
-                // The scene radius is filled in once all shapes are known.
-                Light::Directional(DirectionalLight {
-                    direction: dir.normalize().as_vec3(),
-                    irradiance,
-                    scene_radius: 0.0,
+                let direction = dir.normalize().as_vec3();
+                Box::new(move |scene_radius| {
+                    Light::Directional(DirectionalLight { direction, irradiance, scene_radius })
                 })
             }
             "envmap" => {
@@ -445,7 +454,7 @@ impl Builder {
                     scale as f32,
                 )
                 .map_err(|e| LoadError::at(&loc, format!("'{}': {e}", path.display())))?;
-                Light::EnvMap(light)
+                ready(Light::EnvMap(light))
             }
             "area" => return Err(node.error("an 'area' emitter must be nested inside a shape")),
             _ => return Err(unsupported(node, EMITTERS)),
