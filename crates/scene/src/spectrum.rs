@@ -144,12 +144,15 @@ pub fn check_sampled(pairs: &[(f64, f64)]) -> Result<(), String> {
 const CIE_MIN: f64 = 360.0;
 const CIE_MAX: f64 = 830.0;
 const CIE_SAMPLES: usize = 95;
-/// Makes a unit spectrum integrate to luminance 1.
+/// Makes a unit spectrum integrate to luminance 1 (Mitsuba's constants, digit for digit).
+#[allow(clippy::excessive_precision)]
 const CIE_Y_NORMALIZATION: f64 = 1.0 / 106.7502593994140625;
 /// Makes the D65 table integrate to luminance 1.
+#[allow(clippy::excessive_precision)]
 const CIE_D65_NORMALIZATION: f64 = 1.0 / 98.99741751876255;
 
 /// XYZ → linear sRGB (ITU-R BT.709), in single precision as in Mitsuba.
+#[allow(clippy::excessive_precision)]
 const XYZ_TO_SRGB: [[f32; 3]; 3] =
     [[3.240479, -1.537150, -0.498535], [-0.969256, 1.875991, 0.041556], [0.055648, -0.204043, 1.057311]];
 

@@ -33,8 +33,7 @@ fn mitsuba(python: &Path, variant: &str, scene: &str, defines: &[(&str, &str)], 
 
 fn field(text: &str, prefix: &str, key: &str) -> Option<f64> {
     text.lines()
-        .filter(|l| l.starts_with(prefix))
-        .last()?
+        .rfind(|l| l.starts_with(prefix))?
         .split_whitespace()
         .find_map(|kv| kv.strip_prefix(key))
         .and_then(|v| v.parse().ok())

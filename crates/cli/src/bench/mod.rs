@@ -69,8 +69,7 @@ fn time_mitsuba(
     // The last machine-readable line is the warm (second) render.
     let line = text
         .lines()
-        .filter(|l| l.starts_with("mitsuba "))
-        .last()
+        .rfind(|l| l.starts_with("mitsuba "))
         .ok_or_else(|| anyhow!("Mitsuba benchmark printed no result: {}", String::from_utf8_lossy(&out.stderr)))?;
     line.split_whitespace()
         .find_map(|kv| kv.strip_prefix("seconds="))

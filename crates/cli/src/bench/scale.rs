@@ -85,7 +85,7 @@ pub fn run(triangles: usize, threads: usize) -> Result<()> {
             return Err(anyhow!("the scale render failed: {err}"));
         }
         let field = |key: &str| -> Option<f64> {
-            err.split(|c| c == ',' || c == ':' || c == '\n')
+            err.split([',', ':', '\n'])
                 .find_map(|s| s.trim().strip_prefix(key))
                 .and_then(|v| v.split_whitespace().next())
                 .and_then(|v| v.parse().ok())

@@ -111,6 +111,7 @@ fn dequantize(q: u8, scale: f32, origin: f32) -> f32 {
 /// `lo` and `hi` (the lanes' minima and maxima): dequantised, every lower
 /// plane is <= its `lo` and every upper plane >= its `hi`, checked with the
 /// traversal's arithmetic.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn quantize_axis(lo: &[f32], hi: &[f32], ql: &mut [u8], qh: &mut [u8]) -> (f32, f32) {
     let origin = lo.iter().copied().fold(f32::INFINITY, f32::min);
     let top = hi.iter().copied().fold(f32::NEG_INFINITY, f32::max);

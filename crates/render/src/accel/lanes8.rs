@@ -27,10 +27,13 @@ mod imp {
             unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
             a
         }
+        // Named methods, not operator traits: the lane types stay plain and `#[inline(always)]`.
+        #[allow(clippy::should_implement_trait)]
         #[inline(always)]
         pub fn sub(self, o: F8) -> F8 {
             unsafe { F8(_mm256_sub_ps(self.0, o.0)) }
         }
+        #[allow(clippy::should_implement_trait)]
         #[inline(always)]
         pub fn mul(self, o: F8) -> F8 {
             unsafe { F8(_mm256_mul_ps(self.0, o.0)) }

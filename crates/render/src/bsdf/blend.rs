@@ -48,7 +48,7 @@ impl<'a> Nested<'a> {
     }
 
     #[inline]
-    fn to_nested(&self, w: Vec3) -> Vec3 {
+    fn in_nested(&self, w: Vec3) -> Vec3 {
         match self.map {
             None => w,
             Some(m) => Vec3::new(m[0].dot(w), m[1].dot(w), m[2].dot(w)),
@@ -56,7 +56,7 @@ impl<'a> Nested<'a> {
     }
 
     #[inline]
-    fn from_nested(&self, w: Vec3) -> Vec3 {
+    fn in_blend(&self, w: Vec3) -> Vec3 {
         match self.map {
             None => w,
             Some(m) => m[0] * w.x + m[1] * w.y + m[2] * w.z,
@@ -66,7 +66,7 @@ impl<'a> Nested<'a> {
     /// f · |cos θ_i| in the nested frame, and the pdf, for blend-local directions.
     #[inline]
     fn eval_cos_pdf(&self, wo: Vec3, wi: Vec3) -> (Spectrum, f32) {
-        let (wo, wi) = (self.to_nested(wo), self.to_nested(wi));
+        let (wo, wi) = (self.in_nested(wo), self.in_nested(wi));
         (self.bsdf.eval(wo, wi) * wi.z.abs(), self.bsdf.pdf(wo, wi))
     }
 }
@@ -109,6 +109,7 @@ impl BsdfModel for Blend<'_> {
         self.eval_cos_pdf(wo, wi).1
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let w = self.weight;
         // Mitsuba: the second BSDF when u ≤ weight, its number rescaled.
@@ -117,8 +118,8 @@ impl BsdfModel for Blend<'_> {
         } else {
             (self.second, self.first, w, if w > 0.0 { u / w } else { 0.0 })
         };
-        let s = chosen.bsdf.sample(chosen.to_nested(wo), u.min(ONE_MINUS_EPS), u2)?;
-        let wi = chosen.from_nested(s.wi);
+        let s = chosen.bsdf.sample(chosen.in_nested(wo), u.min(ONE_MINUS_EPS), u2)?;
+        let wi = chosen.in_blend(s.wi);
         let w_other = 1.0 - w_chosen;
         let (f_other, p_other) = if w_other > 0.0 { other.eval_cos_pdf(wo, wi) } else { (Spectrum::ZERO, 0.0) };
         let pdf = w_chosen * s.pdf + w_other * p_other;

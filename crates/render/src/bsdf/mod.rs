@@ -190,6 +190,7 @@ impl Perturbation {
     /// The factor for a direction `wi` (local to the perturbed frame): zero
     /// when it changes side between the two frames.
     #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn factor(&self, wi: Vec3) -> f32 {
         let c = self.n_orig.dot(wi);
         if !(c * wi.z > 0.0) {

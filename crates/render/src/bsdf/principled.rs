@@ -411,6 +411,7 @@ impl BsdfModel for Principled {
         pdf
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let a = wo;
         let cos_i = a.z;

@@ -294,6 +294,7 @@ impl BsdfModel for PrincipledThin {
         pdf
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let cos_i = wo.z;
         if cos_i == 0.0 {

@@ -119,6 +119,7 @@ impl BsdfModel for RoughDielectric {
         prob * dwh_dwi.abs()
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         let cos_o = wo.z;
         if cos_o == 0.0 {

@@ -268,6 +268,7 @@ impl BsdfModel for RoughPlastic<'_> {
         p_spec * spec + (1.0 - p_spec) * warp::cosine_hemisphere_pdf(wi)
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;

@@ -34,6 +34,7 @@ impl Cylinder {
     /// Mitsuba's parameters: `to_world`, `p0`, `p1`, `radius`, `flip_normals`.
     /// Errors when the placement shears or scales x and y unequally (Mitsuba
     /// only warns there, and its sampling density is then wrong).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn new(to_world: DMat4, p0: DVec3, p1: DVec3, radius: f64, flip: bool) -> Result<Cylinder, String> {
         let d = p1 - p0;
         let len = d.length();

@@ -98,6 +98,7 @@ impl Sphere {
     /// A point of the cone the sphere subtends at `p_ref`, with its density
     /// per unit solid angle; `None` when `p_ref` is inside the sphere (or on
     /// it), where the area is sampled instead.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn sample_cone(&self, p_ref: Vec3, u: Vec2) -> Option<ShapeSample> {
         let (center, radius) = (self.center, self.radius);
         let dc2 = p_ref.distance_squared(center);
@@ -131,6 +132,7 @@ impl Sphere {
 
     /// The density of [`Sphere::sample_cone`] from `p_ref` (uniform over
     /// the cone); `None` where it does not sample.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn pdf_cone(&self, p_ref: Vec3) -> Option<f32> {
         let dc2 = p_ref.distance_squared(self.center);
         let r2 = self.radius * self.radius;

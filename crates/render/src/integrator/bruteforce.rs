@@ -35,6 +35,7 @@ pub struct BruteForceIntegrator {
 }
 
 impl BruteForceIntegrator {
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn li(
         &self,
         scene: &Scene,

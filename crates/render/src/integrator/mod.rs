@@ -88,6 +88,7 @@ impl Termination {
     /// β by (1 when roulette did not play), or `None` to stop.
     /// Roulette as Mitsuba: survival q = min(0.95, max(β) η²) from `rr_depth` on.
     #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn survive(&self, beta: Spectrum, eta: f32, depth: u32, rng: &mut SampleStream) -> Option<f32> {
         let beta_max = beta.max_element();
         if !(beta_max > 0.0) || beta_max < self.throughput_threshold {

@@ -35,6 +35,7 @@ impl AreaLight {
     }
 
     /// `shape`: this light's shape.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn sample_li(&self, p_ref: Vec3, u2: Vec2, shape: &Shape) -> Option<LightSample> {
         let s = shape.sample_direction(p_ref, u2)?;
         let d = s.p - p_ref;

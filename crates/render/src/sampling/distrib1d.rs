@@ -23,6 +23,7 @@ pub struct Distribution1D {
 
 impl Distribution1D {
     /// Returns `None` when no weight is positive (or a weight is not finite).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn new(weights: &[f32]) -> Option<Distribution1D> {
         if weights.iter().any(|w| !w.is_finite() || *w < 0.0) {
             return None;

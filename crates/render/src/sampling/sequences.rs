@@ -35,6 +35,7 @@ pub fn multijitter_2d(i: u32, res: (u32, u32), seed: u32, jitter: Vec2) -> Vec2 
 
 /// The smallest prime r ≥ 2 with r² ≥ spp (Mitsuba's `orthogonal` resolution).
 pub fn orthogonal_resolution(spp: u32) -> u32 {
+    #[allow(clippy::manual_is_multiple_of)] // `is_multiple_of` is newer than the crates' rust-version
     let is_prime = |x: u32| (2..=x / 2).all(|i| x % i != 0);
     let mut r = 2u32;
     while (r as u64 * r as u64) < spp as u64 || !is_prime(r) {
