@@ -5,10 +5,10 @@
 //! converged one, `penumbra diff`'s metric with the variance of each pixel's
 //! mean standing in for its squared error:
 //!
-//!   E = 1/(3·P) Σ_pixels Σ_{c ∈ R,G,B} Var[mean_c] / (mean_c² + 0.01)
+//!   E = 1/(3·P) Σ_pixels Σ_{c ∈ R,G,B} Var(mean_c) / (mean_c² + 0.01)
 //!
 //! (relMSE with ε = 0.01 as in Rousselle et al. 2011 and the denoising
-//! literature; Var[mean] from the film's second moments, see
+//! literature; Var(mean) from the film's second moments, see
 //! `Film::pixel_variance`). The render stops after the first pass at whose
 //! end E ≤ X, once every pixel has [`MIN_SPP`] samples: with fewer, rare
 //! bright paths are usually missing from a pixel's samples altogether and

@@ -73,7 +73,7 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
         .with_context(|| format!("cannot write '{}'", path.display()))
 }
 
-/// Reads an EXR written by [`write`] (or any RGB EXR: then `meta` is empty).
+/// Reads an EXR written by [`write()`] (or any RGB EXR: then `meta` is empty).
 pub fn read(path: &Path) -> Result<ExrImage> {
     let image = exr::prelude::read()
         .no_deep_data()

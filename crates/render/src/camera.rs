@@ -145,7 +145,7 @@ impl Camera {
         matches!(self.projection, Projection::ThinLens { .. })
     }
 
-    /// Ray through film position `s` in [0,1]² (x right, y down), drawing
+    /// Ray through film position `s` in [0, 1)² (x right, y down), drawing
     /// the aperture sample from `rng` after the film position (as Mitsuba).
     #[inline]
     pub fn sample_ray(&self, s: Vec2, rng: &mut SampleStream) -> Ray {
@@ -159,7 +159,7 @@ impl Camera {
         self.generate_ray_with_aperture(s, Vec2::splat(0.5))
     }
 
-    /// Ray through film position `s` in [0,1]² and aperture sample `a` in [0,1]².
+    /// Ray through film position `s` in [0, 1)² and aperture sample `a` in [0, 1)².
     #[inline]
     pub fn generate_ray_with_aperture(&self, s: Vec2, a: Vec2) -> Ray {
         match self.projection {

@@ -239,7 +239,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, flip_tex_coords: bool) -> Result<Tri
 
 /// Parses PLY data and the vertex and face properties Mitsuba 3.9.1 keeps
 /// as mesh attributes (`vertex_<name>`, `face_<name>`; see
-/// [`other_fields`]). Face attributes are repeated for every triangle of a
+/// `other_fields`). Face attributes are repeated for every triangle of a
 /// fan-triangulated polygon, so they hold one entry per triangle.
 pub fn parse_ply_with_attributes(
     bytes: &[u8],

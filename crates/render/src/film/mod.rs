@@ -359,7 +359,7 @@ impl Film {
     }
 
     /// Estimated relative error of pixel `i`: the mean over R, G, B of
-    /// Var[mean] / (mean² + ε), the expected relMSE of the pixel against the
+    /// Var(mean) / (mean² + ε), the expected relMSE of the pixel against the
     /// converged image (`penumbra diff`'s relMSE, with the variance of the
     /// mean standing in for the squared error).
     #[inline]

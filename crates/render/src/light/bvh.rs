@@ -386,7 +386,7 @@ impl LightBvh {
 
     /// Probability that `sample(p, n, ·)` returns `light`: bit-identical to
     /// the probability `sample` returns with it, since both walk the tree
-    /// through [`LightBvh::descend`]; 0 for lights never picked there (and
+    /// through `LightBvh::descend`; 0 for lights never picked there (and
     /// for indices out of range).
     pub fn pmf(&self, p: Vec3, n: Vec3, light: usize) -> f32 {
         let mut trail = match self.slots.get(light) {

@@ -29,7 +29,7 @@ pub fn relative_frame(si: &SurfaceInteraction, rgb: Spectrum) -> Frame {
 
 /// The perturbed world-space shading frame for a normal-map texel `rgb`:
 /// n = 2·rgb − 1 in the unperturbed shading frame (flipped if invalid, see
-/// [`flip_invalid`]), s = the local x axis made orthogonal to n, t = n × s.
+/// `flip_invalid`), s = the local x axis made orthogonal to n, t = n × s.
 /// Falls back to the unperturbed frame for a zero normal.
 pub fn perturbed_frame(si: &SurfaceInteraction, rgb: Spectrum) -> Frame {
     let f = relative_frame(si, rgb);
