@@ -7,6 +7,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
@@ -121,8 +123,9 @@ fn slurm_example_scripts_are_valid_bash_with_the_documented_options() {
     }
 }
 
-/// The Kubernetes manifest, parsed with Python's yaml module (skipped, with a
-/// note, where python3 has none); prints what it checked as JSON-ish lines.
+/// The Kubernetes manifest, parsed with Python's yaml module (`python3` from
+/// PATH; .ci/run puts a virtual environment with PyYAML first on PATH).
+/// Without the module it is skipped, and fails under CI (`common::skip`).
 #[test]
 fn kubernetes_indexed_job_parses_and_agrees_with_itself() {
     let script = r#"
@@ -152,8 +155,10 @@ print(f"ok: {len(docs)} documents, {n} indexed parts")
     let yaml = root().join("examples/kubernetes/indexed-job.yaml");
     let probe = Command::new("python3").args(["-c", "import yaml"]).output();
     if !probe.is_ok_and(|o| o.status.success()) {
-        eprintln!("SKIPPED: python3 with the yaml module is not available (apt-get install python3-yaml)");
-        return;
+        return common::skip(
+            "kubernetes_indexed_job_parses_and_agrees_with_itself",
+            "python3 with the yaml module is not available (pip install pyyaml, or apt-get install python3-yaml)",
+        );
     }
     let o = ok(Command::new("python3").arg("-c").arg(script).arg(&yaml).output().unwrap());
     eprintln!("{}", String::from_utf8_lossy(&o.stdout).trim());

@@ -1,15 +1,17 @@
 //! `--preview` for real: an X server (Xvfb), a render with the window, a
 //! screenshot of the window (xwd) taken while it is open, compared with the
 //! PNG the render writes (the preview tonemaps as the PNG writer does).
-//! Skipped, with a note, where Xvfb or xwd is missing (apt-get install xvfb
-//! x11-apps); .ci/run installs them. PENUMBRA_PREVIEW_SCREENSHOT=FILE.png
-//! keeps the screenshot.
+//! Skipped where Xvfb or xwd is missing (apt-get install xvfb x11-apps), and
+//! then fails under CI (`common::skip`); .ci/run installs them.
+//! PENUMBRA_PREVIEW_SCREENSHOT=FILE.png keeps the screenshot.
 
 use penumbra_scene::image_io::{self, linear_to_srgb, RgbImage};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+mod common;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -88,8 +90,10 @@ fn read_xwd(b: &[u8]) -> (usize, usize, Vec<[u8; 3]>) {
 #[test]
 fn preview_window_shows_the_image_under_xvfb() {
     if !have("Xvfb") || !have("xwd") {
-        eprintln!("SKIPPED: the --preview test needs Xvfb and xwd (apt-get install xvfb x11-apps)");
-        return;
+        return common::skip(
+            "preview_window_shows_the_image_under_xvfb",
+            "needs Xvfb and xwd on PATH (apt-get install xvfb x11-apps)",
+        );
     }
     let (display, _xvfb) = start_xvfb();
     let d = std::env::temp_dir().join(format!("penumbra-preview-{}", std::process::id()));

@@ -124,28 +124,87 @@ fn samplers_parse_with_mitsubas_parameters_and_counts() {
     assert!(e.contains("ldsampler") && e.contains("multijitter"), "{e}");
 }
 
+/// Four linear statistics of a 16x16 image, Σ_p c_p x_p (red channel):
+/// the total (normalisation), the first moments Σ u·x and Σ v·x (a shift,
+/// e.g. pixel samples biased within their pixel) and the second moment
+/// Σ (u² + v²)·x (the blur, set by the lens samples), with u, v ∈ (−1, 1) the
+/// pixel centre.
+const STATS: [&str; 4] = ["total", "Σ u·x", "Σ v·x", "Σ r²·x"];
+fn weights(p: usize) -> [f64; 4] {
+    let (u, v) = (((p % 16) as f64 + 0.5 - 8.0) / 8.0, ((p / 16) as f64 + 0.5 - 8.0) / 8.0);
+    [1.0, u, v, u * u + v * v]
+}
+fn stats(img: &[[f32; 3]]) -> [f64; 4] {
+    let mut s = [0.0; 4];
+    for (p, x) in img.iter().enumerate() {
+        for (sk, w) in s.iter_mut().zip(weights(p)) {
+            *sk += w * x[0] as f64;
+        }
+    }
+    s
+}
+
+/// Every sampler renders the blurred thin-lens view of the square (4
+/// dimensions per sample) with the same expectation as the independent
+/// sampler.
+///
+/// Each sampler renders K = 64 seeds at 16 spp (orthogonal rounds to 25);
+/// the mean over seeds of each statistic has the variance s²/K from the
+/// spread over seeds (renders with different seeds are independent, whatever
+/// the stratification within one). The reference is one independent render
+/// at 32768 spp: its samples are 0 or 1 and independent, so pixel p's mean
+/// has the unbiased variance x(1 − x)/(n − 1), and a statistic's variance is
+/// Σ c_p² x_p(1 − x_p)/(n − 1). A sampler passes when
+/// |mean − reference| < T·√(s²/K + V_ref) for every statistic; T = 4.41 is
+/// the two-sided 4.2e-5 quantile of Student's t with 63 degrees of freedom
+/// (conservative, as the reference's part of the variance is known far
+/// better), so the 24 checks (6 samplers × 4 statistics) raise a false alarm
+/// with probability at most 1e-3. Any bias beyond (T + 3)·se, printed below,
+/// fails with probability at least 1 − Φ(−3) = 0.9987.
 #[test]
 fn every_sampler_renders_the_same_image_in_expectation() {
-    // The blurred thin-lens view (4 dimensions per sample) of the square:
-    // each sampler's image mean agrees with a many-sample independent render.
+    const K: u64 = 64;
+    const T: f64 = 4.41;
+    const REF_SPP: u32 = 32768;
     let p = format!(
         r#"<float name="fov" value="40"/>{LOOK}<float name="aperture_radius" value="0.5"/><float name="focus_distance" value="20"/>"#
     );
-    let mean = |img: &[[f32; 3]]| img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64;
-    let reference = mean(&render(&job_of(&scene("thinlens", &p, "")).unwrap(), 1024));
-    for s in ["multijitter", "orthogonal", "ldsampler", "stratified", "independent"] {
-        let xml = scene(
-            "thinlens",
-            &p,
-            &format!(r#"<sampler type="{s}"><integer name="sample_count" value="16"/></sampler>"#),
-        );
-        let job = job_of(&xml).unwrap();
-        let m = mean(&render(&job, job.sampler.spp));
-        eprintln!("{s}: image mean {m:.5}, reference {reference:.5}");
-        // Samples are 0 or 1: the image mean of 16 spp x 256 pixels has a
-        // standard error of at most sqrt(1/4 / 4096) = 0.0078 (far less
-        // here, most pixels being constant); measured deviations are below 0.004.
-        assert!((m - reference).abs() < 0.016, "{s}: {m} vs {reference}");
+    let build_with = |sampler: &str, ov: Overrides| {
+        build(&parse_str(&scene("thinlens", &p, sampler), Path::new("sensors.xml"), &[]).unwrap(), &ov).unwrap()
+    };
+    let ref_job = build_with("", Overrides { seed: Some(1 << 40), ..Default::default() });
+    let ref_img = render(&ref_job, REF_SPP);
+    let reference = stats(&ref_img);
+    let mut ref_var = [0.0f64; 4];
+    for (px, x) in ref_img.iter().enumerate() {
+        let x = x[0] as f64;
+        for (v, w) in ref_var.iter_mut().zip(weights(px)) {
+            *v += w * w * x * (1.0 - x) / (REF_SPP - 1) as f64;
+        }
+    }
+    let xml = |s: &str| format!(r#"<sampler type="{s}"><integer name="sample_count" value="16"/></sampler>"#);
+    let samplers = ["multijitter", "orthogonal", "ldsampler", "stratified", "independent", "sobol"];
+    for s in samplers {
+        let (sampler, over) = if s == "sobol" { (xml("independent"), Some(s.to_string())) } else { (xml(s), None) };
+        let per_seed: Vec<[f64; 4]> = (0..K)
+            .map(|k| {
+                let job =
+                    build_with(&sampler, Overrides { seed: Some(k), sampler: over.clone(), ..Default::default() });
+                stats(&render(&job, job.sampler.spp))
+            })
+            .collect();
+        for (i, name) in STATS.iter().enumerate() {
+            let m = per_seed.iter().map(|v| v[i]).sum::<f64>() / K as f64;
+            let s2 = per_seed.iter().map(|v| (v[i] - m).powi(2)).sum::<f64>() / (K - 1) as f64;
+            let se = (s2 / K as f64 + ref_var[i]).sqrt();
+            eprintln!(
+                "{s} {name}: {m:.4} vs reference {:.4} (difference {:+.4}, se {se:.4}; detects a bias > {:.4})",
+                reference[i],
+                m - reference[i],
+                (T + 3.0) * se
+            );
+            assert!((m - reference[i]).abs() < T * se, "{s} {name}: {m} vs {} ± {se}", reference[i]);
+        }
     }
 }
 

@@ -35,40 +35,84 @@ fn bounds(m: &TriangleMesh) -> Aabb {
     Aabb::from_points(&m.positions)
 }
 
-/// Mitsuba's own matpreview.serialized (not in the repository; skipped when absent):
+/// tests/scenes/shapes/three.serialized (written by
+/// tools/make_serialized_fixture.py from meshes Mitsuba 3.9.1 builds; Mitsuba
+/// reads it back bit for bit and renders it as it renders the source meshes)
+/// against what Mitsuba 3.9.1 reads from it:
 ///   s = mi.load_dict({'type': 'serialized', 'filename': F, 'shape_index': i})
-///   s.vertex_count(), s.face_count(), s.bbox()      (index 3 is out of range)
+///       (index 2 with 'face_normals': True)
+///   s.vertex_count(), s.face_count(), s.has_vertex_normals(),
+///   s.has_vertex_texcoords(), s.bbox(), and the column sums of
+///   s.vertex_positions_buffer() in float64
+/// Index 3 is past the last mesh (Mitsuba refuses it too).
 #[test]
-fn matpreview_serialized_matches_mitsuba() {
-    let path = Path::new("/tmp/mdata/scenes/matpreview/matpreview.serialized");
-    if !path.exists() {
-        eprintln!("skipped: {} not present", path.display());
-        return;
+fn serialized_multi_shape_fixture_matches_mitsuba() {
+    let path = common::root().join("tests/scenes/shapes/three.serialized");
+    struct Want {
+        name: &'static str,
+        counts: (usize, usize),
+        normals: bool,
+        uvs: bool,
+        face_normals: bool,
+        lo: [f32; 3],
+        hi: [f32; 3],
+        sum: [f64; 3],
     }
-    let want: [(usize, usize, [f32; 3], [f32; 3]); 3] = [
-        (289, 512, [-1.0024269819259644, -1.0, 0.0], [1.1313550472259521, 0.622808575630188, 1.2964400053024292]),
-        (
-            2078,
-            3936,
-            [-0.9272717833518982, -0.927271842956543, -0.031111598014831543],
-            [0.9272717833518982, 0.927271842956543, 1.6868669986724854],
-        ),
-        (
-            29439,
-            57152,
-            [-1.2199430465698242, -1.2199430465698242, -1.1764949560165405],
-            [1.003021001815796, 1.2199430465698242, 1.0131640434265137],
-        ),
+    let want = [
+        Want {
+            name: "cube",
+            counts: (24, 12),
+            normals: true,
+            uvs: true,
+            face_normals: false,
+            lo: [-1.5330127477645874, -0.30000001192092896, -0.5964101552963257],
+            hi: [-0.26698726415634155, 0.30000001192092896, 0.5964101552963257],
+            sum: [-21.59999978542328, 0.0, 0.0],
+        },
+        // Double precision in the file (flag 0x2000), read as f32.
+        Want {
+            name: "panel",
+            counts: (4, 2),
+            normals: true,
+            uvs: true,
+            face_normals: false,
+            lo: [-1.399999976158142, -0.8736161589622498, -0.5517541170120239],
+            hi: [1.399999976158142, -0.32638388872146606, 0.951754093170166],
+            sum: [0.0, -2.4000000953674316, 0.7999999523162842],
+        },
+        // Positions only, file flag 0x0010 set.
+        Want {
+            name: "icosahedron",
+            counts: (12, 20),
+            normals: false,
+            uvs: false,
+            face_normals: true,
+            lo: [0.41720718145370483, -0.2827928364276886, -0.3827928304672241],
+            hi: [1.1827929019927979, 0.48279285430908203, 0.3827928304672241],
+            sum: [9.600000262260437, 1.2000000774860382, 0.0],
+        },
     ];
-    for (i, (nv, nf, lo, hi)) in want.iter().enumerate() {
-        let s = load_serialized(path, i).unwrap();
-        assert_eq!((s.mesh.positions.len(), s.mesh.indices.len()), (*nv, *nf), "mesh {i}");
-        let b = bounds(&s.mesh);
-        assert!((b.min - Vec3::from_array(*lo)).abs().max_element() < 1e-6, "mesh {i}: {:?}", b);
-        assert!((b.max - Vec3::from_array(*hi)).abs().max_element() < 1e-6, "mesh {i}: {:?}", b);
+    for (i, w) in want.iter().enumerate() {
+        let s = load_serialized(&path, i).unwrap();
+        let m = &s.mesh;
+        assert_eq!(s.name, w.name, "mesh {i}");
+        assert_eq!((m.positions.len(), m.indices.len()), w.counts, "mesh {i}");
+        assert_eq!(
+            (!m.normals.is_empty(), !m.uvs.is_empty(), s.face_normals),
+            (w.normals, w.uvs, w.face_normals),
+            "mesh {i}"
+        );
+        let b = bounds(m);
+        // The same f32 values, so the same bounds.
+        assert_eq!((b.min.to_array(), b.max.to_array()), (w.lo, w.hi), "mesh {i}");
+        let sum =
+            m.positions.iter().fold([0.0f64; 3], |a, p| [a[0] + p.x as f64, a[1] + p.y as f64, a[2] + p.z as f64]);
+        for k in 0..3 {
+            assert!((sum[k] - w.sum[k]).abs() < 1e-9, "mesh {i}: sum of positions {sum:?} vs {:?}", w.sum);
+        }
     }
-    let e = load_serialized(path, 3).unwrap_err().to_string();
-    assert!(e.contains("out of range") && e.contains("matpreview.serialized"), "{e}");
+    let e = load_serialized(&path, 3).unwrap_err().to_string();
+    assert!(e.contains("out of range") && e.contains("three.serialized"), "{e}");
 }
 
 fn quad(z: f32, with_normals: bool) -> TriangleMesh {

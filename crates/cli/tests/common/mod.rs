@@ -7,6 +7,11 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "../../../../tests/support/skip.rs"]
+mod skip;
+#[allow(unused_imports)]
+pub use skip::{in_ci, skip};
+
 pub fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_penumbra"))
 }

@@ -267,4 +267,129 @@ mod tests {
         let (a, c) = (Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(-0.6, 0.2, 0.3).normalize());
         assert!((b.eval(a, c) - b.eval(c, a)).abs().max_element() < 1e-6);
     }
+
+    /// Smooth `plastic` against Mitsuba 3.9.1 (scalar_rgb). Printed by:
+    ///
+    /// ```python
+    /// import drjit as dr, mitsuba as mi
+    /// mi.set_variant('scalar_rgb')
+    /// n = lambda *v: dr.normalize(mi.Vector3f(*v))
+    /// wo, wi_r = n(0.3, 0.2, 0.8), n(-0.5, 0.1, 0.6)
+    /// wi_t, wi_g = n(-0.4, -0.3, -0.7), n(0.9, -0.2, 0.1)
+    /// rgb = lambda *c: {'type': 'rgb', 'value': list(c)}
+    /// cases = [  # (bsdf, si.wi, wo)
+    ///     ({'type': 'plastic', 'int_ior': 1.49, 'diffuse_reflectance': rgb(0.5, 0.3, 0.8)}, wo, wi_r),
+    ///     ({'type': 'plastic', 'int_ior': 1.7, 'ext_ior': 1.1, 'nonlinear': True,
+    ///       'diffuse_reflectance': rgb(0.9, 0.6, 0.2), 'specular_reflectance': rgb(0.8, 0.7, 0.9)}, wi_g, wo),
+    ///     ({'type': 'plastic', 'int_ior': 1.33, 'diffuse_reflectance': rgb(0.2, 0.7, 0.4)}, wo, wi_g),
+    ///     (case 0's bsdf, wo, wi_t), (case 0's bsdf, wi_t, wo)]
+    /// ctx = mi.BSDFContext()
+    /// for d, a, b in cases:
+    ///     bsdf = mi.load_dict(d)
+    ///     si = mi.SurfaceInteraction3f(); si.wi = a; si.sh_frame = mi.Frame3f([0, 0, 1])
+    ///     print(bsdf.eval(ctx, si, b), bsdf.pdf(ctx, si, b))
+    ///     bs, w = bsdf.sample(ctx, si, 0.0, [0.3, 0.6])    # the specular lobe
+    ///     print(bs.wo, bs.pdf, w)
+    ///     bs, w = bsdf.sample(ctx, si, 0.999, [0.3, 0.6])  # the diffuse lobe
+    ///     print(bs.wo, bs.pdf, w)
+    /// ```
+    ///
+    /// Mitsuba's eval includes cos θ_i; its η is int_ior / ext_ior (ext_ior
+    /// defaults to "air", 1.000277, so case 0 has η = 1.48959) and its
+    /// specular sampling weight s_mean / (d_mean + s_mean) of the channel
+    /// means. Both sides compute the same closed forms in f32, so they agree
+    /// to rounding (relative 1e-4).
+    #[test]
+    fn matches_mitsuba() {
+        let wo = Vec3::new(0.341882, 0.227921, 0.911685);
+        let wi_r = Vec3::new(-0.635001, 0.127, 0.762001);
+        let wi_g = Vec3::new(0.970495, -0.215666, 0.107833);
+        let wi_t = Vec3::new(-0.464991, -0.348743, -0.813733);
+        let make = |int_ior: f32, ext_ior: f32, nonlinear: bool, d: [f32; 3], s: [f32; 3]| {
+            let eta = int_ior / ext_ior;
+            let (d, s) = (Spectrum::from(d), Spectrum::from(s));
+            let (d_mean, s_mean) = ((d.x + d.y + d.z) / 3.0, (s.x + s.y + s.z) / 3.0);
+            Plastic {
+                eta,
+                diffuse_reflectance: d,
+                specular_reflectance: s,
+                nonlinear,
+                fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
+                specular_sampling_weight: s_mean / (d_mean + s_mean),
+            }
+        };
+        // Mitsuba's default ext_ior, "air".
+        let air = crate::bsdf::presets::named_ior("air").unwrap();
+        let a = make(1.49, air, false, [0.5, 0.3, 0.8], [1.0; 3]);
+        let b = make(1.7, 1.1, true, [0.9, 0.6, 0.2], [0.8, 0.7, 0.9]);
+        let c = make(1.33, air, false, [0.2, 0.7, 0.4], [1.0; 3]);
+        type Lobe = (f32, [f32; 3]); // (pdf, weight); direction checked separately
+        let cases: [(Plastic, Vec3, Vec3, [f32; 3], f32, Option<(Lobe, Lobe)>); 5] = [
+            (
+                a,
+                wo,
+                wi_r,
+                [0.1225079894065857, 0.07350479811429977, 0.19601278007030487],
+                0.2252875566482544,
+                Some((
+                    (0.0711798146367073, [0.5516578555107117; 3]),
+                    (0.2709701359272003, [0.5468478798866272, 0.3281087577342987, 0.8749566674232483]),
+                )),
+            ),
+            (
+                b,
+                wi_g,
+                wo,
+                [0.10598835349082947, 0.04957640916109085, 0.011822259053587914],
+                0.10557708889245987,
+                Some((
+                    (0.6361897587776184, [0.6957706809043884, 0.6087992787361145, 0.7827419638633728]),
+                    (0.10613647848367691, [1.0039727687835693, 0.46961164474487305, 0.11198613792657852]),
+                )),
+            ),
+            (
+                c,
+                wo,
+                wi_g,
+                [0.003502377774566412, 0.012258321046829224, 0.007004755549132824],
+                0.032747913151979446,
+                Some((
+                    (0.04592451453208923, [0.4449117183685303; 3]),
+                    (0.2783379852771759, [0.2155425101518631, 0.7543987035751343, 0.4310850203037262]),
+                )),
+            ),
+            // wi below the surface: black, pdf 0.
+            (a, wo, wi_t, [0.0; 3], 0.0, None),
+            // Seen from below: black, and no sample (Mitsuba: pdf 0, weight 0).
+            (a, wi_t, wo, [0.0; 3], 0.0, None),
+        ];
+        // Mitsuba's diffuse sample for u2 = (0.3, 0.6).
+        let wi_diffuse = Vec3::new(-0.36955174803733826, 0.15307341516017914, 0.9165151715278625);
+        let close = |x: f32, y: f32| (x - y).abs() <= 1e-4 * y.abs() + 1e-7;
+        let close3 = |x: Spectrum, y: [f32; 3]| (0..3).all(|k| close(x[k], y[k]));
+        for (k, (m, x, y, e, p, samples)) in cases.into_iter().enumerate() {
+            let ours = m.eval(x, y) * y.z.max(0.0);
+            assert!(close3(ours, e), "case {k}: eval·cos {ours} vs Mitsuba {e:?}");
+            assert!(close(m.pdf(x, y), p), "case {k}: pdf {} vs Mitsuba {p}", m.pdf(x, y));
+            let u2 = Vec2::new(0.3, 0.6);
+            match samples {
+                None => {
+                    if x.z <= 0.0 {
+                        assert!(m.sample(x, 0.0, u2).is_none() && m.sample(x, 0.999, u2).is_none(), "case {k}");
+                    }
+                }
+                Some(((ps, ws), (pd, wd))) => {
+                    let s = m.sample(x, 0.0, u2).expect("specular sample");
+                    assert!(s.delta && (s.wi - reflect(x)).abs().max_element() < 1e-6, "case {k}: {s:?}");
+                    assert!(
+                        close(s.pdf, ps) && close3(s.weight, ws),
+                        "case {k}: specular {s:?} vs Mitsuba {ps} {ws:?}"
+                    );
+                    let s = m.sample(x, 0.999, u2).expect("diffuse sample");
+                    assert!(!s.delta && (s.wi - wi_diffuse).abs().max_element() < 1e-5, "case {k}: {s:?}");
+                    assert!(close(s.pdf, pd) && close3(s.weight, wd), "case {k}: diffuse {s:?} vs Mitsuba {pd} {wd:?}");
+                }
+            }
+        }
+    }
 }

@@ -5,6 +5,11 @@ use penumbra_render::film::Film;
 use penumbra_scene::{load_scene, Overrides};
 use std::path::{Path, PathBuf};
 
+#[path = "../../../../tests/support/skip.rs"]
+mod skip;
+#[allow(unused_imports)]
+pub use skip::{in_ci, skip};
+
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
