@@ -185,6 +185,7 @@ fn principledthin(node: &Node, tex: &mut Textures) -> Result<Material> {
     Ok(Material::PrincipledThin(Box::new(p)))
 }
 
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
     let flagged = |tex: &mut Textures, name: &str| flagged_param(node, tex, name);
     let spec_trans = flagged(tex, "spec_trans")?;

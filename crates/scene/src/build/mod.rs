@@ -389,6 +389,7 @@ impl Builder {
     }
 
     /// Emitters declared at the top level (not attached to a shape).
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn top_level_emitter(&mut self, node: &Node) -> Result<PendingLight> {
         let light: PendingLight = match node.plugin.as_str() {
             "constant" => {
@@ -514,6 +515,7 @@ pub(crate) fn resolve(loc: &FileLoc, name: &str, what: &str) -> Result<PathBuf> 
 const INTEGRATORS: &[&str] = &["path", "direct", "bruteforce"];
 
 /// Termination parameters shared by `path` and `bruteforce`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn termination(node: &Node) -> Result<Termination> {
     let max_depth = node.int("max_depth", -1)?;
     let rr_depth = node.int("rr_depth", 5)?;
@@ -725,6 +727,7 @@ fn has_scale(m: &glam::DMat4) -> bool {
     [m.x_axis, m.y_axis, m.z_axis].iter().any(|c| (c.truncate().length_squared() - 1.0).abs() > 1e-3)
 }
 
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn sensor_model(node: &Node, to_world: &glam::DMat4, far: f64) -> Result<SensorModel> {
     match node.plugin.as_str() {
         "perspective" => {
@@ -757,6 +760,7 @@ fn sensor_model(node: &Node, to_world: &glam::DMat4, far: f64) -> Result<SensorM
     }
 }
 
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if !matches!(node.plugin.as_str(), "perspective" | "thinlens" | "orthographic") {
         return Err(unsupported(node, &["perspective", "thinlens", "orthographic"]));
