@@ -129,8 +129,8 @@ pub(crate) fn mulsign(v: Vec3, s: f32) -> Vec3 {
     Vec3::new(v.x * k, v.y * k, v.z * k)
 }
 
-#[derive(Debug, Clone, Copy)]
 /// A direction sampled from a BSDF, with its density and weight.
+#[derive(Debug, Clone, Copy)]
 pub struct BsdfSample {
     /// Sampled incident direction, local to the shading frame.
     pub wi: Vec3,
@@ -228,14 +228,14 @@ impl Bsdf<'_> {
         self.opacity > 0.0 && with_model!(&self.kind, b => b.has_smooth(), null => false)
     }
 
-    #[inline]
     /// f(wo, wi) without the cosine, scaled by the opacity; local directions.
+    #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         self.eval_and_pdf::<true, false>(wo, wi).0
     }
 
-    #[inline]
     /// Solid-angle density of sampling `wi` from `wo`, scaled by the opacity.
+    #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         self.eval_and_pdf::<false, true>(wo, wi).1
     }

@@ -42,8 +42,8 @@ impl Scratch {
     }
 }
 
-#[derive(Debug, Clone)]
 /// A surface material: a Mitsuba BSDF plugin with its parameters, possibly wrapped.
+#[derive(Debug, Clone)]
 pub enum Material {
     /// Mitsuba `diffuse`.
     Diffuse(DiffuseParams),
