@@ -11,7 +11,7 @@ use glam::{Vec2, Vec3};
 /// A point sampled on a shape, as seen from a reference point.
 #[derive(Debug, Clone, Copy)]
 pub struct ShapeSample {
-    /// World-space position of the sample.
+    /// Position of the sampled point.
     pub p: Vec3,
     /// Front-side geometric normal at `p`.
     pub n: Vec3,
@@ -22,7 +22,7 @@ pub struct ShapeSample {
 /// A triangle mesh shape with its area distribution for sampling.
 #[derive(Debug, Clone)]
 pub struct Mesh {
-    /// World-space triangles.
+    /// The triangles: positions, optional normals and UVs, indices.
     pub mesh: TriangleMesh,
     /// Ignore vertex normals and shade with the flat face normal (also set
     /// when the vertex normals are the face normals, e.g. `rectangle` and
@@ -38,7 +38,7 @@ impl Mesh {
         let face_normals = face_normals || normals_are_flat(&mesh);
         Mesh { area_distrib: Distribution1D::new(&areas), mesh, face_normals }
     }
-    /// World-space corners of triangle `i`.
+    /// Corner positions of triangle `i`.
     #[inline]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
         let t = self.mesh.indices[i];
@@ -63,7 +63,7 @@ fn tri_area(m: &TriangleMesh, i: usize) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
 
-/// A geometric shape in world space.
+/// A geometric shape: a mesh or an analytic primitive.
 #[derive(Debug, Clone)]
 pub enum Shape {
     /// A triangle mesh (Mitsuba `obj`, `ply`, `serialized`, `rectangle`, `cube`).
@@ -100,7 +100,7 @@ impl Shape {
         }
     }
 
-    /// World-space bounds of primitive `i`.
+    /// Bounds of primitive `i` in the shape's space.
     pub fn prim_bounds(&self, i: usize) -> Aabb {
         match self {
             Shape::Mesh(m) => Aabb::from_points(&m.vertices(i)),
@@ -110,7 +110,7 @@ impl Shape {
         }
     }
 
-    /// Total world-space surface area.
+    /// Total surface area.
     pub fn area(&self) -> f32 {
         match self {
             Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
