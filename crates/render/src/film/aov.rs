@@ -77,7 +77,6 @@ impl AovSample {
 }
 
 /// Total channels of `kinds`.
-/// Number of values per pixel for `kinds`.
 pub fn channel_count(kinds: &[AovKind]) -> usize {
     kinds.iter().map(|k| k.channels().len()).sum()
 }
