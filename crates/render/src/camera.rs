@@ -27,12 +27,18 @@ use crate::sampling::warp::sample_concentric_disk;
 use crate::sampling::SampleStream;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba's `fov_axis`: which film extent `fov` spans.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FovAxis {
+    /// The horizontal extent.
     X,
+    /// The vertical extent.
     Y,
+    /// The film diagonal.
     Diagonal,
+    /// The smaller of width and height.
     Smaller,
+    /// The larger of width and height.
     Larger,
 }
 
@@ -42,18 +48,31 @@ pub enum Projection {
     /// Mitsuba `perspective`.
     Pinhole,
     /// Mitsuba `thinlens`.
-    ThinLens { aperture_radius: f32, focus_distance: f32 },
+    ThinLens {
+        /// Radius of the lens aperture, in world units.
+        aperture_radius: f32,
+        /// Distance to the plane in focus along the view axis.
+        focus_distance: f32,
+    },
     /// Mitsuba `orthographic` (`tan_half` is unused).
-    Orthographic { inv_aspect: f32 },
+    Orthographic {
+        /// Reciprocal of the film's aspect ratio.
+        inv_aspect: f32,
+    },
 }
 
+/// A camera: placement, field of view, clip range and projection.
 #[derive(Debug, Clone)]
 pub struct Camera {
+    /// Camera-to-world transform (Mitsuba `to_world`).
     pub world_from_camera: Mat4,
     /// tan of the half field of view along x and y.
     pub tan_half: Vec2,
+    /// Distance of the near clip plane along the view axis.
     pub near_clip: f32,
+    /// Distance of the far clip plane along the view axis.
     pub far_clip: f32,
+    /// How film positions turn into rays.
     pub projection: Projection,
 }
 

@@ -22,24 +22,33 @@ const AOV_STREAM: u32 = 1 << 31;
 /// Everything needed to render an image of a scene.
 #[derive(Debug, Clone)]
 pub struct RenderJob {
+    /// Geometry, materials and lights.
     pub scene: Scene,
+    /// The sensor.
     pub camera: Camera,
+    /// How radiance along camera rays is estimated.
     pub integrator: Integrator,
+    /// Sample generator and samples per pixel.
     pub sampler: Sampler,
+    /// Pixel reconstruction filter.
     pub filter: Filter,
     /// Size of the rendered image (the crop window when there is one).
     pub width: u32,
+    /// Height of the rendered image in pixels.
     pub height: u32,
     /// The crop window's offset and the full film size the camera spans
     /// (Mitsuba's `crop_offset_*` and `width`/`height`).
     pub crop_offset: (u32, u32),
+    /// Full film width and height in pixels.
     pub full_size: (u32, u32),
 }
 
 /// What a render pass did.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RenderStats {
+    /// Camera samples taken.
     pub samples: u64,
+    /// Rays traced, by kind.
     pub rays: RayStats,
     /// Samples dropped because their radiance or weight was NaN or infinite.
     pub non_finite: u64,

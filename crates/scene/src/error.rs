@@ -7,8 +7,11 @@ use std::sync::Arc;
 /// A position in a scene file.
 #[derive(Debug, Clone)]
 pub struct FileLoc {
+    /// The scene file.
     pub file: Arc<PathBuf>,
+    /// Line number, 1-based (0 when unknown).
     pub line: u32,
+    /// Column number, 1-based (0 when unknown).
     pub col: u32,
     /// The directories a relative file name given at this position is
     /// looked up in, in order (Mitsuba's file resolver after `<path>`
@@ -51,13 +54,16 @@ impl fmt::Display for FileLoc {
 pub struct LoadError {
     /// Where the problem is; `None` for errors about the command line.
     pub loc: Option<FileLoc>,
+    /// What went wrong.
     pub message: String,
 }
 
 impl LoadError {
+    /// An error at `loc`, if any.
     pub fn new(loc: Option<FileLoc>, message: impl Into<String>) -> Self {
         LoadError { loc, message: message.into() }
     }
+    /// An error at the position `loc`.
     pub fn at(loc: &FileLoc, message: impl Into<String>) -> Self {
         LoadError { loc: Some(loc.clone()), message: message.into() }
     }
@@ -77,4 +83,5 @@ impl fmt::Display for LoadError {
     }
 }
 
+/// Result of scene loading.
 pub type Result<T> = std::result::Result<T, LoadError>;

@@ -28,6 +28,7 @@ impl Node {
         )
     }
 
+    /// Whether a property `name` is given.
     pub fn has(&self, name: &str) -> bool {
         self.props.iter().any(|p| p.name == name)
     }
@@ -43,10 +44,12 @@ impl Node {
             },
         }
     }
+    /// Float property `name`, or `default` when absent.
     pub fn float(&self, name: &str, default: f64) -> Result<f64> {
         Ok(self.get_float(name)?.unwrap_or(default))
     }
 
+    /// Integer property `name`, `None` when absent.
     pub fn get_int(&self, name: &str) -> Result<Option<i64>> {
         match self.find(name) {
             None => Ok(None),
@@ -57,10 +60,12 @@ impl Node {
             },
         }
     }
+    /// Integer property `name`, or `default` when absent.
     pub fn int(&self, name: &str, default: i64) -> Result<i64> {
         Ok(self.get_int(name)?.unwrap_or(default))
     }
 
+    /// Boolean property `name`, or `default` when absent.
     pub fn bool(&self, name: &str, default: bool) -> Result<bool> {
         match self.find(name) {
             None => Ok(default),
@@ -71,6 +76,7 @@ impl Node {
         }
     }
 
+    /// String property `name` with its file position, `None` when absent.
     pub fn get_string(&self, name: &str) -> Result<Option<(String, crate::error::FileLoc)>> {
         match self.find(name) {
             None => Ok(None),
@@ -80,6 +86,7 @@ impl Node {
             },
         }
     }
+    /// String property `name`, or `default` when absent.
     pub fn string(&self, name: &str, default: &str) -> Result<String> {
         Ok(self.get_string(name)?.map(|s| s.0).unwrap_or_else(|| default.to_string()))
     }
@@ -115,6 +122,7 @@ impl Node {
         }
     }
 
+    /// Transform property `name`, `None` when absent.
     pub fn get_transform(&self, name: &str) -> Result<Option<DMat4>> {
         match self.find(name) {
             None => Ok(None),
@@ -124,6 +132,7 @@ impl Node {
             },
         }
     }
+    /// Transform property `name`, or the identity when absent.
     pub fn transform(&self, name: &str) -> Result<DMat4> {
         Ok(self.get_transform(name)?.unwrap_or(DMat4::IDENTITY))
     }

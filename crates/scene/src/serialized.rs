@@ -14,19 +14,29 @@ use penumbra_render::geometry::TriangleMesh;
 use std::io::Read;
 use std::path::Path;
 
+/// Magic number opening each mesh record.
 pub const HEADER: u16 = 0x041C;
+/// Flag: per-vertex normals are stored.
 pub const HAS_NORMALS: u32 = 0x0001;
+/// Flag: per-vertex texture coordinates are stored.
 pub const HAS_TEXCOORDS: u32 = 0x0002;
+/// Flag: per-vertex colours are stored.
 pub const HAS_COLORS: u32 = 0x0008;
+/// Flag: face normals (flat shading) are requested.
 pub const FACE_NORMALS: u32 = 0x0010;
+/// Flag: arrays are `f32`.
 pub const SINGLE_PRECISION: u32 = 0x1000;
+/// Flag: arrays are `f64`.
 pub const DOUBLE_PRECISION: u32 = 0x2000;
 
 /// One mesh as stored (object space). `face_normals` is the file's flag 0x0010.
 #[derive(Debug, Clone, Default)]
 pub struct SerializedMesh {
+    /// The mesh's name in the file.
     pub name: String,
+    /// Vertices, normals, UVs and indices in object space.
     pub mesh: TriangleMesh,
+    /// Whether flag 0x0010 (flat shading) is set.
     pub face_normals: bool,
 }
 
@@ -165,10 +175,13 @@ impl Reader<'_, '_> {
 /// Options for [`write_serialized`] (used to make test files).
 #[derive(Debug, Clone, Copy)]
 pub struct WriteOptions {
+    /// Format version written (3 or 4).
     pub version: u16,
+    /// Store arrays as `f64` rather than `f32`.
     pub double: bool,
     /// Adds a (skipped) per-vertex colour array.
     pub colors: bool,
+    /// Sets the face-normals flag 0x0010.
     pub face_normals: bool,
 }
 

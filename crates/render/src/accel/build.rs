@@ -24,13 +24,18 @@ pub enum ItemKind {
 /// for ten million primitives).
 #[derive(Debug, Clone, Copy)]
 pub struct Item {
+    /// World-space bounds of the primitive.
     pub bounds: Aabb,
+    /// What the primitive is (selects the meaning of `id` and `index`).
     pub kind: ItemKind,
+    /// Shape id, or instance id for instances.
     pub id: u32,
+    /// Triangle index within the mesh (0 for other kinds).
     pub index: u32,
 }
 
 impl Item {
+    /// Centre of the bounds, the split key.
     #[inline(always)]
     pub fn centroid(&self) -> Vec3 {
         self.bounds.center()
@@ -53,11 +58,26 @@ impl Item {
 /// A node of the binary tree; leaves hold a range of the item array, all
 /// triangles or none.
 pub enum BNode {
-    Leaf { bounds: Aabb, first: usize, count: usize },
-    Inner { bounds: Aabb, children: Box<[BNode; 2]> },
+    /// A leaf over `count` items from `first`.
+    Leaf {
+        /// Bounds of the leaf's items.
+        bounds: Aabb,
+        /// First item of the range.
+        first: usize,
+        /// Number of items in the range.
+        count: usize,
+    },
+    /// An inner node with two children.
+    Inner {
+        /// Bounds of both children.
+        bounds: Aabb,
+        /// The two subtrees.
+        children: Box<[BNode; 2]>,
+    },
 }
 
 impl BNode {
+    /// World-space bounds of the node.
     pub fn bounds(&self) -> Aabb {
         match self {
             BNode::Leaf { bounds, .. } | BNode::Inner { bounds, .. } => *bounds,

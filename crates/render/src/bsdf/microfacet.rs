@@ -21,7 +21,9 @@ use glam::{Vec2, Vec3};
 /// Which normal distribution function.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MicrofacetType {
+    /// The Beckmann distribution (Mitsuba `beckmann`).
     Beckmann,
+    /// The GGX (Trowbridge–Reitz) distribution (Mitsuba `ggx`).
     Ggx,
 }
 
@@ -29,8 +31,11 @@ pub enum MicrofacetType {
 /// `alpha_u` is the roughness along the frame's `s` axis, `alpha_v` along `t`.
 #[derive(Debug, Clone, Copy)]
 pub struct Microfacet {
+    /// Normal distribution function.
     pub kind: MicrofacetType,
+    /// Roughness α along the shading frame's `s` axis.
     pub alpha_u: f32,
+    /// Roughness α along the shading frame's `t` axis.
     pub alpha_v: f32,
 }
 
@@ -38,8 +43,11 @@ pub struct Microfacet {
 /// `roughconductor` and `roughdielectric` store it.
 #[derive(Debug, Clone)]
 pub struct Roughness {
+    /// Normal distribution function.
     pub kind: MicrofacetType,
+    /// Roughness α along `s`.
     pub alpha_u: Texture,
+    /// Roughness α along `t`.
     pub alpha_v: Texture,
 }
 
@@ -154,6 +162,7 @@ pub fn beckmann_g1_fit(a: f32) -> f32 {
 }
 
 impl Microfacet {
+    /// A distribution with the same roughness `alpha` along both axes.
     pub fn isotropic(kind: MicrofacetType, alpha: f32) -> Microfacet {
         Microfacet { kind, alpha_u: alpha, alpha_v: alpha }
     }

@@ -129,8 +129,10 @@ pub(crate) fn mulsign(v: Vec3, s: f32) -> Vec3 {
     Vec3::new(v.x * k, v.y * k, v.z * k)
 }
 
+/// A direction sampled from a BSDF, with its density and weight.
 #[derive(Debug, Clone, Copy)]
 pub struct BsdfSample {
+    /// Sampled incident direction, local to the shading frame.
     pub wi: Vec3,
     /// Solid-angle density, or the lobe's discrete probability when `delta`.
     pub pdf: f32,
@@ -145,15 +147,25 @@ pub struct BsdfSample {
 /// One scattering model with its parameters evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub enum BsdfKind<'a> {
+    /// Mitsuba `diffuse`.
     Diffuse(Diffuse),
+    /// Mitsuba `dielectric`.
     Dielectric(Dielectric),
+    /// Mitsuba `thindielectric`.
     ThinDielectric(ThinDielectric),
+    /// Mitsuba `conductor`.
     Conductor(Conductor),
+    /// Mitsuba `roughconductor`.
     RoughConductor(RoughConductor),
+    /// Mitsuba `roughdielectric`.
     RoughDielectric(RoughDielectric),
+    /// Mitsuba `plastic`.
     Plastic(Plastic),
+    /// Mitsuba `roughplastic`.
     RoughPlastic(RoughPlastic<'a>),
+    /// Mitsuba `principled`.
     Principled(Principled),
+    /// Mitsuba `principledthin`.
     PrincipledThin(PrincipledThin),
     /// Mitsuba `null`: light passes straight through.
     Null,
@@ -166,7 +178,9 @@ pub enum BsdfKind<'a> {
 /// "null" lobe); eval and pdf of the model scale by the opacity.
 #[derive(Debug, Clone, Copy)]
 pub struct Bsdf<'a> {
+    /// The scattering model.
     pub kind: BsdfKind<'a>,
+    /// Mitsuba `mask` opacity in [0, 1] (1 when unmasked).
     pub opacity: f32,
     /// Set by `normalmap` / `bumpmap`: the model is evaluated in the
     /// perturbed shading frame, and Mitsuba's wrappers add two terms.
@@ -214,11 +228,13 @@ impl Bsdf<'_> {
         self.opacity > 0.0 && with_model!(&self.kind, b => b.has_smooth(), null => false)
     }
 
+    /// f(wo, wi) without the cosine, scaled by the opacity; local directions.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
         self.eval_and_pdf::<true, false>(wo, wi).0
     }
 
+    /// Solid-angle density of sampling `wi` from `wo`, scaled by the opacity.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         self.eval_and_pdf::<false, true>(wo, wi).1

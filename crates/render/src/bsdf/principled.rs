@@ -27,15 +27,25 @@ use std::f32::consts::{FRAC_1_PI, PI};
 /// The principled BSDF with every parameter evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct Principled {
+    /// Base colour (linear RGB).
     pub base_color: Spectrum,
+    /// Perceptual roughness in [0, 1]; α = roughness².
     pub roughness: f32,
+    /// Anisotropy of the specular roughness, in [0, 1].
     pub anisotropic: f32,
+    /// Weight of the specular transmission lobe, in [0, 1].
     pub spec_trans: f32,
+    /// Metallic blend in [0, 1] from dielectric to conductor.
     pub metallic: f32,
+    /// Tint of the dielectric specular towards the base colour.
     pub spec_tint: f32,
+    /// Weight of the sheen lobe.
     pub sheen: f32,
+    /// Tint of the sheen towards the base colour.
     pub sheen_tint: f32,
+    /// Weight of the clearcoat lobe.
     pub clearcoat: f32,
+    /// Glossiness of the clearcoat, in [0, 1].
     pub clearcoat_gloss: f32,
     /// Used only when `has_flatness`.
     pub flatness: f32,
@@ -44,9 +54,13 @@ pub struct Principled {
     /// Mitsuba's `m_has_spec_trans` (the parameter given and not the float
     /// 0): it also enables transmission sampling from the back side.
     pub has_spec_trans: bool,
+    /// Whether `flatness` was given and nonzero.
     pub has_flatness: bool,
+    /// Sampling weight of the main specular lobe.
     pub spec_srate: f32,
+    /// Sampling weight of the clearcoat lobe.
     pub clearcoat_srate: f32,
+    /// Sampling weight of the diffuse lobe.
     pub diffuse_srate: f32,
 }
 
@@ -54,21 +68,35 @@ pub struct Principled {
 /// `get_flag`) are `None` and evaluate to 0.
 #[derive(Debug, Clone)]
 pub struct PrincipledParams {
+    /// Base colour (linear RGB).
     pub base_color: Texture,
+    /// Perceptual roughness in [0, 1].
     pub roughness: Texture,
+    /// Anisotropy of the specular roughness.
     pub anisotropic: Option<Texture>,
+    /// Weight of the specular transmission lobe.
     pub spec_trans: Option<Texture>,
+    /// Metallic blend from dielectric to conductor.
     pub metallic: Option<Texture>,
+    /// Tint of the dielectric specular towards the base colour.
     pub spec_tint: Option<Texture>,
+    /// Weight of the sheen lobe.
     pub sheen: Option<Texture>,
+    /// Tint of the sheen towards the base colour.
     pub sheen_tint: Option<Texture>,
+    /// Weight of the clearcoat lobe.
     pub clearcoat: Option<Texture>,
+    /// Glossiness of the clearcoat.
     pub clearcoat_gloss: Texture,
+    /// Blend from diffuse towards the fake-subsurface lobe.
     pub flatness: Option<Texture>,
     /// Relative IOR (Mitsuba's adjustments for η = 1 already applied).
     pub eta: f32,
+    /// Sampling weight of the main specular lobe.
     pub spec_srate: f32,
+    /// Sampling weight of the clearcoat lobe.
     pub clearcoat_srate: f32,
+    /// Sampling weight of the diffuse lobe.
     pub diffuse_srate: f32,
 }
 

@@ -27,27 +27,47 @@ use std::f32::consts::FRAC_1_PI;
 /// `has_*` are Mitsuba's `get_flag`s (the parameter given and not the float 0).
 #[derive(Debug, Clone, Copy)]
 pub struct PrincipledThin {
+    /// Base colour (linear RGB) of the diffuse, sheen tint and specular tint.
     pub base_color: Spectrum,
+    /// Perceptual roughness in [0, 1]; α = roughness².
     pub roughness: f32,
+    /// Anisotropy in [0, 1] of the specular lobes' roughness.
     pub anisotropic: f32,
+    /// Weight in [0, 1] of the specular (reflection + transmission) lobes.
     pub spec_trans: f32,
+    /// Tint of the specular reflection towards the base colour, in [0, 1].
     pub spec_tint: f32,
+    /// Weight of the sheen lobe.
     pub sheen: f32,
+    /// Tint of the sheen towards the base colour, in [0, 1].
     pub sheen_tint: f32,
+    /// Blend in [0, 1] from diffuse towards the fake-subsurface lobe.
     pub flatness: f32,
     /// Mitsuba's `diff_trans` (0..2), halved here as Mitsuba does (0..1).
     pub diff_trans: f32,
+    /// Relative IOR, interior over exterior.
     pub eta: f32,
+    /// Whether `anisotropic` was given and nonzero.
     pub has_anisotropic: bool,
+    /// Whether `spec_trans` was given and nonzero.
     pub has_spec_trans: bool,
+    /// Whether `spec_tint` was given and nonzero.
     pub has_spec_tint: bool,
+    /// Whether `sheen` was given and nonzero.
     pub has_sheen: bool,
+    /// Whether `sheen_tint` was given and nonzero.
     pub has_sheen_tint: bool,
+    /// Whether `flatness` was given and nonzero.
     pub has_flatness: bool,
+    /// Whether `diff_trans` was given and nonzero.
     pub has_diff_trans: bool,
+    /// Sampling weight of the specular reflection lobe.
     pub spec_refl_srate: f32,
+    /// Sampling weight of the specular transmission lobe.
     pub spec_trans_srate: f32,
+    /// Sampling weight of the diffuse transmission lobe.
     pub diff_trans_srate: f32,
+    /// Sampling weight of the diffuse reflection lobe.
     pub diff_refl_srate: f32,
 }
 
@@ -55,20 +75,33 @@ pub struct PrincipledThin {
 /// `get_flag`) are `None`.
 #[derive(Debug, Clone)]
 pub struct PrincipledThinParams {
+    /// Base colour (linear RGB).
     pub base_color: Texture,
+    /// Perceptual roughness in [0, 1].
     pub roughness: Texture,
+    /// Anisotropy of the specular roughness, in [0, 1].
     pub anisotropic: Option<Texture>,
+    /// Weight of the specular lobes, in [0, 1].
     pub spec_trans: Option<Texture>,
+    /// Tint of the specular reflection towards the base colour.
     pub spec_tint: Option<Texture>,
+    /// Weight of the sheen lobe.
     pub sheen: Option<Texture>,
+    /// Tint of the sheen towards the base colour.
     pub sheen_tint: Option<Texture>,
+    /// Blend from diffuse towards the fake-subsurface lobe.
     pub flatness: Option<Texture>,
     /// Mitsuba's 0..2 `diff_trans`, halved at evaluation as there.
     pub diff_trans: Option<Texture>,
+    /// Relative IOR, interior over exterior.
     pub eta: Texture,
+    /// Sampling weight of the specular reflection lobe.
     pub spec_refl_srate: f32,
+    /// Sampling weight of the specular transmission lobe.
     pub spec_trans_srate: f32,
+    /// Sampling weight of the diffuse transmission lobe.
     pub diff_trans_srate: f32,
+    /// Sampling weight of the diffuse reflection lobe.
     pub diff_refl_srate: f32,
 }
 

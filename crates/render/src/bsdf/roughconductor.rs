@@ -12,20 +12,29 @@ use crate::math::Spectrum;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `roughconductor` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct RoughConductor {
+    /// Microfacet distribution of the surface.
     pub distr: Microfacet,
+    /// Real part of the relative complex IOR, per channel.
     pub eta: Spectrum,
+    /// Imaginary part (absorption) of the relative complex IOR, per channel.
     pub k: Spectrum,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Spectrum,
 }
 
 /// Mitsuba `roughconductor` as the scene stores it.
 #[derive(Debug, Clone)]
 pub struct RoughConductorParams {
+    /// Roughness (α, isotropic or anisotropic) and distribution.
     pub roughness: Roughness,
+    /// Real part of the relative complex IOR.
     pub eta: Texture,
+    /// Imaginary part (absorption) of the relative complex IOR.
     pub k: Texture,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Texture,
 }
 

@@ -130,6 +130,7 @@ fn eval_reflectance(distr: &Microfacet, wi: Vec3, eta: f32, nodes: &(Vec<f64>, V
 }
 
 impl RoughPlasticTables {
+    /// The tables at Mitsuba's resolution (32 nodes for η > 1, else 128).
     pub fn new(distr: Microfacet, eta: f32) -> RoughPlasticTables {
         let res = |e: f32| if e > 1.0 { 32 } else { 128 };
         Self::with_resolution(distr, eta, res(eta), res(1.0 / eta))
@@ -171,16 +172,22 @@ impl RoughPlasticTables {
     }
 }
 
+/// Mitsuba `roughplastic` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct RoughPlastic<'a> {
+    /// Isotropic microfacet distribution of the specular coating.
     pub distr: Microfacet,
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Reflectance of the diffuse base (linear RGB).
     pub diffuse_reflectance: Spectrum,
+    /// Tint of the specular reflection.
     pub specular_reflectance: Spectrum,
+    /// Mitsuba's `nonlinear`: account for colour shifts from internal scattering.
     pub nonlinear: bool,
     /// Mitsuba's `m_specular_sampling_weight`: s_mean / (d_mean + s_mean) of the textures' means.
     pub specular_sampling_weight: f32,
+    /// Precomputed transmittance and internal-reflectance tables.
     pub tables: &'a RoughPlasticTables,
 }
 
@@ -188,12 +195,19 @@ pub struct RoughPlastic<'a> {
 /// textured: the tables depend on it).
 #[derive(Debug, Clone)]
 pub struct RoughPlasticParams {
+    /// Isotropic microfacet distribution of the specular coating.
     pub distr: Microfacet,
+    /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Reflectance of the diffuse base.
     pub diffuse_reflectance: Texture,
+    /// Tint of the specular reflection.
     pub specular_reflectance: Texture,
+    /// Mitsuba's `nonlinear`: account for colour shifts from internal scattering.
     pub nonlinear: bool,
+    /// Probability of sampling the specular lobe.
     pub specular_sampling_weight: f32,
+    /// Precomputed transmittance and internal-reflectance tables.
     pub tables: RoughPlasticTables,
 }
 

@@ -6,15 +6,21 @@
 /// One kind of AOV and its channels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum AovKind {
+    /// Surface albedo (RGB).
     Albedo,
+    /// Normal of the first hit (XYZ).
     Normal,
+    /// Depth of the first hit (one channel).
     Depth,
+    /// Position of the first hit (XYZ).
     Position,
 }
 
 impl AovKind {
+    /// Every kind, in the film's channel order.
     pub const ALL: [AovKind; 4] = [AovKind::Albedo, AovKind::Normal, AovKind::Depth, AovKind::Position];
 
+    /// The layer name in EXR output and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             AovKind::Albedo => "albedo",
@@ -24,6 +30,7 @@ impl AovKind {
         }
     }
 
+    /// The kind named `s`, if any.
     pub fn from_name(s: &str) -> Option<AovKind> {
         AovKind::ALL.into_iter().find(|k| k.name() == s)
     }
@@ -41,9 +48,13 @@ impl AovKind {
 /// The values of every AOV kind for one camera ray.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct AovSample {
+    /// Albedo of the first hit (RGB).
     pub albedo: [f32; 3],
+    /// Normal of the first hit.
     pub normal: [f32; 3],
+    /// Depth of the first hit.
     pub depth: f32,
+    /// Position of the first hit.
     pub position: [f32; 3],
 }
 

@@ -23,10 +23,16 @@ pub enum FilterKind {
     /// `box`: 1 inside the pixel (radius 0.5).
     Box,
     /// `tent`: 1 - |x| / radius (default radius 1).
-    Tent { radius: f32 },
+    Tent {
+        /// Support radius in pixels.
+        radius: f32,
+    },
     /// `gaussian`: exp(-x²/2σ²) - exp(-r²/2σ²) clamped at 0, with r = 4σ
     /// (default σ = 0.5).
-    Gaussian { stddev: f32 },
+    Gaussian {
+        /// Standard deviation σ in pixels.
+        stddev: f32,
+    },
 }
 
 /// The widest margin (in pixels) a filter may reach beyond its pixel.
@@ -35,7 +41,9 @@ pub const MAX_MARGIN: u32 = 16;
 /// A 1D filter profile.
 #[derive(Debug, Clone)]
 pub struct Filter {
+    /// The profile's shape.
     pub kind: FilterKind,
+    /// Support radius in pixels (the profile is 0 beyond it).
     pub radius: f32,
     /// The Gaussian tabulated on [0, radius] (`TABLE` intervals), for
     /// splatting: ten profile evaluations per sample are otherwise ten
@@ -49,6 +57,7 @@ pub struct Filter {
 const TABLE: usize = 1024;
 
 impl Filter {
+    /// The filter of a kind, tabulated when Gaussian.
     pub fn new(kind: FilterKind) -> Filter {
         let radius = match kind {
             FilterKind::Box => 0.5,
@@ -126,7 +135,9 @@ fn nonzero_taps(w: &[f32], first: i32, size: u32) -> std::ops::Range<usize> {
 /// a sum over samples, so films of disjoint sample sets simply add.
 #[derive(Debug, Clone)]
 pub struct Film {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// Per pixel [Σ w·R, Σ w·G, Σ w·B, Σ w], interleaved so that a splat
     /// adds one 4-wide vector per pixel.
@@ -143,7 +154,9 @@ pub struct Film {
 /// Which layers a film accumulates besides the beauty.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct FilmLayers {
+    /// AOVs accumulated, in channel order.
     pub aovs: Vec<AovKind>,
+    /// Whether the second moments for the variance estimate are tracked.
     pub variance: bool,
 }
 
@@ -151,10 +164,12 @@ pub struct FilmLayers {
 pub const REL_EPS: f64 = 0.01;
 
 impl Film {
+    /// An empty film with the beauty only.
     pub fn new(width: u32, height: u32) -> Film {
         Film::with_layers(width, height, &FilmLayers::default())
     }
 
+    /// An empty film accumulating `layers`.
     pub fn with_layers(width: u32, height: u32, layers: &FilmLayers) -> Film {
         let n = (width * height) as usize;
         Film {
@@ -167,6 +182,7 @@ impl Film {
         }
     }
 
+    /// The layers this film accumulates.
     pub fn layers(&self) -> FilmLayers {
         FilmLayers { aovs: self.aov_kinds.clone(), variance: self.has_variance() }
     }
@@ -177,11 +193,13 @@ impl Film {
         channel_count(&self.aov_kinds)
     }
 
+    /// Whether the second moments are tracked.
     #[inline]
     pub fn has_variance(&self) -> bool {
         !self.moments.is_empty()
     }
 
+    /// Adds radiance `l` with filter weight `w` to pixel (x, y).
     #[inline]
     pub fn add(&mut self, x: u32, y: u32, l: Spectrum, w: f32) {
         let i = (y * self.width + x) as usize;

@@ -11,6 +11,7 @@ use glam::{Vec2, Vec3};
 /// A point sampled on a shape, as seen from a reference point.
 #[derive(Debug, Clone, Copy)]
 pub struct ShapeSample {
+    /// Position of the sampled point.
     pub p: Vec3,
     /// Front-side geometric normal at `p`.
     pub n: Vec3,
@@ -18,8 +19,10 @@ pub struct ShapeSample {
     pub pdf: f32,
 }
 
+/// A triangle mesh shape with its area distribution for sampling.
 #[derive(Debug, Clone)]
 pub struct Mesh {
+    /// The triangles: positions, optional normals and UVs, indices.
     pub mesh: TriangleMesh,
     /// Ignore vertex normals and shade with the flat face normal (also set
     /// when the vertex normals are the face normals, e.g. `rectangle` and
@@ -29,11 +32,13 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The mesh shape, with its per-triangle area distribution.
     pub fn new(mesh: TriangleMesh, face_normals: bool) -> Mesh {
         let areas: Vec<f32> = (0..mesh.indices.len()).map(|i| tri_area(&mesh, i)).collect();
         let face_normals = face_normals || normals_are_flat(&mesh);
         Mesh { area_distrib: Distribution1D::new(&areas), mesh, face_normals }
     }
+    /// Corner positions of triangle `i`.
     #[inline]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
         let t = self.mesh.indices[i];
@@ -58,8 +63,10 @@ fn tri_area(m: &TriangleMesh, i: usize) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
 
+/// A geometric shape: a mesh or an analytic primitive.
 #[derive(Debug, Clone)]
 pub enum Shape {
+    /// A triangle mesh (Mitsuba `obj`, `ply`, `serialized`, `rectangle`, `cube`).
     Mesh(Mesh),
     /// Mitsuba `sphere` (see [`Sphere`]).
     Sphere(Sphere),
@@ -70,6 +77,7 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// A sphere; `flip` flips the normals (Mitsuba `flip_normals`).
     pub fn sphere(center: Vec3, radius: f32, flip: bool) -> Shape {
         Shape::Sphere(Sphere::new(center, radius, Mat3::IDENTITY, flip))
     }
@@ -79,6 +87,7 @@ impl Shape {
         Shape::Sphere(Sphere::new(center, radius, rot, flip))
     }
 
+    /// A disk placed by `world_from_object`; `flip` flips the normals.
     pub fn disk(world_from_object: Mat4, flip: bool) -> Shape {
         Shape::Disk(Disk::new(world_from_object, flip))
     }
@@ -91,6 +100,7 @@ impl Shape {
         }
     }
 
+    /// Bounds of primitive `i` in the shape's space.
     pub fn prim_bounds(&self, i: usize) -> Aabb {
         match self {
             Shape::Mesh(m) => Aabb::from_points(&m.vertices(i)),
@@ -100,6 +110,7 @@ impl Shape {
         }
     }
 
+    /// Total surface area.
     pub fn area(&self) -> f32 {
         match self {
             Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),

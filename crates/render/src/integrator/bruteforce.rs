@@ -20,21 +20,30 @@ use crate::sampling::{warp, SampleStream};
 use crate::scene::Scene;
 use glam::Vec3;
 
+/// How the direction at each hit is sampled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum HemisphereSampling {
+    /// Uniformly over the hemisphere.
     Uniform,
+    /// Cosine-weighted over the hemisphere.
     Cosine,
+    /// From the BSDF.
     Bsdf,
 }
 
+/// The `bruteforce` integrator: pure path sampling, no light sampling.
 #[derive(Debug, Clone)]
 pub struct BruteForceIntegrator {
+    /// Path length limits and Russian roulette.
     pub term: Termination,
+    /// Whether directly visible emitters are left out of the image.
     pub hide_emitters: bool,
+    /// How the direction at each hit is sampled.
     pub sampling: HemisphereSampling,
 }
 
 impl BruteForceIntegrator {
+    /// Radiance arriving along `camera_ray`.
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn li(
         &self,

@@ -30,6 +30,7 @@ use glam::Vec3;
 pub struct Scratch(bumpalo::Bump);
 
 impl Scratch {
+    /// An empty scratch buffer.
     pub fn new() -> Scratch {
         Scratch::default()
     }
@@ -41,15 +42,24 @@ impl Scratch {
     }
 }
 
+/// A surface material: a Mitsuba BSDF plugin with its parameters, possibly wrapped.
 #[derive(Debug, Clone)]
 pub enum Material {
+    /// Mitsuba `diffuse`.
     Diffuse(DiffuseParams),
+    /// Mitsuba `dielectric`.
     Dielectric(DielectricParams),
+    /// Mitsuba `thindielectric`.
     ThinDielectric(ThinDielectricParams),
+    /// Mitsuba `conductor`.
     Conductor(ConductorParams),
+    /// Mitsuba `roughconductor`.
     RoughConductor(RoughConductorParams),
+    /// Mitsuba `roughdielectric`.
     RoughDielectric(RoughDielectricParams),
+    /// Mitsuba `plastic`.
     Plastic(PlasticParams),
+    /// Mitsuba `roughplastic`.
     RoughPlastic(RoughPlasticParams),
     /// Mitsuba `principled` (the Disney BSDF).
     Principled(Box<PrincipledParams>),
@@ -59,23 +69,36 @@ pub enum Material {
     Null,
     /// The front material, and the one seen from the back side.
     TwoSided(Box<Material>, Box<Material>),
+    /// Mitsuba `mask`: cut-out by an opacity texture.
     Mask {
+        /// Opacity in [0, 1]; rays pass through the rest.
         opacity: Texture,
+        /// The material where opaque.
         inner: Box<Material>,
     },
+    /// Mitsuba `normalmap`: shading normals from a texture.
     NormalMap {
+        /// Tangent-space normal texture.
         normals: Texture,
+        /// The wrapped material.
         inner: Box<Material>,
     },
+    /// Mitsuba `bumpmap`: shading normals from a height texture's gradient.
     BumpMap {
+        /// Height texture.
         height: Texture,
+        /// Multiplier of the height.
         scale: f32,
+        /// The wrapped material.
         inner: Box<Material>,
     },
     /// Mitsuba `blendbsdf`: (1 − weight) · first + weight · second.
     Blend {
+        /// Blend weight in [0, 1] of `second`.
         weight: Texture,
+        /// Material weighted by 1 − weight.
         first: Box<Material>,
+        /// Material weighted by weight.
         second: Box<Material>,
     },
 }

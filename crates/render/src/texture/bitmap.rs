@@ -9,19 +9,27 @@ use crate::math::luminance;
 use crate::math::Spectrum;
 use glam::{Affine2, Vec2};
 
+/// Texel lookup (Mitsuba `bitmap`'s `filter_type`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FilterType {
+    /// The nearest texel.
     Nearest,
+    /// Bilinear interpolation of the four nearest texels.
     Bilinear,
 }
 
+/// Handling of coordinates outside [0, 1] (Mitsuba `bitmap`'s `wrap_mode`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WrapMode {
+    /// Tile the image.
     Repeat,
+    /// Tile the image, mirroring every other copy.
     Mirror,
+    /// Clamp to the edge texels.
     Clamp,
 }
 
+/// An RGB image texture with its lookup settings.
 #[derive(Debug, Clone)]
 pub struct Bitmap {
     width: usize,
@@ -64,10 +72,12 @@ impl Bitmap {
         Ok(Bitmap { width: w2, height: h2, data, filter, wrap, to_uv, mean: mean as f32 })
     }
 
+    /// Width and height in texels.
     pub fn resolution(&self) -> (usize, usize) {
         (self.width, self.height)
     }
 
+    /// Mean luminance of the texels.
     pub fn mean(&self) -> f32 {
         self.mean
     }
