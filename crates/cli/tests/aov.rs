@@ -368,6 +368,137 @@ fn adaptive_render_killed_and_resumed_is_bitwise_the_uninterrupted_one() {
     fs::remove_dir_all(&d).ok();
 }
 
+/// What [`expectation_against_fixed_spp`] found.
+struct ExpectationCheck {
+    /// Per channel: (difference of the image means, its standard error).
+    image_mean: [(f64, f64); 3],
+    /// The largest per-pixel |difference| / standard error: (|z|, pixel, channel).
+    worst_pixel: (f64, usize, usize),
+    /// The spp each render with `extra` stopped at.
+    stop_spp: Vec<u32>,
+}
+
+/// The Cornell box at 24x24 (default gaussian filter): K renders with
+/// `--spp 128` and `extra` (seeds 0..K) against K fixed-spp renders at
+/// `--spp fixed_spp` (seeds 1000..1000+K, independent of the first). Both image sets estimate the
+/// same expectation when `extra` keeps the estimator unbiased; per pixel and
+/// for the image mean, the difference of the two means over seeds is
+/// compared with its standard error from the spread over seeds,
+/// √(s_a²/K + s_f²/K).
+fn expectation_against_fixed_spp(name: &str, extra: &[&str], fixed_spp: u32, k: u64) -> ExpectationCheck {
+    let d = tmpdir(name);
+    let images = |seed0: u64, spp: &str, extra: &[&str]| -> (Vec<[Vec<f32>; 3]>, Vec<u32>) {
+        let base = ["-D", "res=24", "--spp", spp];
+        (0..k)
+            .map(|s| {
+                let out = d.join(format!("s{}.exr", seed0 + s));
+                let seed = (seed0 + s).to_string();
+                let args = [&base[..], extra, &["--seed", &seed]].concat();
+                ok(render(&cornell(), &out, &args).output().unwrap());
+                let e = read_exr(&out);
+                let spp: u32 = e.meta["samples"].split("..").nth(1).unwrap().parse().unwrap();
+                (["R", "G", "B"].map(|c| e.ch(c).to_vec()), spp)
+            })
+            .unzip()
+    };
+    let (a, stop_spp) = images(0, "128", extra);
+    let (f, _) = images(1000, &fixed_spp.to_string(), &[]);
+    let kf = k as f64;
+    let mean_var = |v: &mut dyn Iterator<Item = f64>| {
+        let v: Vec<f64> = v.collect();
+        let m = v.iter().sum::<f64>() / kf;
+        (m, v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (kf - 1.0) / kf)
+    };
+    let n = a[0][0].len();
+    let mut worst_pixel = (0.0f64, 0, 0);
+    let image_mean = [0, 1, 2].map(|c| {
+        for p in 0..n {
+            let (ma, va) = mean_var(&mut a.iter().map(|img| img[c][p] as f64));
+            let (mf, vf) = mean_var(&mut f.iter().map(|img| img[c][p] as f64));
+            if va + vf > 0.0 {
+                let z = (ma - mf).abs() / (va + vf).sqrt();
+                if z > worst_pixel.0 {
+                    worst_pixel = (z, p, c);
+                }
+            }
+        }
+        let img_mean = |img: &[Vec<f32>; 3]| img[c].iter().map(|&x| x as f64).sum::<f64>() / n as f64;
+        let (ma, va) = mean_var(&mut a.iter().map(img_mean));
+        let (mf, vf) = mean_var(&mut f.iter().map(img_mean));
+        eprintln!(
+            "{name} channel {c}: image mean {ma:.5} vs fixed spp {mf:.5}, z = {:+.2}",
+            (ma - mf) / (va + vf).sqrt()
+        );
+        (ma - mf, (va + vf).sqrt())
+    });
+    let (z, p, c) = worst_pixel;
+    eprintln!(
+        "{name}: largest per-pixel |z| {z:.2} at pixel ({}, {}) channel {c}; stopped at {}..={} spp",
+        p % 24,
+        p / 24,
+        stop_spp.iter().min().unwrap(),
+        stop_spp.iter().max().unwrap()
+    );
+    fs::remove_dir_all(&d).ok();
+    ExpectationCheck { image_mean, worst_pixel, stop_spp }
+}
+
+/// Thresholds for [`expectation_against_fixed_spp`] with K = 64 seeds per
+/// side: each z is a Welch t statistic with at least 63 degrees of freedom.
+/// Image means: |z| < 4.2, two-sided 8.6e-5 under t(63), 2.6e-4 for three
+/// channels. Pixels: max |z| < 5.7, two-sided 3.4e-7 each, at most 5.9e-4
+/// for the 1728 pixel channels (Bonferroni, which neighbouring pixels'
+/// correlation under the filter only makes more conservative). Together a
+/// false-alarm rate below 1e-3. A bias beyond (4.2 + 3)·se in the image
+/// mean, or (5.7 + 3)·se in one pixel, fails with probability ≥ 0.9987.
+const EXPECTATION_K: u64 = 64;
+fn assert_same_expectation(name: &str, r: &ExpectationCheck) {
+    for (c, (diff, se)) in r.image_mean.iter().enumerate() {
+        assert!(diff.abs() < 4.2 * se, "{name}: channel {c} image mean differs by {diff:+.5} ({:+.2} se)", diff / se);
+    }
+    let (z, p, c) = r.worst_pixel;
+    assert!(z < 5.7, "{name}: pixel ({}, {}) channel {c} differs by {z:.2} se", p % 24, p / 24);
+}
+
+/// `--noise-threshold` stops the whole render at the first pass whose
+/// estimated error is at most X: a stopping time that depends on the
+/// samples. The images must still have the fixed-spp render's expectation
+/// (thresholds at [`EXPECTATION_K`]; against 64 fixed spp, cheaper, so the
+/// image mean resolves a bias beyond 7.2 se ≈ 0.0045, 1.6 % of R). X = 0.01
+/// stops the 64 seeds between 28 and 92 spp, so the rule is exercised
+/// (asserted). Measured: image means within 0.3 se, worst pixel 3.5 se.
+#[test]
+fn noise_threshold_stop_keeps_the_expectation_of_the_fixed_spp_render() {
+    let extra = ["--max-pass-spp", "4", "--noise-threshold", "0.01"];
+    let r = expectation_against_fixed_spp("threshold-expectation", &extra, 64, EXPECTATION_K);
+    let (lo, hi) = (*r.stop_spp.iter().min().unwrap(), *r.stop_spp.iter().max().unwrap());
+    assert!(lo < hi && hi < 128, "the stopping rule is not exercised: {lo}..={hi} spp");
+    assert_same_expectation("noise threshold", &r);
+}
+
+/// `--adaptive` renders, after 16 spp, only the pixels whose own estimated
+/// error is above X (and their neighbours): the adaptive images must have
+/// the fixed-spp render's expectation (thresholds at [`EXPECTATION_K`]).
+/// X = 0.003 with a cap of 128 spp: the image never reaches X as a whole,
+/// so every difference comes from the per-pixel decisions.
+///
+/// Fails with the adaptive sampling of this revision: image means 5.1, 4.3
+/// and 3.0 se low (R, G, B; −1.3 % in R), a pixel 6.1 se off (100 seeds:
+/// 7.6, 6.5, 5.0 se and 8.6 se; with a box filter still 5.1, 4.1, 3.1 se
+/// low, but no pixel beyond 3.5 se). Two
+/// causes: a pixel stops when its estimated variance is low, which for
+/// skewed (caustic) samples correlates with a low mean; and under a filter
+/// wider than a pixel a stopped pixel keeps receiving the samples of active
+/// neighbours, which weights its value towards their side.
+#[test]
+#[ignore = "adaptive sampling is biased (Cornell box: image means 3-5 se low, a pixel 6 se off); see the doc comment"]
+fn adaptive_render_has_the_expectation_of_the_fixed_spp_render() {
+    let extra = ["--max-pass-spp", "4", "--noise-threshold", "0.003", "--adaptive"];
+    let r = expectation_against_fixed_spp("adaptive-expectation", &extra, 128, EXPECTATION_K);
+    assert!(r.stop_spp.iter().all(|&s| s == 128), "the image reached the threshold: {:?}", r.stop_spp);
+    assert_same_expectation("adaptive", &r);
+}
+
 #[test]
 fn parts_carry_aovs_and_variance_into_the_merge() {
     let d = tmpdir("parts");
