@@ -70,27 +70,14 @@ impl Scene {
     /// [`Scene::set_light_selection`].
     pub fn new(shapes: Vec<Shape>, shape_info: Vec<ShapeInfo>, materials: Vec<Material>, lights: Vec<Light>) -> Scene {
         let placed: Vec<Primitive> = (0..shapes.len() as u32).map(Primitive::Shape).collect();
-        Scene::with_instances(shapes, shape_info, Vec::new(), placed, materials, lights)
+        let accel = Accel::build(&placed, &shapes, &[]);
+        Scene::with_accel(accel, shapes, shape_info, Vec::new(), placed, materials, lights)
     }
 
-    /// Assembles a scene whose BVH holds `placed`: shapes placed directly
-    /// and instances (the other shapes are members of the instances' groups).
-    pub fn with_instances(
-        shapes: Vec<Shape>,
-        shape_info: Vec<ShapeInfo>,
-        instances: Vec<Instance>,
-        placed: Vec<Primitive>,
-        materials: Vec<Material>,
-        lights: Vec<Light>,
-    ) -> Scene {
-        let accel = Accel::build(&placed, &shapes, &instances);
-        Scene::with_accel(accel, shapes, shape_info, instances, placed, materials, lights)
-    }
-
-    /// [`Scene::with_instances`] with `accel` already built by
-    /// `Accel::build(&placed, &shapes, &instances)`, for callers that need
-    /// its bounds first (the scene builder makes directional lights with the
-    /// scene's bounding radius).
+    /// A scene whose BVH `accel` was built by `Accel::build(&placed, &shapes,
+    /// &instances)`: shapes placed directly and instances of shape groups
+    /// (whose members are the other shapes). The scene builder builds the
+    /// BVH first, for the bounding radius its directional lights need.
     pub fn with_accel(
         accel: Accel,
         shapes: Vec<Shape>,

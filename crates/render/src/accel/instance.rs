@@ -94,20 +94,7 @@ impl Instance {
 
     /// The interaction, in world space, at a hit on primitive `prim` of
     /// `shape`, the group member with id `shape_id` (arguments as in
-    /// [`Shape::interaction`], with the world ray).
-    pub fn interaction(
-        &self,
-        shape: &Shape,
-        shape_id: u32,
-        prim: usize,
-        ray: &Ray,
-        t: f32,
-        uv: Vec2,
-    ) -> SurfaceInteraction {
-        self.interaction_with(shape, shape_id, prim, ray, t, uv, true)
-    }
-
-    /// [`Instance::interaction`], with `param` as in [`Shape::interaction_with`].
+    /// [`Shape::interaction_with`], with the world ray).
     #[allow(clippy::too_many_arguments)]
     pub fn interaction_with(
         &self,
@@ -191,8 +178,8 @@ mod tests {
                     assert!((h1.t - h2.t).abs() < 1e-4 * h2.t.max(1.0), "ray {i}: {} vs {}", h1.t, h2.t);
                     assert_eq!(h2.instance, Hit::NOT_INSTANCED);
                     let inst = &instances[h1.instance as usize];
-                    let si1 =
-                        inst.interaction(&shapes[h1.shape as usize], h1.shape, h1.index as usize, &ray, h1.t, h1.uv);
+                    let member = &shapes[h1.shape as usize];
+                    let si1 = inst.interaction_with(member, h1.shape, h1.index as usize, &ray, h1.t, h1.uv, true);
                     let si2 = flat[h2.shape as usize].interaction(0, h2.index as usize, &ray, h2.t, h2.uv);
                     assert_eq!(si1.shape, flat_ids[h2.shape as usize]);
                     assert!((si1.p - si2.p).length() < 1e-4, "ray {i}: p {} vs {}", si1.p, si2.p);
