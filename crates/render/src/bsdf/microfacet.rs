@@ -58,12 +58,10 @@ impl Roughness {
         Microfacet { kind: self.kind, alpha_u: self.alpha_u.eval_1(si), alpha_v: self.alpha_v.eval_1(si) }
     }
 
-    /// Anisotropic, or textured: the model reads the frame's orientation or the uv.
-    pub fn reads_uv(&self) -> bool {
-        match (self.alpha_u.constant(), self.alpha_v.constant()) {
-            (Some(u), Some(v)) => u != v,
-            _ => true,
-        }
+    /// Constant and different roughness along `s` and `t` (textured
+    /// roughness counts among the plugin's textures).
+    pub fn anisotropic(&self) -> bool {
+        matches!((self.alpha_u.constant(), self.alpha_v.constant()), (Some(u), Some(v)) if u != v)
     }
 }
 

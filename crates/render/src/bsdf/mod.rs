@@ -108,12 +108,17 @@ pub trait BsdfParams {
     /// Every texture the plugin reads.
     fn textures(&self) -> Vec<&Texture>;
 
+    /// Whether the model depends on the orientation of the shading frame
+    /// about the normal with every texture constant (anisotropic roughness).
+    fn anisotropic(&self) -> bool {
+        false
+    }
+
     /// Whether the model reads the hit's surface parameterisation (`uv`,
     /// `dpdu`, `dpdv`, or the orientation of the shading frame about the
-    /// normal): when a texture varies, and for anisotropic models (which
-    /// override this).
+    /// normal): when it is anisotropic or a texture varies.
     fn reads_uv(&self) -> bool {
-        self.textures().iter().any(|t| t.constant().is_none())
+        self.anisotropic() || self.textures().iter().any(|t| t.constant().is_none())
     }
 }
 

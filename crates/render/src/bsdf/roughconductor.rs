@@ -55,8 +55,8 @@ impl BsdfParams for RoughConductorParams {
         vec![&self.roughness.alpha_u, &self.roughness.alpha_v, &self.eta, &self.k, &self.specular_reflectance]
     }
 
-    fn reads_uv(&self) -> bool {
-        self.roughness.reads_uv() || self.textures().iter().any(|t| t.constant().is_none())
+    fn anisotropic(&self) -> bool {
+        self.roughness.anisotropic()
     }
 }
 

@@ -51,8 +51,8 @@ impl BsdfParams for RoughDielectricParams {
         vec![&self.roughness.alpha_u, &self.roughness.alpha_v, &self.specular_reflectance, &self.specular_transmittance]
     }
 
-    fn reads_uv(&self) -> bool {
-        self.roughness.reads_uv() || self.textures().iter().any(|t| t.constant().is_none())
+    fn anisotropic(&self) -> bool {
+        self.roughness.anisotropic()
     }
 }
 

@@ -231,8 +231,8 @@ impl BsdfParams for RoughPlasticParams {
         vec![&self.diffuse_reflectance, &self.specular_reflectance]
     }
 
-    fn reads_uv(&self) -> bool {
-        self.distr.alpha_u != self.distr.alpha_v || self.textures().iter().any(|t| t.constant().is_none())
+    fn anisotropic(&self) -> bool {
+        self.distr.alpha_u != self.distr.alpha_v
     }
 }
 
