@@ -38,18 +38,23 @@ fn rel_mse(a: &Exr, b: &Exr) -> f64 {
 }
 
 /// A camera at the origin looking down +z (fov 10°, 8x8 box-filtered
-/// pixels) at `body`, under a constant environment.
+/// pixels, 4 spp) at `body`, under a constant environment.
 fn scene_file(d: &Path, name: &str, body: &str) -> PathBuf {
+    scene_with(d, name, body, "box", 8, 4)
+}
+
+/// [`scene_file`] with a `res`² film, reconstruction filter `filter` and `spp` samples.
+fn scene_with(d: &Path, name: &str, body: &str, filter: &str, res: u32, spp: u32) -> PathBuf {
     let xml = format!(
         r#"<scene version="3.0.0">
     <integrator type="path"/>
     <sensor type="perspective">
         <float name="fov" value="10"/>
         <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+        <sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>
         <film type="hdrfilm">
-            <integer name="width" value="8"/><integer name="height" value="8"/>
-            <rfilter type="box"/>
+            <integer name="width" value="{res}"/><integer name="height" value="{res}"/>
+            <rfilter type="{filter}"/>
         </film>
     </sensor>
     <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
@@ -140,26 +145,8 @@ fn aov_layers_report_depth_normal_position_and_albedo_also_through_a_mirror() {
 /// the sky's directions are behind the wall), independent of where in the
 /// pixel a sample lands.
 fn sky_wall(d: &Path, filter: &str, res: u32, spp: u32) -> PathBuf {
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="path"/>
-    <sensor type="perspective">
-        <float name="fov" value="10"/>
-        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>
-        <film type="hdrfilm">
-            <integer name="width" value="{res}"/><integer name="height" value="{res}"/>
-            <rfilter type="{filter}"/>
-        </film>
-    </sensor>
-    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
-    {}
-</scene>"#,
-        wall(3.0, r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.8"/></bsdf>"#)
-    );
-    let p = d.join(format!("wall-{filter}.xml"));
-    fs::write(&p, xml).unwrap();
-    p
+    let body = wall(3.0, r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.8"/></bsdf>"#);
+    scene_with(d, &format!("wall-{filter}.xml"), &body, filter, res, spp)
 }
 
 /// Over K seeds: Σ over pixels (`border` pixels from the edges left out) of
