@@ -137,12 +137,22 @@ impl Scene {
     }
 
     /// Whether the segment from `si` along `wi` is blocked before `dist`.
+    ///
+    /// The ray starts at the offset origin and is aimed from there at the
+    /// light's point `si.p + wi * dist`: keeping `wi` from the unoffset
+    /// point would shift the whole segment by the offset, and at grazing
+    /// angles its end would pierce the light's own surface (Mitsuba's
+    /// `spawn_ray_to` aims the same way).
     #[inline]
     pub fn occluded(&self, si: &SurfaceInteraction, wi: Vec3, dist: f32) -> bool {
         let o = offset_origin(si.p, si.n, wi);
-        let t_max =
-            if dist.is_finite() { (si.p + wi * dist - o).length() * (1.0 - SHADOW_EPSILON) } else { f32::INFINITY };
-        let ray = Ray::new(o, wi, t_max);
+        let ray = if dist.is_finite() {
+            let d = si.p + wi * dist - o;
+            let len = d.length();
+            Ray::new(o, d / len, len * (1.0 - SHADOW_EPSILON))
+        } else {
+            Ray::new(o, wi, f32::INFINITY)
+        };
         if let Some(log) = &self.ray_log {
             log_ray(log, ray, true);
         }
@@ -288,6 +298,33 @@ mod tests {
         let sum: f32 = w.iter().sum();
         for i in 0..3 {
             assert!((scene.light_pmf(Vec3::ZERO, Vec3::Y, i) - w[i] / sum).abs() < 1e-5);
+        }
+    }
+    /// A receiver far out on a floor sees the edge of a ceiling light at a
+    /// grazing angle to the light's plane. Shifting the segment by the
+    /// receiver's offset (instead of aiming from the offset origin) lifted
+    /// its end above that plane, through the light: occluded wrongly.
+    #[test]
+    fn shadow_rays_reach_an_area_light_at_a_grazing_angle() {
+        use glam::Mat4;
+        let light = Mat4::from_translation(Vec3::Y) * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let floor = Mat4::from_scale(Vec3::splat(100.0)) * Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+        let shapes = vec![Shape::disk(light, false), Shape::disk(floor, false)];
+        let info = vec![ShapeInfo { material: 0, light: Some(0) }, ShapeInfo { material: 0, light: None }];
+        let materials = vec![Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Vec3::splat(0.5).into() })];
+        let lights = vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::ONE })];
+        let scene = Scene::new(shapes, info, materials, lights);
+        for x in [5.0f32, 20.0, 40.0] {
+            let si = scene.intersect(&Ray::new(Vec3::new(x, 5.0, 0.0), -Vec3::Y, f32::INFINITY)).unwrap();
+            assert_eq!(si.shape, 1);
+            assert!(si.n.y > 0.99, "floor normal {:?}", si.n);
+            // A point on the light near the receiver's side of its edge.
+            let target = Vec3::new(0.9, 1.0, 0.0);
+            let (wi, dist) = ((target - si.p).normalize(), (target - si.p).length());
+            assert!(!scene.occluded(&si, wi, dist), "x = {x}: the light's own point occludes it");
+            // Unbounded, a ray aimed at the light's centre does hit it.
+            let wc = (Vec3::Y - si.p).normalize();
+            assert!(scene.occluded(&si, wc, f32::INFINITY), "x = {x}: the ray misses the light");
         }
     }
 }

@@ -1,24 +1,52 @@
 //! Penumbra against Mitsuba 3: each scene in tests/scenes/ is rendered and
 //! compared with its converged Mitsuba reference in tests/refs/ (regenerate
-//! with tools/make_refs.py): per-channel means within 1 % and 5 standard
-//! errors, and squared error explained by the two images' variances.
+//! with tools/make_refs.py) by `common::compare`: per-channel means within
+//! 1 %, and pixel and 8x8-block statistics at a false-alarm rate of 1e-4 per
+//! scene. On the noisy scenes each comparison also shows its power: the
+//! same render with a local error injected (a wider lobe, a mirror image,
+//! 10 % more light over a fifth of the image) must fail it.
 
 mod common;
 
-use common::{assert_agree, render_with_sampler, render_with_variance, root, Estimate};
+use common::{assert_agree, compare as compare_estimates, injected_errors, render_with_sampler, render_with_variance, root, Estimate};
 use penumbra_scene::image_io::read_exr;
 
 fn reference(name: &str) -> Estimate {
     let img = read_exr(&root().join("tests/refs").join(format!("{name}.exr"))).unwrap();
     let var = read_exr(&root().join("tests/refs").join(format!("{name}_var.exr"))).unwrap();
     let f = |v: &Vec<[f32; 3]>| v.iter().map(|p| p.map(|c| c as f64)).collect();
-    Estimate { width: img.width, height: img.height, mean: f(&img.pixels), var: f(&var.pixels) }
+    Estimate {
+        width: img.width,
+        height: img.height,
+        mean: f(&img.pixels),
+        var: f(&var.pixels),
+        batches: manifest_batches(name),
+        block_var: None,
+    }
 }
+
+/// The batch count tools/make_refs.py recorded for `name` in tests/refs/manifest.json.
+fn manifest_batches(name: &str) -> u32 {
+    let text = std::fs::read_to_string(root().join("tests/refs/manifest.json")).unwrap();
+    let entry = &text[text.find(&format!("\"{name}\": {{")).unwrap_or_else(|| panic!("{name} not in manifest.json"))..];
+    let field = &entry[entry.find("\"batches\":").unwrap() + 10..];
+    field.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
+}
+
+/// Scenes whose noise could hide a local error from a weaker comparison:
+/// here each injected error must be caught.
+const NOISY: &[&str] = &["envmap_sun", "many_lights", "rough_spheres", "spot_light"];
 
 fn compare(name: &str, spp: u32) {
     let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-    let ours = render_with_variance(&scene, spp, 8, None, 1);
-    assert_agree(name, &ours, &reference(name), 0.01);
+    let ours = render_with_variance(&scene, spp, 16, None, 1);
+    let reference = reference(name);
+    assert_agree(name, &ours, &reference, 0.01);
+    for (error, bad) in injected_errors(&ours) {
+        let caught = !compare_estimates(&format!("{name} with {error}"), &bad, &reference, 0.01).failures.is_empty();
+        eprintln!("{name}: injected error '{error}' caught: {caught}");
+        assert!(caught || !NOISY.contains(&name), "{name}: the comparison missed an injected error: {error}");
+    }
 }
 
 #[test]
@@ -124,7 +152,7 @@ fn sobol_sampler_matches_mitsuba() {
     // a different sampler must not change the image's expectation.
     for name in ["cbox_diffuse", "envmap_sun"] {
         let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-        let ours = render_with_sampler(&scene, 256, 8, "sobol", 1);
+        let ours = render_with_sampler(&scene, 256, 16, "sobol", 1);
         assert_agree(name, &ours, &reference(name), 0.01);
     }
 }

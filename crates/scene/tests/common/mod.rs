@@ -1,8 +1,25 @@
 //! Statistics shared by the image-comparison tests.
+//!
+//! An [`Estimate`] is an image with the variance of each pixel's mean,
+//! estimated from independent batches. [`compare`] tests the hypothesis
+//! that two estimates have the same expectation with four statistics, each
+//! at a false-alarm rate of `FALSE_ALARM / 4` (Bonferroni), so a comparison
+//! of two unbiased renders fails with probability at most [`FALSE_ALARM`]:
+//! - each channel's image mean (a z-test, also held to a relative tolerance);
+//! - every pixel: Σ z² over pixel channels against χ²(n);
+//! - 8x8-pixel block means, where noise averages out but a local error does
+//!   not: the largest |t| of any block and Σ z² over blocks against χ²(n).
+//!
+//! Each t statistic is a difference over its standard error, with Welch–
+//! Satterthwaite degrees of freedom from the two sides' batch counts, and is
+//! mapped to a standard normal z by its own distribution's CDF, so the χ²
+//! sums are exact for normal batch means whatever the batch counts.
 #![allow(dead_code)]
 
 use penumbra_render::film::Film;
+use penumbra_render::sampling::Sampler;
 use penumbra_scene::{load_scene, Overrides};
+use statrs::distribution::{ChiSquared, ContinuousCDF, Normal, StudentsT};
 use std::path::{Path, PathBuf};
 
 #[path = "../../../../tests/support/skip.rs"]
@@ -10,68 +27,99 @@ mod skip;
 #[allow(unused_imports)]
 pub use skip::{in_ci, skip};
 
+/// Probability that [`compare`] rejects two unbiased estimates of one image.
+pub const FALSE_ALARM: f64 = 1e-4;
+/// Side of the square pixel blocks of the block statistics.
+pub const BLOCK: u32 = 8;
+
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// A rendered image: per-pixel mean and the variance of that mean.
+/// A rendered image: per-pixel mean and the variance of that mean, from
+/// `batches` independent batches.
 #[derive(Clone)]
 pub struct Estimate {
     pub width: u32,
     pub height: u32,
     pub mean: Vec<[f64; 3]>,
     pub var: Vec<[f64; 3]>,
+    /// Number of independent batches behind `var` (its degrees of freedom
+    /// are `batches - 1`).
+    pub batches: u32,
+    /// Per block and channel, the variance of the block's mean estimated
+    /// from the batches' block means; `None` for a reference read from disk.
+    /// Pixel filters wider than a pixel correlate neighbours, which the sum
+    /// of pixel variances misses; this measures it (see [`compare`]).
+    pub block_var: Option<Vec<[f64; 3]>>,
 }
 
-/// Renders `batches` independent batches of `spp / batches` samples and
+/// Seed of batch `b` of an estimate seeded `seed`: distinct for every
+/// (seed, batch) pair the tests use (fewer than 1000 batches).
+fn batch_seed(seed: u64, b: u32) -> u64 {
+    seed * 1000 + b as u64
+}
+
+/// Renders `batches` independent batches of `spp / batches` samples, each
+/// with its own seed and the scene's own sampler (or `sampler`), and
 /// estimates each pixel's variance from the spread of the batch means.
-/// Estimates to be compared with each other must use different seeds, or
-/// their errors are correlated and the comparison proves little.
-pub fn render_with_variance(scene: &Path, spp: u32, batches: u32, integrator: Option<&str>, seed: u64) -> Estimate {
+/// Batches that were index ranges of one stratified or low-discrepancy
+/// pattern would be correlated; independently seeded ones are not.
+/// Estimates to be compared with each other must use different seeds.
+pub fn render_batches(scene: &Path, spp: u32, batches: u32, integrator: Option<&str>, sampler: Option<&str>, seed: u64) -> Estimate {
+    assert!(batches >= 2 && spp >= batches, "{}: need at least 2 batches of 1 sample", scene.display());
+    let per = spp / batches;
     let ov = Overrides {
-        spp: Some(spp),
-        seed: Some(seed),
+        spp: Some(per),
         integrator: integrator.map(str::to_string),
+        sampler: sampler.map(str::to_string),
         ..Default::default()
     };
-    let job = load_scene(scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
-    let per = spp / batches;
+    let mut job = load_scene(scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
     let imgs: Vec<Vec<[f32; 3]>> = (0..batches)
         .map(|b| {
+            // The sampler as loaded, re-seeded: stratified kinds keep the
+            // sample count they rounded `per` to, and every batch renders all of it.
+            job.sampler = Sampler::new(job.sampler.kind, batch_seed(seed, b), job.sampler.spp);
             let mut film = Film::new(job.width, job.height);
-            job.render_into(&mut film, b * per..(b + 1) * per, &|_| {});
+            job.render_into(&mut film, 0..job.sampler.spp, &|_| {});
             film.develop()
         })
         .collect();
     estimate(job.width, job.height, &imgs)
 }
 
-/// As [`render_with_variance`] with another sampler (`--sampler NAME`):
-/// each batch is its own seed's first `spp / batches` samples. Batches of one
-/// low-discrepancy sequence are correlated, so their spread would misjudge
-/// the variance; independently scrambled batches are independent.
+/// [`render_batches`] with the scene's sampler.
+pub fn render_with_variance(scene: &Path, spp: u32, batches: u32, integrator: Option<&str>, seed: u64) -> Estimate {
+    render_batches(scene, spp, batches, integrator, None, seed)
+}
+
+/// [`render_batches`] with another sampler (`--sampler NAME`).
 pub fn render_with_sampler(scene: &Path, spp: u32, batches: u32, sampler: &str, seed: u64) -> Estimate {
-    let per = spp / batches;
-    let imgs: Vec<Vec<[f32; 3]>> = (0..batches as u64)
-        .map(|b| {
-            let ov = Overrides {
-                spp: Some(per),
-                seed: Some(seed + b),
-                sampler: Some(sampler.to_string()),
-                ..Default::default()
-            };
-            let job = load_scene(scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
-            let mut film = Film::new(job.width, job.height);
-            job.render_into(&mut film, 0..per, &|_| {});
-            film.develop()
-        })
-        .collect();
-    let job = load_scene(scene, &[], &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
-    estimate(job.width, job.height, &imgs)
+    render_batches(scene, spp, batches, None, Some(sampler), seed)
 }
 
-/// Per-pixel mean of equally weighted, independent images and the variance of that mean.
-fn estimate(width: u32, height: u32, imgs: &[Vec<[f32; 3]>]) -> Estimate {
+/// Pixel indices of each `BLOCK`x`BLOCK` block (partial at the right and
+/// bottom edges), row by row.
+fn blocks(width: u32, height: u32) -> Vec<Vec<usize>> {
+    let mut out = Vec::new();
+    for by in (0..height).step_by(BLOCK as usize) {
+        for bx in (0..width).step_by(BLOCK as usize) {
+            let mut px = Vec::new();
+            for y in by..(by + BLOCK).min(height) {
+                for x in bx..(bx + BLOCK).min(width) {
+                    px.push((y * width + x) as usize);
+                }
+            }
+            out.push(px);
+        }
+    }
+    out
+}
+
+/// Per-pixel mean of equally weighted, independent images, the variance of
+/// that mean, and the variance of each block's mean.
+pub fn estimate(width: u32, height: u32, imgs: &[Vec<[f32; 3]>]) -> Estimate {
     let n = imgs[0].len();
     let k = imgs.len() as f64;
     let mut mean = vec![[0.0; 3]; n];
@@ -84,41 +132,207 @@ fn estimate(width: u32, height: u32, imgs: &[Vec<[f32; 3]>]) -> Estimate {
             var[i][c] = v / k;
         }
     }
-    Estimate { width, height, mean, var }
+    let block_var = blocks(width, height)
+        .iter()
+        .map(|px| {
+            let bm = |im: &Vec<[f32; 3]>, c: usize| px.iter().map(|&i| im[i][c] as f64).sum::<f64>() / px.len() as f64;
+            std::array::from_fn(|c| {
+                let m = imgs.iter().map(|im| bm(im, c)).sum::<f64>() / k;
+                imgs.iter().map(|im| (bm(im, c) - m).powi(2)).sum::<f64>() / (k - 1.0) / k
+            })
+        })
+        .collect();
+    Estimate { width, height, mean, var, batches: imgs.len() as u32, block_var: Some(block_var) }
 }
 
-/// Checks that two estimates of the same image agree: per-channel image
-/// means within `rel_tol` and 5 standard errors, and a squared difference
-/// that the two variances explain (Σ d² / Σ (var_a + var_b) < 1.3, relative
-/// weighting 1 / (ref² + 0.01) as in relMSE). Returns that ratio.
-pub fn assert_agree(name: &str, a: &Estimate, b: &Estimate, rel_tol: f64) -> f64 {
+/// `(z², Welch–Satterthwaite degrees of freedom)` of a difference `d`
+/// whose variance is `v`, from the variance parts `va` and `vb` with
+/// `dfa` and `dfb` degrees of freedom; z is the standard normal deviate
+/// with the same tail probability as the t statistic d / √v.
+fn welch_z2(d: f64, v: f64, sq_a: f64, sq_b: f64, dfa: f64, dfb: f64) -> (f64, f64) {
+    // sq_x = Σ v_i² / df_x: the Satterthwaite denominator (v_i the parts of v).
+    let df = (v * v / (sq_a / dfa + sq_b / dfb)).clamp(1.0, 1e6);
+    let t = d.abs() / v.sqrt();
+    let tail = StudentsT::new(0.0, 1.0, df).unwrap().sf(t);
+    let z = if tail > 0.0 { Normal::standard().inverse_cdf(tail) } else { f64::NEG_INFINITY };
+    (z * z, df)
+}
+
+/// What [`compare`] found: each statistic and the tests that failed.
+#[derive(Debug, Default)]
+pub struct Verdict {
+    pub failures: Vec<String>,
+    /// Σ z² over pixel channels, its degrees of freedom and critical value.
+    pub pixel_chi2: (f64, usize, f64),
+    /// Σ z² over block channels, its degrees of freedom and critical value.
+    pub block_chi2: (f64, usize, f64),
+    /// Largest block |z| and its critical value.
+    pub block_max: (f64, f64),
+    /// Per-channel ratio of block variance to the sum of pixel variances.
+    pub kappa: [f64; 3],
+}
+
+/// Tests that `a` and `b` estimate the same image (see the module's
+/// comment): per-channel means within `rel_tol` and the z-test, the pixel
+/// χ², the block χ² and the largest block deviation. Never panics.
+pub fn compare(name: &str, a: &Estimate, b: &Estimate, rel_tol: f64) -> Verdict {
     assert_eq!((a.width, a.height), (b.width, b.height), "{name}: resolution");
+    let alpha = FALSE_ALARM / 4.0;
+    let normal = Normal::standard();
+    let (dfa, dfb) = ((a.batches - 1) as f64, (b.batches - 1) as f64);
+    let mut v = Verdict::default();
     let n = a.mean.len() as f64;
+
+    // Image means: the variance of a mean of pixels is Σ var / n² times the
+    // filter's correlation factor κ, measured below on the blocks.
+    let blocks = blocks(a.width, a.height);
+    for c in 0..3 {
+        // κ: how much more the block means vary than independent pixels
+        // would (1 for a box filter); the filters are the same on both
+        // sides, so it applies to both.
+        let (mut measured, mut pixel_sum) = (0.0, 0.0);
+        for (bi, px) in blocks.iter().enumerate() {
+            let m = px.len() as f64;
+            if let Some(bv) = a.block_var.as_ref().or(b.block_var.as_ref()) {
+                measured += bv[bi][c];
+                let own = if a.block_var.is_some() { a } else { b };
+                pixel_sum += px.iter().map(|&i| own.var[i][c]).sum::<f64>() / (m * m);
+            }
+        }
+        v.kappa[c] = if pixel_sum > 0.0 { (measured / pixel_sum).max(1.0) } else { 1.0 };
+    }
+    let z_mean = -normal.inverse_cdf(alpha / 6.0);
     for c in 0..3 {
         let ma = a.mean.iter().map(|p| p[c]).sum::<f64>() / n;
         let mb = b.mean.iter().map(|p| p[c]).sum::<f64>() / n;
-        let se = (a.var.iter().map(|v| v[c]).sum::<f64>() + b.var.iter().map(|v| v[c]).sum::<f64>()).sqrt() / n;
-        eprintln!("{name} channel {c}: {ma:.5} vs {mb:.5} (se {se:.5})");
-        assert!((ma - mb).abs() <= rel_tol * mb.abs() + 1e-4, "{name}: channel {c} mean {ma} vs {mb}");
-        assert!((ma - mb).abs() <= 5.0 * se + 1e-4, "{name}: channel {c} mean {ma} vs {mb}, se {se}");
-    }
-    let (mut err, mut expl) = (0.0, 0.0);
-    for i in 0..a.mean.len() {
-        for c in 0..3 {
-            let d = b.mean[i][c] * b.mean[i][c] + 1e-2;
-            err += (a.mean[i][c] - b.mean[i][c]).powi(2) / d;
-            expl += (a.var[i][c] + b.var[i][c]) / d;
+        let se = (v.kappa[c] * (a.var.iter().map(|p| p[c]).sum::<f64>() + b.var.iter().map(|p| p[c]).sum::<f64>())).sqrt() / n;
+        eprintln!("{name} channel {c}: mean {ma:.5} vs {mb:.5} (se {se:.5}, kappa {:.2})", v.kappa[c]);
+        if (ma - mb).abs() > rel_tol * mb.abs() + 1e-4 {
+            v.failures.push(format!("channel {c} mean {ma:.5} vs {mb:.5}: more than {rel_tol} apart"));
+        }
+        if (ma - mb).abs() > z_mean * se + 1e-6 {
+            v.failures.push(format!("channel {c} mean {ma:.5} vs {mb:.5}: {:.1} se apart (limit {z_mean:.1})", (ma - mb).abs() / se));
         }
     }
-    let ratio = err / expl;
+
+    // Every pixel channel. A pixel with no variance on either side (black
+    // background) must agree to rounding.
+    let (mut sum, mut dof) = (0.0, 0usize);
+    for i in 0..a.mean.len() {
+        for c in 0..3 {
+            let d = a.mean[i][c] - b.mean[i][c];
+            let (va, vb) = (a.var[i][c], b.var[i][c]);
+            if va + vb <= 0.0 {
+                if d.abs() > 1e-6 * (1.0 + b.mean[i][c].abs()) {
+                    v.failures.push(format!("pixel {i} channel {c}: {} vs {} with zero variance", a.mean[i][c], b.mean[i][c]));
+                }
+                continue;
+            }
+            sum += welch_z2(d, va + vb, va * va, vb * vb, dfa, dfb).0;
+            dof += 1;
+        }
+    }
+    let crit = if dof > 0 { ChiSquared::new(dof as f64).unwrap().inverse_cdf(1.0 - alpha) } else { 0.0 };
+    v.pixel_chi2 = (sum, dof, crit);
+    if sum > crit {
+        v.failures.push(format!("pixels: chi2 {sum:.0} over {dof} pixel channels, above {crit:.0}"));
+    }
+
+    // Blocks.
+    let (mut sum, mut dof, mut worst, mut worst_at) = (0.0, 0usize, 0.0f64, (0, 0));
+    for (bi, px) in blocks.iter().enumerate() {
+        let m = px.len() as f64;
+        for c in 0..3 {
+            let d = px.iter().map(|&i| a.mean[i][c] - b.mean[i][c]).sum::<f64>() / m;
+            let (mut va, mut vb, mut sqa, mut sqb) = (0.0, 0.0, 0.0, 0.0);
+            for &i in px {
+                va += a.var[i][c];
+                vb += b.var[i][c];
+                sqa += a.var[i][c] * a.var[i][c];
+                sqb += b.var[i][c] * b.var[i][c];
+            }
+            if va + vb <= 0.0 {
+                continue;
+            }
+            let k = v.kappa[c] / (m * m);
+            let (z2, _) = welch_z2(d, k * (va + vb), k * k * sqa, k * k * sqb, dfa, dfb);
+            sum += z2;
+            dof += 1;
+            if z2 > worst {
+                worst = z2;
+                worst_at = (bi, c);
+            }
+        }
+    }
+    let crit = if dof > 0 { ChiSquared::new(dof as f64).unwrap().inverse_cdf(1.0 - alpha) } else { 0.0 };
+    v.block_chi2 = (sum, dof, crit);
+    if sum > crit {
+        v.failures.push(format!("blocks: chi2 {sum:.0} over {dof} block channels, above {crit:.0}"));
+    }
+    // Largest block deviation, Bonferroni over the blocks.
+    let zmax = -normal.inverse_cdf(alpha / (2.0 * dof.max(1) as f64));
+    v.block_max = (worst.sqrt(), zmax);
+    if worst.sqrt() > zmax {
+        let bw = a.width.div_ceil(BLOCK) as usize;
+        let (bi, c) = worst_at;
+        v.failures.push(format!(
+            "block at pixel ({}, {}) channel {c}: {:.1} standard errors off, above {zmax:.1}",
+            (bi % bw) as u32 * BLOCK,
+            (bi / bw) as u32 * BLOCK,
+            worst.sqrt()
+        ));
+    }
     eprintln!(
-        "{name}: relMSE {:.3e}, explained by variance {:.3e}, ratio {ratio:.3}",
-        err / (3.0 * n),
-        expl / (3.0 * n)
+        "{name}: pixel chi2 {:.0}/{} (limit {:.0}), block chi2 {:.0}/{} (limit {:.0}), worst block {:.2} (limit {:.2})",
+        v.pixel_chi2.0, v.pixel_chi2.1, v.pixel_chi2.2, v.block_chi2.0, v.block_chi2.1, v.block_chi2.2, v.block_max.0, v.block_max.1
     );
-    // For unbiased estimators the ratio's expectation is 1; over ~10k pixel
-    // channels its spread is a few percent, the batch variance estimates add
-    // more; 1.3 leaves room for that but not for a systematic difference.
-    assert!(ratio < 1.3, "{name}: squared difference {ratio:.2}x what the variances explain");
-    ratio
+    v
+}
+
+/// [`compare`], panicking with every failed test.
+pub fn assert_agree(name: &str, a: &Estimate, b: &Estimate, rel_tol: f64) -> Verdict {
+    let v = compare(name, a, b, rel_tol);
+    assert!(v.failures.is_empty(), "{name}: the estimates disagree:\n  {}", v.failures.join("\n  "));
+    v
+}
+
+/// The three local errors a comparison must catch where they are visible
+/// (a lobe a little too wide, a mirrored texture or environment map, 10 %
+/// too bright over a fifth of the image), applied to an image.
+pub fn injected_errors(e: &Estimate) -> Vec<(&'static str, Estimate)> {
+    let (w, h) = (e.width as usize, e.height as usize);
+    let at = |x: usize, y: usize| y * w + x;
+    // Too wide: a 3x3 box blur over the image (a wider lobe spreads every highlight and edge).
+    let mut blur = e.clone();
+    for y in 0..h {
+        for x in 0..w {
+            let mut s = [0.0; 3];
+            let mut k = 0.0;
+            for yy in y.saturating_sub(1)..(y + 2).min(h) {
+                for xx in x.saturating_sub(1)..(x + 2).min(w) {
+                    for (c, sc) in s.iter_mut().enumerate() {
+                        *sc += e.mean[at(xx, yy)][c];
+                    }
+                    k += 1.0;
+                }
+            }
+            blur.mean[at(x, y)] = s.map(|v| v / k);
+        }
+    }
+    // Mirrored: the image flipped left to right.
+    let mut mirror = e.clone();
+    for y in 0..h {
+        for x in 0..w {
+            mirror.mean[at(x, y)] = e.mean[at(w - 1 - x, y)];
+            mirror.var[at(x, y)] = e.var[at(w - 1 - x, y)];
+        }
+    }
+    // 10 % too bright in the middle fifth of the rows.
+    let mut bright = e.clone();
+    for y in 2 * h / 5..3 * h / 5 {
+        for x in 0..w {
+            bright.mean[at(x, y)] = e.mean[at(x, y)].map(|v| v * 1.1);
+        }
+    }
+    vec![("lobe too wide (3x3 blur)", blur), ("mirrored", mirror), ("10 % too bright over a fifth", bright)]
 }
