@@ -4,6 +4,8 @@
 //! Layers, bottom up: `math` → `sampling` → `geometry` → `accel` →
 //! `texture` → `bsdf` → `material` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
 
+#![warn(missing_docs)]
+
 pub mod accel;
 pub mod bsdf;
 pub mod camera;

@@ -19,7 +19,9 @@ pub type RayLog = Arc<Mutex<Vec<LoggedRay>>>;
 /// shadow (any-hit) query.
 #[derive(Debug, Clone, Copy)]
 pub struct LoggedRay {
+    /// The ray in world space; for shadow rays already offset and shortened.
     pub ray: Ray,
+    /// An any-hit (`occluded`) query rather than a closest-hit one.
     pub shadow: bool,
 }
 
@@ -32,6 +34,7 @@ pub struct ShapeInfo {
     pub light: Option<u32>,
 }
 
+/// Shapes, materials, lights and the BVH, with the queries integrators use.
 #[derive(Debug, Clone)]
 pub struct Scene {
     /// Every shape, by id: those placed directly, in world space, and the
@@ -44,10 +47,13 @@ pub struct Scene {
     /// What `accel` is built over, in scene order: the shapes placed
     /// directly and the instances.
     pub placed: Vec<Primitive>,
+    /// Materials, indexed by [`ShapeInfo::material`].
     pub materials: Vec<Material>,
+    /// Every emitter; area lights refer to their shape by id.
     pub lights: Vec<Light>,
     /// Indices of lights at infinity (hit by escaping rays).
     pub env_lights: Vec<u32>,
+    /// The top-level BVH over `placed`.
     pub accel: Accel,
     /// How `sample_light` picks a light (see [`Scene::set_light_selection`]).
     light_sampler: LightSampler,

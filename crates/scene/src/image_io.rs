@@ -11,21 +11,29 @@ use std::path::Path;
 /// A linear RGB image, row-major, top row first.
 #[derive(Debug, Clone)]
 pub struct RgbImage {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// `width · height` pixels; pixel (x, y) at `y * width + x`.
     pub pixels: Vec<[f32; 3]>,
 }
 
 /// The output formats, chosen by extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
+    /// OpenEXR, 32-bit float RGB, linear.
     Exr,
+    /// 8-bit sRGB-encoded RGB, clamped to [0, 1] (non-finite values → 0).
     Png,
+    /// Portable float map, little-endian, rows bottom to top, linear.
     Pfm,
+    /// Radiance RGBE, linear (negative and non-finite values → 0).
     Hdr,
 }
 
 impl Format {
+    /// The format named by the extension of `path` (case-insensitive).
     pub fn from_path(path: &Path) -> Result<Format, String> {
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         match ext.as_str() {

@@ -1,6 +1,8 @@
 //! Scene loading for Penumbra: Mitsuba 3 XML → format-neutral description
 //! (`desc`) → render job (`build`), plus mesh readers, image output and atomic file writes.
 
+#![warn(missing_docs)]
+
 pub mod atomic;
 pub mod build;
 pub mod desc;

@@ -34,8 +34,11 @@ use std::path::Path;
 /// module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ColorUse {
+    /// With D65, clamped to [0, 1] (`get_texture`).
     Reflectance,
+    /// With D65, negative components clamped to 0 (`get_unbounded_texture`).
     Unbounded,
+    /// Without D65, negative components clamped to 0 (`get_emissive_texture`).
     Emission,
 }
 

@@ -152,6 +152,7 @@ struct Entry {
 /// The closest hit found by [`Accel::intersect`].
 #[derive(Debug, Clone, Copy)]
 pub struct Hit {
+    /// Ray parameter of the hit, in units of the (world) ray's `d`.
     pub t: f32,
     /// Triangle barycentrics (b1, b2) or the analytic shape's local coordinates.
     pub uv: Vec2,
@@ -168,6 +169,8 @@ impl Hit {
     pub const NOT_INSTANCED: u32 = u32::MAX;
 }
 
+/// An 8-wide BVH over [`Primitive`]s, built by [`Accel::build`]; the
+/// default value is the empty tree, which nothing hits.
 #[derive(Debug, Clone, Default)]
 pub struct Accel {
     nodes: HugeArray<Node>,
@@ -178,6 +181,8 @@ pub struct Accel {
     pub prims: Vec<Primitive>,
     /// The root slot, `None` when there is nothing to hit.
     root: Option<(u32, u32)>,
+    /// Bounds of everything in the tree, in the space of its primitives
+    /// (world space; object space for a [`ShapeGroup`](super::ShapeGroup)'s).
     pub bounds: Aabb,
     /// Whether traversal prefetches children: only where the tree is too
     /// large for the L2 cache (in it, prefetching costs instructions and

@@ -17,6 +17,7 @@ use std::sync::Arc;
 pub struct ShapeGroup {
     /// The members' shape ids.
     pub members: Vec<u32>,
+    /// BVH over the members, in object space.
     pub accel: Accel,
 }
 
@@ -29,8 +30,10 @@ impl ShapeGroup {
     }
 }
 
+/// One placement of a [`ShapeGroup`] by a transform (Mitsuba's `instance`).
 #[derive(Debug, Clone)]
 pub struct Instance {
+    /// The group placed, shared by all its instances.
     pub group: Arc<ShapeGroup>,
     world_from_object: Mat4,
     object_from_world: Mat4,
@@ -40,6 +43,8 @@ pub struct Instance {
 }
 
 impl Instance {
+    /// Places `group` by `world_from_object`; the world bounds enclose the
+    /// transformed corners of the group's box, padded against rounding.
     pub fn new(group: Arc<ShapeGroup>, world_from_object: Mat4) -> Instance {
         let object_from_world = world_from_object.inverse();
         let normal_m = Mat3::from_mat4(object_from_world).transpose();
@@ -65,6 +70,7 @@ impl Instance {
         Instance { group, world_from_object, object_from_world, normal_m, bounds }
     }
 
+    /// World-space bounds.
     pub fn bounds(&self) -> Aabb {
         self.bounds
     }
@@ -87,6 +93,7 @@ impl Instance {
         self.group.accel.intersect(&r, shapes, &[])
     }
 
+    /// Any hit with 0 < t < `ray.t_max` (world ray), for shadow rays.
     #[inline]
     pub fn occluded(&self, ray: &Ray, shapes: &[Shape]) -> bool {
         self.group.accel.occluded(&self.object_ray(ray), shapes, &[])

@@ -6,6 +6,7 @@
 mod imp {
     use std::arch::x86_64::*;
 
+    /// Eight f32 lanes in one AVX register.
     #[derive(Clone, Copy, Debug)]
     #[repr(transparent)]
     pub struct F8(__m256);
@@ -13,14 +14,17 @@ mod imp {
     // SAFETY (all blocks below): the intrinsics need only AVX, which the
     // `cfg` above guarantees at compile time.
     impl F8 {
+        /// All lanes `v`.
         #[inline(always)]
         pub fn splat(v: f32) -> F8 {
             unsafe { F8(_mm256_set1_ps(v)) }
         }
+        /// Lane `l` = `a[l]`.
         #[inline(always)]
         pub fn from_array(a: [f32; 8]) -> F8 {
             unsafe { F8(_mm256_loadu_ps(a.as_ptr())) }
         }
+        /// The lanes in order.
         #[inline(always)]
         pub fn to_array(self) -> [f32; 8] {
             let mut a = [0.0; 8];
@@ -28,11 +32,13 @@ mod imp {
             a
         }
         // Named methods, not operator traits: the lane types stay plain and `#[inline(always)]`.
+        /// Lane-wise `self - o`.
         #[allow(clippy::should_implement_trait)]
         #[inline(always)]
         pub fn sub(self, o: F8) -> F8 {
             unsafe { F8(_mm256_sub_ps(self.0, o.0)) }
         }
+        /// Lane-wise `self * o`.
         #[allow(clippy::should_implement_trait)]
         #[inline(always)]
         pub fn mul(self, o: F8) -> F8 {
@@ -87,28 +93,34 @@ mod imp {
 mod imp {
     use glam::Vec4;
 
+    /// Eight f32 lanes as two SSE-width halves (lanes 0..4, 4..8).
     #[derive(Clone, Copy, Debug)]
     #[repr(C, align(32))]
     pub struct F8([Vec4; 2]);
 
     impl F8 {
+        /// All lanes `v`.
         #[inline(always)]
         pub fn splat(v: f32) -> F8 {
             F8([Vec4::splat(v); 2])
         }
+        /// Lane `l` = `a[l]`.
         #[inline(always)]
         pub fn from_array(a: [f32; 8]) -> F8 {
             F8([Vec4::new(a[0], a[1], a[2], a[3]), Vec4::new(a[4], a[5], a[6], a[7])])
         }
+        /// The lanes in order.
         #[inline(always)]
         pub fn to_array(self) -> [f32; 8] {
             let (l, h) = (self.0[0].to_array(), self.0[1].to_array());
             [l[0], l[1], l[2], l[3], h[0], h[1], h[2], h[3]]
         }
+        /// Lane-wise `self - o`.
         #[inline(always)]
         pub fn sub(self, o: F8) -> F8 {
             F8([self.0[0] - o.0[0], self.0[1] - o.0[1]])
         }
+        /// Lane-wise `self * o`.
         #[inline(always)]
         pub fn mul(self, o: F8) -> F8 {
             F8([self.0[0] * o.0[0], self.0[1] * o.0[1]])

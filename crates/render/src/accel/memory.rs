@@ -25,6 +25,7 @@ unsafe impl<T: Copy + Send> Send for HugeArray<T> {}
 unsafe impl<T: Copy + Sync> Sync for HugeArray<T> {}
 
 impl<T: Copy> HugeArray<T> {
+    /// A copy of `values` (empty arrays allocate nothing).
     pub fn from_slice(values: &[T]) -> HugeArray<T> {
         let bytes = std::mem::size_of_val(values);
         if bytes == 0 {

@@ -13,6 +13,7 @@ use glam::{BVec4A, Vec3, Vec4};
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(16))]
 pub struct Tri4 {
+    /// `v[vertex][coordinate]`, one lane per triangle.
     pub v: [[Vec4; 3]; 3],
 }
 
@@ -52,6 +53,7 @@ pub struct RayLanes {
 }
 
 impl RayLanes {
+    /// Splats the ray origin and the shear constants `sh` of `ray.d` over four lanes.
     #[inline(always)]
     pub fn new(ray: &Ray, sh: &RayShear) -> RayLanes {
         RayLanes {

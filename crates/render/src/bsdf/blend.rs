@@ -21,13 +21,16 @@ use glam::{Vec2, Vec3};
 pub struct Blend<'a> {
     /// The second BSDF's weight, clamped to [0, 1].
     pub weight: f32,
+    /// Weighted by 1 − `weight`.
     pub first: &'a Nested<'a>,
+    /// Weighted by `weight`.
     pub second: &'a Nested<'a>,
 }
 
 /// A nested BSDF and the map from the blend's local frame to its own.
 #[derive(Debug, Clone, Copy)]
 pub struct Nested<'a> {
+    /// The nested BSDF, working in its own shading frame.
     pub bsdf: Bsdf<'a>,
     /// Rows of the change of basis (None when the frames agree).
     map: Option<[Vec3; 3]>,

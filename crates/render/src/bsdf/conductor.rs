@@ -14,18 +14,25 @@ use crate::math::Spectrum;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `conductor` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct Conductor {
+    /// Real part of the relative complex IOR, per channel.
     pub eta: Spectrum,
+    /// Imaginary part (absorption) of the relative complex IOR, per channel.
     pub k: Spectrum,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Spectrum,
 }
 
 /// Mitsuba `conductor` as the scene stores it.
 #[derive(Debug, Clone)]
 pub struct ConductorParams {
+    /// Real part of the relative complex IOR.
     pub eta: Texture,
+    /// Imaginary part (absorption) of the relative complex IOR.
     pub k: Texture,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Texture,
 }
 

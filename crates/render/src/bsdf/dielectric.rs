@@ -15,11 +15,14 @@ use crate::math::Spectrum;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `dielectric` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct Dielectric {
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Spectrum,
+    /// Multiplier of the Fresnel transmittance 1 − F.
     pub specular_transmittance: Spectrum,
 }
 
@@ -28,7 +31,9 @@ pub struct Dielectric {
 pub struct DielectricParams {
     /// Relative IOR (interior / exterior).
     pub eta: f32,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Texture,
+    /// Multiplier of the Fresnel transmittance 1 − F.
     pub specular_transmittance: Texture,
 }
 

@@ -12,14 +12,17 @@ use crate::sampling::warp;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `diffuse` with its texture evaluated at a hit: f = reflectance / π.
 #[derive(Debug, Clone, Copy)]
 pub struct Diffuse {
+    /// Albedo ρ (linear RGB).
     pub reflectance: Spectrum,
 }
 
 /// Mitsuba `diffuse` as the scene stores it.
 #[derive(Debug, Clone)]
 pub struct DiffuseParams {
+    /// Albedo ρ.
     pub reflectance: Texture,
 }
 

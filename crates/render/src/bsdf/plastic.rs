@@ -22,12 +22,16 @@ use crate::sampling::warp;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `plastic` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct Plastic {
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Reflectance ρ of the diffuse base (linear RGB).
     pub diffuse_reflectance: Spectrum,
+    /// Tint of the specular reflection.
     pub specular_reflectance: Spectrum,
+    /// Mitsuba's `nonlinear`: account for colour shifts from internal scattering.
     pub nonlinear: bool,
     /// Diffuse Fresnel reflectance seen from inside, F_dr(1/η).
     pub fdr_int: f32,
@@ -40,8 +44,11 @@ pub struct Plastic {
 pub struct PlasticParams {
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Reflectance ρ of the diffuse base.
     pub diffuse_reflectance: Texture,
+    /// Tint of the specular reflection.
     pub specular_reflectance: Texture,
+    /// Mitsuba's `nonlinear`: account for colour shifts from internal scattering.
     pub nonlinear: bool,
     /// F_dr(1/η), precomputed from `eta`.
     pub fdr_int: f32,

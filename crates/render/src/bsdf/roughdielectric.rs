@@ -15,22 +15,29 @@ use crate::math::Spectrum;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `roughdielectric` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct RoughDielectric {
+    /// Microfacet distribution of the surface.
     pub distr: Microfacet,
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Spectrum,
+    /// Multiplier of the Fresnel transmittance 1 − F.
     pub specular_transmittance: Spectrum,
 }
 
 /// Mitsuba `roughdielectric` as the scene stores it.
 #[derive(Debug, Clone)]
 pub struct RoughDielectricParams {
+    /// Roughness (α, isotropic or anisotropic) and distribution.
     pub roughness: Roughness,
     /// Relative IOR (interior / exterior).
     pub eta: f32,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Texture,
+    /// Multiplier of the Fresnel transmittance 1 − F.
     pub specular_transmittance: Texture,
 }
 

@@ -16,11 +16,14 @@ use crate::math::Spectrum;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba `thindielectric` with its textures evaluated at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct ThinDielectric {
     /// Relative IOR int_ior / ext_ior.
     pub eta: f32,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Spectrum,
+    /// Multiplier of the Fresnel transmittance 1 − F.
     pub specular_transmittance: Spectrum,
 }
 
@@ -29,7 +32,9 @@ pub struct ThinDielectric {
 pub struct ThinDielectricParams {
     /// Relative IOR (interior / exterior).
     pub eta: f32,
+    /// Multiplier of the Fresnel reflectance.
     pub specular_reflectance: Texture,
+    /// Multiplier of the Fresnel transmittance 1 − F.
     pub specular_transmittance: Texture,
 }
 

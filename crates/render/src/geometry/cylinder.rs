@@ -12,13 +12,17 @@ use super::{Aabb, Ray};
 use crate::math::PI;
 use glam::{DMat4, DVec3, Mat4, Vec2, Vec3};
 
+/// An open tube placed by a transform (Mitsuba's `cylinder`), see the module docs.
 #[derive(Debug, Clone)]
 pub struct Cylinder {
     world_from_object: DMat4,
     object_from_world: DMat4,
     to_world: Mat4,
+    /// Radius in world units (after `to_world`'s scale).
     pub radius: f32,
+    /// Length of the axis in world units.
     pub length: f32,
+    /// Normals point inwards (Mitsuba's `flip_normals`).
     pub flip: bool,
 }
 
@@ -73,6 +77,7 @@ impl Cylinder {
         })
     }
 
+    /// World-space surface area of the tube, 2πr·length (no caps).
     pub fn area(&self) -> f32 {
         2.0 * PI * self.radius * self.length
     }

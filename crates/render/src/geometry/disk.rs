@@ -7,8 +7,10 @@ use crate::math::{fast, PI};
 use crate::sampling::warp;
 use glam::{Mat4, Vec2, Vec3};
 
+/// The unit disk placed by a transform (Mitsuba's `disk`).
 #[derive(Debug, Clone)]
 pub struct Disk {
+    /// Mitsuba's `to_world`: places the unit disk in z = 0.
     pub world_from_object: Mat4,
     object_from_world: Mat4,
     /// The front normal, in world space.
@@ -17,6 +19,8 @@ pub struct Disk {
 }
 
 impl Disk {
+    /// The disk placed by `world_from_object`; `flip` reverses the normal
+    /// (Mitsuba's `flip_normals`). The area follows the transform's scale.
     pub fn new(world_from_object: Mat4, flip: bool) -> Disk {
         let ax = world_from_object.transform_vector3(Vec3::X);
         let ay = world_from_object.transform_vector3(Vec3::Y);
@@ -25,6 +29,7 @@ impl Disk {
         Disk { world_from_object, object_from_world: world_from_object.inverse(), n, area: PI * c.length() }
     }
 
+    /// World-space area: π·|X × Y|, X and Y the transformed local axes.
     pub fn area(&self) -> f32 {
         self.area
     }

@@ -9,6 +9,7 @@ use glam::{Vec2, Vec3};
 /// incoming ray, towards the camera side; sampled directions are `wi`.
 #[derive(Debug, Clone, Copy)]
 pub struct SurfaceInteraction {
+    /// The hit point.
     pub p: Vec3,
     /// Ray distance to the hit.
     pub t: f32,
@@ -26,6 +27,7 @@ pub struct SurfaceInteraction {
     /// Hits on materials that read none of `uv`, `dpdu`, `dpdv` skip them
     /// (`Shape::interaction_with`): `dpdu` is then only a tangent.
     pub dpdu: Vec3,
+    /// ∂p/∂v in world space (zero where skipped, see `dpdu`).
     pub dpdv: Vec3,
     /// Index of the hit shape in the scene.
     pub shape: u32,
@@ -54,10 +56,12 @@ impl SurfaceInteraction {
         }
     }
 
+    /// World direction → the shading frame (normal = +z), where BSDFs work.
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         self.sh_frame.to_local(v)
     }
+    /// Shading-frame direction → world space.
     #[inline]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         self.sh_frame.to_world(v)

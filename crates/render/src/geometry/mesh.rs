@@ -9,9 +9,14 @@ use glam::{Mat4, Vec2, Vec3};
 /// [`TriangleMesh::transform`] to bake `to_world` in.
 #[derive(Debug, Clone, Default)]
 pub struct TriangleMesh {
+    /// Vertex positions (object space as loaded, world space once transformed).
     pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, or empty (then shading uses the face normal).
     pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates, or empty.
     pub uvs: Vec<Vec2>,
+    /// Vertex indices of each triangle; the winding (v0, v1, v2) makes the
+    /// geometric normal (v1 − v0) × (v2 − v0).
     pub indices: Vec<[u32; 3]>,
 }
 

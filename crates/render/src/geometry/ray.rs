@@ -7,16 +7,21 @@ use glam::Vec3;
 /// intersection, but integrators keep it unit length so `t` is a distance.
 #[derive(Debug, Clone, Copy)]
 pub struct Ray {
+    /// Origin.
     pub o: Vec3,
+    /// Direction.
     pub d: Vec3,
+    /// Upper bound of the open interval of t searched for hits.
     pub t_max: f32,
 }
 
 impl Ray {
+    /// The ray `o + t d`, t in (0, t_max).
     #[inline]
     pub fn new(o: Vec3, d: Vec3, t_max: f32) -> Ray {
         Ray { o, d, t_max }
     }
+    /// The point `o + t d`.
     #[inline]
     pub fn at(&self, t: f32) -> Vec3 {
         self.o + self.d * t

@@ -9,12 +9,16 @@ use crate::math::{fast, safe_sqrt, Frame, Mat3, PI};
 use crate::sampling::warp;
 use glam::{Vec2, Vec3};
 
+/// A sphere in world space (Mitsuba's `sphere` with its `to_world` applied).
 #[derive(Debug, Clone)]
 pub struct Sphere {
+    /// Centre, in world space.
     pub center: Vec3,
+    /// Radius in world units (non-negative).
     pub radius: f32,
     /// The rotation part of `to_world`, which orients the uv parameterisation.
     pub rot: Mat3,
+    /// Normals point inwards (Mitsuba's `flip_normals`).
     pub flip: bool,
 }
 
@@ -25,10 +29,12 @@ impl Sphere {
         Sphere { center, radius: radius.abs(), rot, flip }
     }
 
+    /// World-space bounding box.
     pub fn bounds(&self) -> Aabb {
         Aabb { min: self.center - Vec3::splat(self.radius), max: self.center + Vec3::splat(self.radius) }
     }
 
+    /// Surface area, 4πr².
     pub fn area(&self) -> f32 {
         4.0 * PI * self.radius * self.radius
     }

@@ -8,13 +8,18 @@ use glam::Vec3;
 /// Per-ray data for the shear transform, computed once per traversal.
 #[derive(Debug, Clone, Copy)]
 pub struct RayShear {
+    /// The axis of the largest |d| component, which becomes z (kx, ky follow it cyclically).
     pub kz: usize,
+    /// Shear of x: −d_kx / d_kz (Woop et al. 2013).
     pub sx: f32,
+    /// Shear of y: −d_ky / d_kz.
     pub sy: f32,
+    /// Scale of z: 1 / d_kz.
     pub sz: f32,
 }
 
 impl RayShear {
+    /// The shear of ray direction `d` (need not be unit length).
     #[inline]
     pub fn new(d: Vec3) -> RayShear {
         let ad = d.abs();

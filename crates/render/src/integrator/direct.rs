@@ -18,14 +18,21 @@ use crate::sampling::mis::power_heuristic;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
 
+/// The `direct` integrator's parameters.
 #[derive(Debug, Clone)]
 pub struct DirectIntegrator {
+    /// Light samples (shadow rays) per hit, N_s.
     pub emitter_samples: u32,
+    /// BSDF samples per hit.
     pub bsdf_samples: u32,
+    /// Mitsuba's `hide_emitters`: camera rays pass through area emitters
+    /// and see a black environment.
     pub hide_emitters: bool,
 }
 
 impl DirectIntegrator {
+    /// Radiance along the camera ray `ray`: emission at the first hit plus its
+    /// direct illumination, the two sample kinds MIS-weighted (Veach 1997, eq. 9.13).
     pub fn li(
         &self,
         scene: &Scene,

@@ -34,6 +34,7 @@ pub struct RayStats {
 }
 
 impl RayStats {
+    /// Adds another thread's counts.
     pub fn add(&mut self, o: &RayStats) {
         self.rays += o.rays;
         self.shadow_rays += o.shadow_rays;
@@ -102,10 +103,14 @@ impl Termination {
     }
 }
 
+/// The scene's integrator: one variant per plugin (see the module docs).
 #[derive(Debug, Clone)]
 pub enum Integrator {
+    /// `path`: NEE + BSDF sampling, MIS, Russian roulette.
     Path(PathIntegrator),
+    /// `direct`: direct illumination at the first hit.
     Direct(DirectIntegrator),
+    /// `bruteforce`: one sampled direction per vertex, no light sampling.
     BruteForce(BruteForceIntegrator),
 }
 

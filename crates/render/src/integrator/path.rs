@@ -20,9 +20,13 @@ use crate::sampling::SampleStream;
 use crate::scene::Scene;
 use glam::Vec3;
 
+/// The `path` integrator's parameters.
 #[derive(Debug, Clone)]
 pub struct PathIntegrator {
+    /// Path length limits and Russian roulette.
     pub term: Termination,
+    /// Mitsuba's `hide_emitters`: camera rays pass through area emitters
+    /// and see a black environment.
     pub hide_emitters: bool,
     /// Weight light and BSDF samples by the power heuristic; when false,
     /// each kind of sample estimates its own part of the integral.

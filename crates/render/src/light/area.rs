@@ -16,10 +16,12 @@ use crate::geometry::{Aabb, Mesh, Shape, SurfaceInteraction};
 use crate::math::{luminance, Spectrum, PI};
 use glam::{Vec2, Vec3};
 
+/// Mitsuba's `area` emitter on one shape.
 #[derive(Debug, Clone)]
 pub struct AreaLight {
     /// Index of the emitting shape in the scene's shapes.
     pub shape: u32,
+    /// Emitted radiance (W/(m² sr)), the same in every front-facing direction.
     pub radiance: Spectrum,
 }
 

@@ -83,13 +83,17 @@ impl DirectionCone {
 /// beam axes), θ_e the spread of emission around each (pbrt-v4 §12.6.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightBounds {
+    /// Box of the emitting points, in world space.
     pub bounds: Aabb,
     /// Unit axis of the direction cone.
     pub w: Vec3,
     /// Power: the luminance of the emitted flux (4π I for point and spot lights).
     pub phi: f32,
+    /// cos θ_o: the half-angle around `w` that bounds the normals (or beam axes).
     pub cos_theta_o: f32,
+    /// cos θ_e: the spread of emission around each normal (0 for diffuse emitters, θ_e = π/2).
     pub cos_theta_e: f32,
+    /// Emission around ±`w` rather than `w` alone.
     pub two_sided: bool,
 }
 

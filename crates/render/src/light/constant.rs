@@ -10,12 +10,15 @@ use crate::math::{Spectrum, PI};
 use crate::sampling::warp;
 use glam::Vec2;
 
+/// Mitsuba's `constant` emitter.
 #[derive(Debug, Clone)]
 pub struct ConstantLight {
+    /// Radiance arriving from every direction (W/(m² sr)).
     pub radiance: Spectrum,
 }
 
 impl ConstantLight {
+    /// A uniform direction on the sphere: pdf 1/(4π), `li` = radiance, infinite distance.
     pub fn sample_li(&self, u2: Vec2) -> Option<LightSample> {
         let wi = warp::sample_uniform_sphere(u2);
         Some(LightSample { wi, dist: f32::INFINITY, pdf: warp::uniform_sphere_pdf(), li: self.radiance, delta: false })

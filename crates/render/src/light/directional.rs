@@ -11,10 +11,12 @@ use super::LightSample;
 use crate::math::{Spectrum, PI};
 use glam::Vec3;
 
+/// Mitsuba's `directional` emitter.
 #[derive(Debug, Clone)]
 pub struct DirectionalLight {
     /// Unit direction in which the light travels.
     pub direction: Vec3,
+    /// Irradiance E (W/m²) on a surface facing the light.
     pub irradiance: Spectrum,
     /// Radius of the scene's bounding sphere (for `power`), given at
     /// construction: the scene builder makes lights once the geometry's
@@ -23,6 +25,7 @@ pub struct DirectionalLight {
 }
 
 impl DirectionalLight {
+    /// The one direction `-direction`, as a delta: pdf 1, `li` = E, infinite distance.
     pub fn sample_li(&self) -> Option<LightSample> {
         Some(LightSample { wi: -self.direction, dist: f32::INFINITY, pdf: 1.0, li: self.irradiance, delta: true })
     }

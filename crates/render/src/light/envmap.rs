@@ -32,6 +32,7 @@ use crate::math::{fast, luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
 use crate::sampling::Distribution2D;
 use glam::{Vec2, Vec3};
 
+/// Mitsuba's `envmap` emitter (mapping and sampling in the module docs).
 #[derive(Debug, Clone)]
 pub struct EnvMapLight {
     width: usize,

@@ -57,13 +57,20 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+/// An emitter: one variant per Mitsuba plugin, dispatched by `match`.
 #[derive(Debug, Clone)]
 pub enum Light {
+    /// `area`: diffuse emission from the front side of a shape.
     Area(AreaLight),
+    /// `constant`: uniform radiance from every direction at infinity.
     Constant(ConstantLight),
+    /// `point`: isotropic point light (delta in position).
     Point(PointLight),
+    /// `spot`: point light restricted to a cone (delta in position).
     Spot(SpotLight),
+    /// `directional`: light from one direction at infinity (delta in direction).
     Directional(DirectionalLight),
+    /// `envmap`: radiance at infinity from a latitude-longitude image.
     EnvMap(EnvMapLight),
 }
 

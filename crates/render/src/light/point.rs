@@ -21,9 +21,12 @@ pub(super) fn towards(from: Vec3, to: Vec3) -> Option<(Vec3, f32)> {
     (dist > 0.0).then(|| (d / dist, dist))
 }
 
+/// Mitsuba's `point` emitter.
 #[derive(Debug, Clone)]
 pub struct PointLight {
+    /// Position in world space.
     pub position: Vec3,
+    /// Radiant intensity I (W/sr), the same in every direction.
     pub intensity: Spectrum,
 }
 

@@ -26,7 +26,10 @@ pub enum LightSelection {
 #[derive(Debug, Clone)]
 pub enum LightSampler {
     /// Each of `count` lights with probability 1 / `count`.
-    Uniform { count: usize },
+    Uniform {
+        /// Number of lights.
+        count: usize,
+    },
     /// By power: an alias table over the lights' flux luminances.
     Power(Distribution1D),
     /// By importance at the receiver.

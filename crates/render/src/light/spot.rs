@@ -17,11 +17,14 @@ use crate::geometry::Aabb;
 use crate::math::{luminance, safe_acos, Mat3, Mat4, Spectrum, PI};
 use glam::Vec3;
 
+/// Mitsuba's `spot` emitter.
 #[derive(Debug, Clone)]
 pub struct SpotLight {
+    /// Position in world space (the translation of `to_world`).
     pub position: Vec3,
     /// World to light-local rotation (local +z is the beam axis).
     pub light_from_world: Mat4,
+    /// Radiant intensity I (W/sr) inside `beam_width`, before the falloff.
     pub intensity: Spectrum,
     cutoff: f32,
     cos_cutoff: f32,
@@ -56,6 +59,8 @@ impl SpotLight {
         }
     }
 
+    /// The direction to the light as a delta: pdf 1, `li` = I·falloff / d²;
+    /// `None` outside the cone (or at the light's position).
     pub fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
         let (wi, dist) = super::point::towards(p_ref, self.position)?;
         let dist2 = dist * dist;

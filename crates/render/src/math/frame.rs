@@ -5,8 +5,11 @@ use glam::Vec3;
 /// An orthonormal basis (s, t, n). Local directions have `z = cos θ`.
 #[derive(Debug, Clone, Copy)]
 pub struct Frame {
+    /// First tangent: local +x.
     pub s: Vec3,
+    /// Second tangent: local +y.
     pub t: Vec3,
+    /// Normal: local +z.
     pub n: Vec3,
 }
 
@@ -23,11 +26,13 @@ impl Frame {
         Frame { s, t, n }
     }
 
+    /// World direction → local coordinates (dot products with s, t, n).
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
+    /// Local direction → world coordinates (inverse of [`Frame::to_local`]).
     #[inline]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         self.s * v.x + self.t * v.y + self.n * v.z

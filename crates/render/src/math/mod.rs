@@ -10,9 +10,13 @@ pub use glam::{DMat4, Mat3, Mat4, Vec2, Vec3};
 /// representation can replace it later without touching the integrators.
 pub type Spectrum = Vec3;
 
+/// π.
 pub const PI: f32 = std::f32::consts::PI;
+/// 1/π.
 pub const INV_PI: f32 = std::f32::consts::FRAC_1_PI;
+/// 1/(2π).
 pub const INV_2PI: f32 = 0.5 * std::f32::consts::FRAC_1_PI;
+/// 1/(4π): the pdf of a uniform direction on the sphere.
 pub const INV_4PI: f32 = 0.25 * std::f32::consts::FRAC_1_PI;
 
 /// Relative offset for spawning rays off a surface (Mitsuba's `math::RayEpsilon`).
@@ -20,11 +24,13 @@ pub const RAY_EPSILON: f32 = f32::EPSILON * 0.5 * 1500.0;
 /// Shadow rays stop this fraction short of the light (Mitsuba's `math::ShadowEpsilon`).
 pub const SHADOW_EPSILON: f32 = RAY_EPSILON * 10.0;
 
+/// x².
 #[inline]
 pub fn sqr(x: f32) -> f32 {
     x * x
 }
 
+/// √x with negative `x` (from rounding) clamped to 0.
 #[inline]
 pub fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()

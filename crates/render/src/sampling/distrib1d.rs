@@ -60,10 +60,12 @@ impl Distribution1D {
         Some(Distribution1D { func: weights.to_vec(), total, pmf, alias })
     }
 
+    /// Number of items.
     pub fn len(&self) -> usize {
         self.func.len()
     }
 
+    /// True when there are no items (never for a distribution [`Distribution1D::new`] built).
     pub fn is_empty(&self) -> bool {
         self.func.is_empty()
     }

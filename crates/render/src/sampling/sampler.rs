@@ -13,6 +13,7 @@ use super::sequences;
 use crate::math::ONE_MINUS_EPS;
 use glam::Vec2;
 
+/// Which sample construction a [`Sampler`] uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SamplerKind {
     /// Independent uniform random numbers.
@@ -22,10 +23,16 @@ pub enum SamplerKind {
     Stratified,
     /// Mitsuba `multijitter`: correlated multi-jittered sampling (Kensler
     /// 2013) on a near-square grid of `spp` = res_x · res_y cells.
-    Multijitter { jitter: bool },
+    Multijitter {
+        /// Random offset inside each cell (Mitsuba's `jitter`); false: cell centres.
+        jitter: bool,
+    },
     /// Mitsuba `orthogonal`: orthogonal-array Latin hypercubes of strength 2
     /// (Bose construction, Jarosz et al. 2019); `spp` is the square of a prime.
-    Orthogonal { jitter: bool },
+    Orthogonal {
+        /// Random offset inside each substratum (Mitsuba's `jitter`); false: centres.
+        jitter: bool,
+    },
     /// Mitsuba `ldsampler`: a scrambled (0, 2)-sequence (van der Corput ×
     /// Sobol') with sample indices shuffled per dimension; `spp` is a power of
     /// two and a square.
@@ -76,9 +83,12 @@ fn multijitter_resolution(spp: u32) -> (u32, u32) {
     (spp.div_ceil(ry), ry)
 }
 
+/// A sampler plugin's settings: hands out a [`SampleStream`] per pixel sample.
 #[derive(Debug, Clone, Copy)]
 pub struct Sampler {
+    /// The construction.
     pub kind: SamplerKind,
+    /// Seed of every stream (Mitsuba's `seed`).
     pub seed: u64,
     /// Samples per pixel of the whole render (stratification needs it).
     pub spp: u32,
@@ -143,6 +153,7 @@ impl SampleStream {
         mix64(self.key ^ (self.dim as u64).wrapping_mul(0x9e3779b97f4a7c15))
     }
 
+    /// The next value in [0, 1), one dimension further.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         let h = self.next_hash();
@@ -227,6 +238,8 @@ impl SampleStream {
         sequences::bose(self.index % self.sampler.spp, col, r, key, jitter)
     }
 
+    /// The next point in [0, 1)², stratified jointly where the kind allows
+    /// (orthogonal takes two dimensions; Sobol' starts on an even one).
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
         match self.sampler.kind {

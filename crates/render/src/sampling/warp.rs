@@ -27,6 +27,7 @@ pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
     Vec3::new(d.x, d.y, safe_sqrt(1.0 - d.length_squared()))
 }
 
+/// Solid-angle density of [`sample_cosine_hemisphere`] at local `w`: cos θ / π, 0 below the horizon.
 #[inline]
 pub fn cosine_hemisphere_pdf(w: Vec3) -> f32 {
     w.z.max(0.0) * INV_PI
@@ -50,6 +51,7 @@ pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// Solid-angle density of [`sample_uniform_sphere`]: 1 / (4π).
 #[inline]
 pub fn uniform_sphere_pdf() -> f32 {
     INV_4PI
@@ -65,6 +67,7 @@ pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
 }
 
+/// Solid-angle density of [`sample_uniform_cone`] inside the cone: 1 / (2π (1 - cos_max)).
 #[inline]
 pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
     1.0 / (2.0 * PI * (1.0 - cos_max))

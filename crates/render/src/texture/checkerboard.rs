@@ -6,6 +6,7 @@ use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
 use glam::{Affine2, Vec2};
 
+/// Mitsuba's `checkerboard` texture.
 #[derive(Debug, Clone)]
 pub struct Checkerboard {
     /// Default 0.4 in Mitsuba.

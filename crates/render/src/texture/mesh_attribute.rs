@@ -17,9 +17,13 @@ use std::sync::OnceLock;
 /// or `face_<name>`): `dim` floats per vertex or per triangle.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshAttributeData {
+    /// With its prefix, as `mesh_attribute` names it: `vertex_color`, `face_<name>`.
     pub name: String,
+    /// One value per vertex (`vertex_`), else per triangle (`face_`).
     pub per_vertex: bool,
+    /// Components per value.
     pub dim: usize,
+    /// The values, `dim` floats each, in vertex or face order.
     pub data: Vec<f32>,
 }
 
@@ -81,13 +85,16 @@ impl AttributeTable {
 /// Mitsuba's `mesh_attribute` texture (`name`, `scale`).
 #[derive(Debug)]
 pub struct MeshAttribute {
+    /// The attribute read, with its prefix (`vertex_color`, `face_<name>`).
     pub name: String,
+    /// Factor applied to every value.
     pub scale: f32,
     /// Per scene shape id; `None` for shapes that never use this texture.
     tables: OnceLock<Vec<Option<AttributeTable>>>,
 }
 
 impl MeshAttribute {
+    /// The texture before its tables are installed ([`MeshAttribute::set_tables`]).
     pub fn new(name: String, scale: f32) -> MeshAttribute {
         MeshAttribute { name, scale, tables: OnceLock::new() }
     }

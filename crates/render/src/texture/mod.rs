@@ -18,11 +18,16 @@ use crate::math::Spectrum;
 use glam::Vec2;
 use std::sync::Arc;
 
+/// A texturable parameter: a constant or a shared texture object.
 #[derive(Debug, Clone)]
 pub enum Texture {
+    /// The same value everywhere (linear RGB; scalars in all three channels).
     Constant(Spectrum),
+    /// Mitsuba's `bitmap`: an image looked up at the surface uv.
     Bitmap(Arc<Bitmap>),
+    /// Mitsuba's `checkerboard`.
     Checkerboard(Arc<Checkerboard>),
+    /// Mitsuba's `mesh_attribute`: per-vertex or per-face data of the hit mesh.
     MeshAttribute(Arc<MeshAttribute>),
 }
 

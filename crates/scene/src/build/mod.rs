@@ -39,7 +39,9 @@ use std::sync::Arc;
 /// Settings from the command line that override the scene file.
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
+    /// `--spp`, replacing the sampler's `sample_count`.
     pub spp: Option<u32>,
+    /// `--seed`, replacing the sampler's `seed`.
     pub seed: Option<u64>,
     /// `--integrator NAME[:key=value,...]`, replacing the scene's integrator.
     pub integrator: Option<String>,

@@ -6,10 +6,12 @@
 
 use glam::{DMat4, DVec3, DVec4};
 
+/// Translation by `v`.
 pub fn translate(v: DVec3) -> DMat4 {
     DMat4::from_translation(v)
 }
 
+/// Scale by `v` along x, y, z.
 pub fn scale(v: DVec3) -> DMat4 {
     DMat4::from_scale(v)
 }
