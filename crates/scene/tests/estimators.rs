@@ -6,6 +6,10 @@ mod common;
 
 use common::{assert_agree, render_with_variance, root};
 
+/// Each comparison must resolve an error of this fraction of the image mean
+/// (see `common::compare`).
+const RESOLUTION: f64 = 0.02;
+
 #[test]
 fn all_estimators_agree_on_the_diffuse_box() {
     let scene = root().join("tests/scenes/cbox_diffuse.xml");
@@ -19,7 +23,7 @@ fn all_estimators_agree_on_the_diffuse_box() {
         ("bruteforce:sampling=uniform", 1024),
     ] {
         let est = render_with_variance(&scene, spp, 8, Some(spec), 2);
-        assert_agree(spec, &est, &reference, 0.01);
+        assert_agree(spec, &est, &reference, RESOLUTION);
     }
 }
 
@@ -29,7 +33,7 @@ fn direct_matches_path_at_depth_two() {
     let path = render_with_variance(&scene, 256, 8, Some("path:max_depth=2"), 1);
     for spec in ["direct", "direct:emitter_samples=4,bsdf_samples=0", "direct:emitter_samples=0,bsdf_samples=4"] {
         let est = render_with_variance(&scene, 256, 8, Some(spec), 2);
-        assert_agree(spec, &est, &path, 0.01);
+        assert_agree(spec, &est, &path, RESOLUTION);
     }
 }
 
@@ -44,7 +48,7 @@ fn light_selection_strategies_agree_on_many_lights() {
             uniform.clone()
         };
         let est = render_with_variance(&scene, 256, 16, Some(spec), 2);
-        assert_agree(spec, &est, &reference, 0.01);
+        assert_agree(spec, &est, &reference, RESOLUTION);
     }
 }
 
@@ -54,7 +58,7 @@ fn delta_lights_agree_between_direct_and_path() {
         let scene = root().join("tests/scenes").join(format!("{name}.xml"));
         let path = render_with_variance(&scene, 256, 16, Some("path:max_depth=2"), 1);
         let direct = render_with_variance(&scene, 256, 16, Some("direct:emitter_samples=2"), 2);
-        assert_agree(name, &direct, &path, 0.01);
+        assert_agree(name, &direct, &path, RESOLUTION);
     }
 }
 
@@ -83,5 +87,5 @@ fn estimators_agree_on_hidden_emitters() {
     let scene = root().join("tests/scenes/hidden_emitters.xml");
     let path = render_with_variance(&scene, 256, 16, Some("path"), 1);
     let brute = render_with_variance(&scene, 1024, 16, Some("bruteforce:sampling=bsdf"), 2);
-    assert_agree("hidden_emitters bruteforce", &brute, &path, 0.01);
+    assert_agree("hidden_emitters bruteforce", &brute, &path, RESOLUTION);
 }

@@ -3,17 +3,27 @@
 //! An [`Estimate`] is an image with the variance of each pixel's mean,
 //! estimated from independent batches. [`compare`] tests the hypothesis
 //! that two estimates have the same expectation with four statistics, each
-//! at a false-alarm rate of `FALSE_ALARM / 4` (Bonferroni), so a comparison
+//! at a false-alarm rate of `FALSE_ALARM / 3` (Bonferroni), so a comparison
 //! of two unbiased renders fails with probability at most [`FALSE_ALARM`]:
-//! - each channel's image mean (a z-test, also held to a relative tolerance);
-//! - every pixel: Σ z² over pixel channels against χ²(n);
+//! - each channel's image mean (a z-test, whose resolution must reach the
+//!   caller's relative tolerance: a comparison too noisy to see a 1 % energy
+//!   error fails as such);
 //! - 8x8-pixel block means, where noise averages out but a local error does
-//!   not: the largest |t| of any block and Σ z² over blocks against χ²(n).
+//!   not: Σ z² over block channels against χ²(n), for errors spread over
+//!   the image, and the largest |z| of any block, for a local one.
 //!
-//! Each t statistic is a difference over its standard error, with Welch–
-//! Satterthwaite degrees of freedom from the two sides' batch counts, and is
+//! Each block's t statistic is its difference over its standard error, with
+//! Welch–Satterthwaite degrees of freedom from the two sides' batch counts,
 //! mapped to a standard normal z by its own distribution's CDF, so the χ²
-//! sums are exact for normal batch means whatever the batch counts.
+//! sum is exact for normal batch means whatever the batch counts.
+//!
+//! Normal batch means need enough samples behind each: single pixels of a
+//! caustic are far from it at the sample counts tests afford (rare paths
+//! make a batch's mean and its spread low together, so z is skewed
+//! negative: glass_caustic at 16 batches of 32 spp gave Σ z² = 4.3 n over
+//! pixels), which is why pixels are tested only through their blocks, and
+//! why a scene's batches must hold enough samples for its blocks (glass_caustic:
+//! Σ z² = 1.05 n over blocks with 8 batches of 512 spp).
 #![allow(dead_code)]
 
 use penumbra_render::film::Film;
@@ -31,6 +41,10 @@ pub use skip::{in_ci, skip};
 pub const FALSE_ALARM: f64 = 1e-4;
 /// Side of the square pixel blocks of the block statistics.
 pub const BLOCK: u32 = 8;
+/// Relative differences of a block below this are not tested: constant
+/// pixels (a background seen directly) have no variance, yet renderers'
+/// colour conversions and f32 sums differ there in the fifth digit.
+const ROUNDING: f64 = 1e-4;
 
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -66,7 +80,14 @@ fn batch_seed(seed: u64, b: u32) -> u64 {
 /// Batches that were index ranges of one stratified or low-discrepancy
 /// pattern would be correlated; independently seeded ones are not.
 /// Estimates to be compared with each other must use different seeds.
-pub fn render_batches(scene: &Path, spp: u32, batches: u32, integrator: Option<&str>, sampler: Option<&str>, seed: u64) -> Estimate {
+pub fn render_batches(
+    scene: &Path,
+    spp: u32,
+    batches: u32,
+    integrator: Option<&str>,
+    sampler: Option<&str>,
+    seed: u64,
+) -> Estimate {
     assert!(batches >= 2 && spp >= batches, "{}: need at least 2 batches of 1 sample", scene.display());
     let per = spp / batches;
     let ov = Overrides {
@@ -145,25 +166,22 @@ pub fn estimate(width: u32, height: u32, imgs: &[Vec<[f32; 3]>]) -> Estimate {
     Estimate { width, height, mean, var, batches: imgs.len() as u32, block_var: Some(block_var) }
 }
 
-/// `(z², Welch–Satterthwaite degrees of freedom)` of a difference `d`
-/// whose variance is `v`, from the variance parts `va` and `vb` with
-/// `dfa` and `dfb` degrees of freedom; z is the standard normal deviate
-/// with the same tail probability as the t statistic d / √v.
-fn welch_z2(d: f64, v: f64, sq_a: f64, sq_b: f64, dfa: f64, dfb: f64) -> (f64, f64) {
-    // sq_x = Σ v_i² / df_x: the Satterthwaite denominator (v_i the parts of v).
-    let df = (v * v / (sq_a / dfa + sq_b / dfb)).clamp(1.0, 1e6);
-    let t = d.abs() / v.sqrt();
-    let tail = StudentsT::new(0.0, 1.0, df).unwrap().sf(t);
+/// z² of a difference `d` whose two independent parts have estimated
+/// variances `va` and `vb` with `dfa` and `dfb` degrees of freedom: the
+/// standard normal deviate with the same tail probability as the Welch t
+/// statistic d / √(va + vb) under Welch–Satterthwaite's degrees of freedom.
+fn welch_z2(d: f64, va: f64, dfa: f64, vb: f64, dfb: f64) -> f64 {
+    let v = va + vb;
+    let df = (v * v / (va * va / dfa + vb * vb / dfb)).clamp(1.0, 1e6);
+    let tail = StudentsT::new(0.0, 1.0, df).unwrap().sf(d.abs() / v.sqrt());
     let z = if tail > 0.0 { Normal::standard().inverse_cdf(tail) } else { f64::NEG_INFINITY };
-    (z * z, df)
+    z * z
 }
 
 /// What [`compare`] found: each statistic and the tests that failed.
 #[derive(Debug, Default)]
 pub struct Verdict {
     pub failures: Vec<String>,
-    /// Σ z² over pixel channels, its degrees of freedom and critical value.
-    pub pixel_chi2: (f64, usize, f64),
     /// Σ z² over block channels, its degrees of freedom and critical value.
     pub block_chi2: (f64, usize, f64),
     /// Largest block |z| and its critical value.
@@ -173,13 +191,12 @@ pub struct Verdict {
 }
 
 /// Tests that `a` and `b` estimate the same image (see the module's
-/// comment): per-channel means within `rel_tol` and the z-test, the pixel
-/// χ², the block χ² and the largest block deviation. Never panics.
+/// comment): the per-channel mean z-test, resolving `rel_tol` of the mean,
+/// the block χ² and the largest block deviation. Never panics.
 pub fn compare(name: &str, a: &Estimate, b: &Estimate, rel_tol: f64) -> Verdict {
     assert_eq!((a.width, a.height), (b.width, b.height), "{name}: resolution");
-    let alpha = FALSE_ALARM / 4.0;
+    let alpha = FALSE_ALARM / 3.0;
     let normal = Normal::standard();
-    let (dfa, dfb) = ((a.batches - 1) as f64, (b.batches - 1) as f64);
     let mut v = Verdict::default();
     let n = a.mean.len() as f64;
 
@@ -205,65 +222,88 @@ pub fn compare(name: &str, a: &Estimate, b: &Estimate, rel_tol: f64) -> Verdict 
     for c in 0..3 {
         let ma = a.mean.iter().map(|p| p[c]).sum::<f64>() / n;
         let mb = b.mean.iter().map(|p| p[c]).sum::<f64>() / n;
-        let se = (v.kappa[c] * (a.var.iter().map(|p| p[c]).sum::<f64>() + b.var.iter().map(|p| p[c]).sum::<f64>())).sqrt() / n;
+        let se = (v.kappa[c] * (a.var.iter().map(|p| p[c]).sum::<f64>() + b.var.iter().map(|p| p[c]).sum::<f64>()))
+            .sqrt()
+            / n;
         eprintln!("{name} channel {c}: mean {ma:.5} vs {mb:.5} (se {se:.5}, kappa {:.2})", v.kappa[c]);
-        if (ma - mb).abs() > rel_tol * mb.abs() + 1e-4 {
-            v.failures.push(format!("channel {c} mean {ma:.5} vs {mb:.5}: more than {rel_tol} apart"));
+        if (ma - mb).abs() > z_mean * se + ROUNDING * mb.abs() {
+            v.failures.push(format!(
+                "channel {c} mean {ma:.5} vs {mb:.5}: {:.1} se apart (limit {z_mean:.1})",
+                (ma - mb).abs() / se
+            ));
         }
-        if (ma - mb).abs() > z_mean * se + 1e-6 {
-            v.failures.push(format!("channel {c} mean {ma:.5} vs {mb:.5}: {:.1} se apart (limit {z_mean:.1})", (ma - mb).abs() / se));
+        // Power: the test must resolve an energy error of `rel_tol`.
+        if z_mean * se > rel_tol * mb.abs() {
+            v.failures.push(format!(
+                "channel {c}: too noisy to resolve a {rel_tol} error in the image mean (se {se:.5} of {mb:.5}): render more samples"
+            ));
         }
     }
 
-    // Every pixel channel. A pixel with no variance on either side (black
-    // background) must agree to rounding.
-    let (mut sum, mut dof) = (0.0, 0usize);
+    // A pixel with no variance on either side (a constant background)
+    // must agree to rounding; other pixels enter through their blocks.
     for i in 0..a.mean.len() {
         for c in 0..3 {
-            let d = a.mean[i][c] - b.mean[i][c];
-            let (va, vb) = (a.var[i][c], b.var[i][c]);
-            if va + vb <= 0.0 {
-                if d.abs() > 1e-6 * (1.0 + b.mean[i][c].abs()) {
-                    v.failures.push(format!("pixel {i} channel {c}: {} vs {} with zero variance", a.mean[i][c], b.mean[i][c]));
-                }
-                continue;
+            let (ma, mb) = (a.mean[i][c], b.mean[i][c]);
+            if a.var[i][c] + b.var[i][c] <= 0.0 && (ma - mb).abs() > 4.0 * ROUNDING * (ma.abs() + mb.abs()) {
+                v.failures.push(format!("pixel {i} channel {c}: {ma} vs {mb} with zero variance"));
             }
-            sum += welch_z2(d, va + vb, va * va, vb * vb, dfa, dfb).0;
-            dof += 1;
         }
-    }
-    let crit = if dof > 0 { ChiSquared::new(dof as f64).unwrap().inverse_cdf(1.0 - alpha) } else { 0.0 };
-    v.pixel_chi2 = (sum, dof, crit);
-    if sum > crit {
-        v.failures.push(format!("pixels: chi2 {sum:.0} over {dof} pixel channels, above {crit:.0}"));
     }
 
     // Blocks.
-    let (mut sum, mut dof, mut worst, mut worst_at) = (0.0, 0usize, 0.0f64, (0, 0));
+    let (mut sum, mut dof) = (0.0, 0usize);
+    let mut all = Vec::new();
     for (bi, px) in blocks.iter().enumerate() {
         let m = px.len() as f64;
         for c in 0..3 {
+            let mean_b = px.iter().map(|&i| b.mean[i][c]).sum::<f64>() / m;
             let d = px.iter().map(|&i| a.mean[i][c] - b.mean[i][c]).sum::<f64>() / m;
-            let (mut va, mut vb, mut sqa, mut sqb) = (0.0, 0.0, 0.0, 0.0);
-            for &i in px {
-                va += a.var[i][c];
-                vb += b.var[i][c];
-                sqa += a.var[i][c] * a.var[i][c];
-                sqb += b.var[i][c] * b.var[i][c];
-            }
+            // Either side's block variance: measured from its batches when it
+            // has them (B - 1 degrees of freedom, correlations included),
+            // else κ Σ pixel variances / m² with Satterthwaite's degrees of
+            // freedom for a sum of independent pixel estimates.
+            let side = |e: &Estimate| -> (f64, f64) {
+                match &e.block_var {
+                    Some(bv) => (bv[bi][c], (e.batches - 1) as f64),
+                    None => {
+                        let k = v.kappa[c] / (m * m);
+                        let (sum, sq) =
+                            px.iter().fold((0.0, 0.0), |(s, q), &i| (s + e.var[i][c], q + e.var[i][c].powi(2)));
+                        let df = if sq > 0.0 { sum * sum / sq * (e.batches - 1) as f64 } else { 1e6 };
+                        (k * sum, df)
+                    }
+                }
+            };
+            let ((va, dfa), (vb, dfb)) = (side(a), side(b));
+            // Differences below ROUNDING of the value are not tested.
+            let d = d.signum() * (d.abs() - ROUNDING * mean_b.abs()).max(0.0);
             if va + vb <= 0.0 {
+                if d != 0.0 {
+                    v.failures.push(format!("block {bi} channel {c}: {} vs {mean_b} with zero variance", mean_b + d));
+                }
                 continue;
             }
-            let k = v.kappa[c] / (m * m);
-            let (z2, _) = welch_z2(d, k * (va + vb), k * k * sqa, k * k * sqb, dfa, dfb);
+            let z2 = welch_z2(d, va, dfa, vb, dfb);
             sum += z2;
             dof += 1;
-            if z2 > worst {
-                worst = z2;
-                worst_at = (bi, c);
-            }
+            all.push((z2, bi, c, mean_b + d, mean_b, va.sqrt(), vb.sqrt()));
         }
     }
+    all.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let bw = a.width.div_ceil(BLOCK) as usize;
+    let describe = |&(z2, bi, c, ma, mb, sa, sb): &(f64, usize, usize, f64, f64, f64, f64)| {
+        format!(
+            "block at pixel ({}, {}) channel {c}: {ma:.5} vs {mb:.5} (se {sa:.5} and {sb:.5}), z {:.1}",
+            (bi % bw) as u32 * BLOCK,
+            (bi / bw) as u32 * BLOCK,
+            z2.sqrt()
+        )
+    };
+    for worst in all.iter().take(3) {
+        eprintln!("{name}: {}", describe(worst));
+    }
+    let worst = all.first().map_or(0.0, |w| w.0);
     let crit = if dof > 0 { ChiSquared::new(dof as f64).unwrap().inverse_cdf(1.0 - alpha) } else { 0.0 };
     v.block_chi2 = (sum, dof, crit);
     if sum > crit {
@@ -273,18 +313,11 @@ pub fn compare(name: &str, a: &Estimate, b: &Estimate, rel_tol: f64) -> Verdict 
     let zmax = -normal.inverse_cdf(alpha / (2.0 * dof.max(1) as f64));
     v.block_max = (worst.sqrt(), zmax);
     if worst.sqrt() > zmax {
-        let bw = a.width.div_ceil(BLOCK) as usize;
-        let (bi, c) = worst_at;
-        v.failures.push(format!(
-            "block at pixel ({}, {}) channel {c}: {:.1} standard errors off, above {zmax:.1}",
-            (bi % bw) as u32 * BLOCK,
-            (bi / bw) as u32 * BLOCK,
-            worst.sqrt()
-        ));
+        v.failures.push(format!("{}, above {zmax:.1}", describe(&all[0])));
     }
     eprintln!(
-        "{name}: pixel chi2 {:.0}/{} (limit {:.0}), block chi2 {:.0}/{} (limit {:.0}), worst block {:.2} (limit {:.2})",
-        v.pixel_chi2.0, v.pixel_chi2.1, v.pixel_chi2.2, v.block_chi2.0, v.block_chi2.1, v.block_chi2.2, v.block_max.0, v.block_max.1
+        "{name}: block chi2 {:.0}/{} (limit {:.0}), worst block {:.2} (limit {:.2})",
+        v.block_chi2.0, v.block_chi2.1, v.block_chi2.2, v.block_max.0, v.block_max.1
     );
     v
 }
