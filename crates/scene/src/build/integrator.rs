@@ -1,7 +1,7 @@
 //! `<integrator>` nodes (and `--integrator` specs) → [`Integrator`]s with
 //! the light-selection strategy they ask for.
 
-use super::unsupported;
+use super::{plugin, Plugins};
 use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
@@ -11,7 +11,11 @@ use penumbra_render::light::LightSelection;
 use std::cell::Cell;
 use std::path::PathBuf;
 
-const INTEGRATORS: &[&str] = &["path", "direct", "bruteforce"];
+/// A builder of an integrator and the light-selection strategy it asks for.
+type BuildIntegrator = fn(&Node) -> Result<(Integrator, LightSelection)>;
+
+pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> =
+    &[("path", path), ("direct", direct), ("bruteforce", bruteforce)];
 
 /// Termination parameters shared by `path` and `bruteforce`.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
@@ -57,52 +61,56 @@ fn count(node: &Node, name: &str, default: i64) -> Result<u32> {
 
 /// Builds an integrator and the light-selection strategy it asks for.
 pub(super) fn build_integrator(node: &Node) -> Result<(Integrator, LightSelection)> {
-    let result = match node.plugin.as_str() {
-        "path" => (
-            Integrator::Path(PathIntegrator {
-                term: termination(node)?,
-                hide_emitters: node.bool("hide_emitters", false)?,
-                mis: node.bool("mis", true)?,
-            }),
-            light_selection(node)?,
-        ),
-        "direct" => {
-            let shading = node.get_int("shading_samples")?;
-            let default = shading.unwrap_or(1);
-            (
-                Integrator::Direct(DirectIntegrator {
-                    emitter_samples: count(node, "emitter_samples", default)?,
-                    bsdf_samples: count(node, "bsdf_samples", default)?,
-                    hide_emitters: node.bool("hide_emitters", false)?,
-                }),
-                light_selection(node)?,
-            )
-        }
-        "bruteforce" => {
-            let sampling = match node.string("sampling", "cosine")?.as_str() {
-                "uniform" => HemisphereSampling::Uniform,
-                "cosine" => HemisphereSampling::Cosine,
-                "bsdf" => HemisphereSampling::Bsdf,
-                other => {
-                    return Err(LoadError::at(
-                        node.loc_of("sampling"),
-                        format!("sampling '{other}' is not one of uniform, cosine, bsdf"),
-                    ))
-                }
-            };
-            (
-                Integrator::BruteForce(BruteForceIntegrator {
-                    term: termination(node)?,
-                    hide_emitters: node.bool("hide_emitters", false)?,
-                    sampling,
-                }),
-                LightSelection::Uniform,
-            )
-        }
-        _ => return Err(unsupported(node, INTEGRATORS)),
-    };
+    let result = plugin(INTEGRATORS, node)?(node)?;
     node.check_all_used(&[])?;
     Ok(result)
+}
+
+fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
+    Ok((
+        Integrator::Path(PathIntegrator {
+            term: termination(node)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
+            mis: node.bool("mis", true)?,
+        }),
+        light_selection(node)?,
+    ))
+}
+
+fn direct(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let shading = node.get_int("shading_samples")?;
+    let default = shading.unwrap_or(1);
+    Ok((
+        Integrator::Direct(DirectIntegrator {
+            emitter_samples: count(node, "emitter_samples", default)?,
+            bsdf_samples: count(node, "bsdf_samples", default)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
+        }),
+        light_selection(node)?,
+    ))
+}
+
+/// Penumbra's `bruteforce`: pure path sampling, no light sampling.
+fn bruteforce(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let sampling = match node.string("sampling", "cosine")?.as_str() {
+        "uniform" => HemisphereSampling::Uniform,
+        "cosine" => HemisphereSampling::Cosine,
+        "bsdf" => HemisphereSampling::Bsdf,
+        other => {
+            return Err(LoadError::at(
+                node.loc_of("sampling"),
+                format!("sampling '{other}' is not one of uniform, cosine, bsdf"),
+            ))
+        }
+    };
+    Ok((
+        Integrator::BruteForce(BruteForceIntegrator {
+            term: termination(node)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
+            sampling,
+        }),
+        LightSelection::Uniform,
+    ))
 }
 
 /// Parameters that carry over from the scene's integrator to one chosen on

@@ -46,14 +46,60 @@ pub struct Overrides {
     pub sampler: Option<String>,
 }
 
-fn unsupported(node: &Node, supported: &[&str]) -> LoadError {
+/// The plugins of one kind that Penumbra builds, in the order error messages
+/// list them: each entry's name and its builder. Dispatch and the list in
+/// [`unsupported`]'s message both come from the table, so no plugin is
+/// built without being listed, or listed without being built. A name may
+/// carry a note after a space (`"area (inside a shape)"`): listed with the
+/// note, matched without it.
+type Plugins<F> = [(&'static str, F)];
+
+/// The `type` an entry of a [`Plugins`] table matches.
+fn plugin_type(entry: &str) -> &str {
+    entry.split_once(' ').map_or(entry, |(name, _)| name)
+}
+
+/// The builder `table` holds for the plugin `name`, if any.
+fn find_plugin<F: Copy>(table: &Plugins<F>, name: &str) -> Option<F> {
+    table.iter().find(|(entry, _)| plugin_type(entry) == name).map(|&(_, f)| f)
+}
+
+/// The builder of `node`'s plugin, or the error listing the plugins `table` supports.
+fn plugin<F: Copy>(table: &Plugins<F>, node: &Node) -> Result<F> {
+    find_plugin(table, &node.plugin).ok_or_else(|| unsupported(node, table))
+}
+
+/// The entries of `table`, as messages list them.
+fn listed<F>(table: &Plugins<F>) -> Vec<&'static str> {
+    table.iter().map(|&(name, _)| name).collect()
+}
+
+fn unsupported<F>(node: &Node, table: &Plugins<F>) -> LoadError {
     node.error(format!(
         "{} plugin '{}' is not supported by Penumbra; supported {} plugins: {}",
         node.kind.tag(),
         node.plugin,
         node.kind.tag(),
-        supported.join(", ")
+        listed(table).join(", ")
     ))
+}
+
+/// The plugins of `kind` that Penumbra builds, as its error messages list
+/// them (an entry may carry a note: `"area (inside a shape)"`); empty for
+/// kinds it builds none of (media, phase functions, volumes).
+pub fn supported_plugins(kind: Kind) -> Vec<&'static str> {
+    match kind {
+        Kind::Shape => listed(shape::SHAPES),
+        Kind::Bsdf => listed(bsdf::BSDFS),
+        Kind::Texture => listed(texture::TEXTURES),
+        Kind::Emitter => listed(emitter::EMITTERS),
+        Kind::Sensor => listed(sensor::SENSORS),
+        Kind::Film => listed(sensor::FILMS),
+        Kind::Rfilter => listed(sensor::RFILTERS),
+        Kind::Sampler => listed(sensor::SAMPLERS),
+        Kind::Integrator => listed(integrator::INTEGRATORS),
+        Kind::Scene | Kind::Medium | Kind::Phase | Kind::Volume => Vec::new(),
+    }
 }
 
 /// Builds the render job for a parsed scene.
@@ -71,10 +117,7 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
             Kind::Emitter | Kind::Sampler | Kind::Film | Kind::Rfilter
                 if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || node.plugin == "area") => {}
             Kind::Shape => b.shape(node)?,
-            Kind::Emitter => {
-                let light = b.top_level_emitter(node)?;
-                b.lights.push(light);
-            }
+            Kind::Emitter => b.lights.push(emitter::top_level(node)?),
             Kind::Sensor => {
                 if sensor.is_some() {
                     return Err(LoadError::at(&child.loc, "the scene has more than one sensor; Penumbra renders one"));
@@ -198,4 +241,36 @@ pub(crate) fn resolve(loc: &FileLoc, name: &str, what: &str) -> Result<PathBuf> 
     }
     let searched: Vec<String> = dirs.iter().map(|d| format!("'{}'", d.display())).collect();
     Err(LoadError::at(loc, format!("{what} '{name}' not found (searched {})", searched.join(", "))))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each table names each plugin once, so every entry is reachable.
+    #[test]
+    fn plugin_tables_name_each_plugin_once() {
+        let kinds = [
+            Kind::Shape,
+            Kind::Bsdf,
+            Kind::Texture,
+            Kind::Emitter,
+            Kind::Sensor,
+            Kind::Film,
+            Kind::Rfilter,
+            Kind::Sampler,
+            Kind::Integrator,
+        ];
+        for kind in kinds {
+            let listed = supported_plugins(kind);
+            assert!(!listed.is_empty(), "{}", kind.tag());
+            let mut types: Vec<&str> = listed.iter().map(|e| plugin_type(e)).collect();
+            types.sort_unstable();
+            types.dedup();
+            assert_eq!(types.len(), listed.len(), "{}: {listed:?}", kind.tag());
+        }
+        assert_eq!(plugin_type("area (inside a shape)"), "area");
+        assert!(find_plugin(emitter::EMITTERS, "area").is_some());
+        assert!(find_plugin(emitter::EMITTERS, "area (inside a shape)").is_none());
+    }
 }

@@ -2,7 +2,7 @@
 //! meshes read from OBJ, PLY and Mitsuba `.serialized` files), each with its
 //! BSDF and optional area emitter, and Mitsuba's `shapegroup` / `instance`.
 
-use super::{emitter, resolve, unsupported, Builder};
+use super::{emitter, find_plugin, plugin, resolve, Builder, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::{obj, ply};
@@ -13,21 +13,48 @@ use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::scene::ShapeInfo;
+use penumbra_render::texture::MeshAttributeData;
 use std::rc::Rc;
 use std::sync::Arc;
 
-const SHAPES: &[&str] =
-    &["rectangle", "cube", "sphere", "disk", "cylinder", "obj", "ply", "serialized", "shapegroup", "instance"];
+/// How a shape plugin is built.
+#[derive(Clone, Copy)]
+pub(super) enum ShapeBuilder {
+    /// A shape with geometry of its own, from its node, `to_world` and
+    /// `flip_normals`.
+    Geometry(fn(&Node, &DMat4, bool) -> Result<Geometry>),
+    /// Mitsuba's `shapegroup` ([`Builder::shape_group`]).
+    Group,
+    /// Mitsuba's `instance` ([`Builder::instance`]).
+    Instance,
+}
+
+/// A shape's geometry with its mesh attributes (PLY vertex colours and
+/// other properties; Mitsuba's `mesh_attribute` textures read them).
+type Geometry = (Shape, Vec<MeshAttributeData>);
+
+pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
+    ("rectangle", ShapeBuilder::Geometry(rectangle)),
+    ("cube", ShapeBuilder::Geometry(cube)),
+    ("sphere", ShapeBuilder::Geometry(sphere)),
+    ("disk", ShapeBuilder::Geometry(disk)),
+    ("cylinder", ShapeBuilder::Geometry(cylinder)),
+    ("obj", ShapeBuilder::Geometry(mesh_file)),
+    ("ply", ShapeBuilder::Geometry(mesh_file)),
+    ("serialized", ShapeBuilder::Geometry(serialized)),
+    ("shapegroup", ShapeBuilder::Group),
+    ("instance", ShapeBuilder::Instance),
+];
 
 impl Builder {
     /// A top-level shape: placed directly, placed by an instance, or a
     /// shape group (placed only by instances).
     pub(super) fn shape(&mut self, node: &Rc<Node>) -> Result<()> {
-        match node.plugin.as_str() {
-            "shapegroup" => {
+        match find_plugin(SHAPES, &node.plugin) {
+            Some(ShapeBuilder::Group) => {
                 self.shape_group(node)?;
             }
-            "instance" => {
+            Some(ShapeBuilder::Instance) => {
                 let instance = self.instance(node)?;
                 self.placed.push(Primitive::Instance(self.instances.len() as u32));
                 self.instances.push(instance);
@@ -100,64 +127,11 @@ impl Builder {
     fn plain_shape(&mut self, node: &Rc<Node>) -> Result<u32> {
         let to_world = node.transform("to_world")?;
         let flip = node.bool("flip_normals", false)?;
-        // Mitsuba's mesh attributes (PLY vertex colours and other properties).
-        let mut attributes = Vec::new();
-        let shape = match node.plugin.as_str() {
-            "rectangle" | "cube" => {
-                let mut m = if node.plugin == "rectangle" { TriangleMesh::rectangle() } else { TriangleMesh::cube() };
-                m.transform(&to_world.as_mat4());
-                if flip {
-                    m.flip();
-                }
-                Shape::Mesh(Mesh::new(m, false))
-            }
-            "obj" | "ply" => {
-                let (file, loc) = node
-                    .get_string("filename")?
-                    .ok_or_else(|| node.error(format!("{} needs a 'filename'", node.describe())))?;
-                let path = resolve(&loc, &file, "mesh file")?;
-                // Mitsuba flips v for OBJ by default, not for PLY.
-                let flip_uv = node.bool("flip_tex_coords", node.plugin == "obj")?;
-                let mut m = if node.plugin == "obj" {
-                    obj::load_obj_with(&path, flip_uv)?
-                } else {
-                    let (m, a) = ply::load_ply_with_attributes(&path, flip_uv)?;
-                    attributes = a;
-                    m
-                };
-                let face_normals = node.bool("face_normals", false)?;
-                m.transform(&to_world.as_mat4());
-                if flip {
-                    m.flip();
-                }
-                m.validate().map_err(|e| LoadError::at(&loc, format!("mesh '{}': {e}", path.display())))?;
-                Shape::Mesh(Mesh::new(m, face_normals))
-            }
-            "serialized" => serialized_shape(node, &to_world, flip)?,
-            "sphere" => {
-                let c = node.get_point("center")?.unwrap_or(DVec3::ZERO);
-                let r = node.float("radius", 1.0)?;
-                // The sphere's own parameters compose with to_world, as in Mitsuba.
-                let m = to_world * DMat4::from_translation(c) * DMat4::from_scale(DVec3::splat(r));
-                let center = m.transform_point3(DVec3::ZERO);
-                let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a).length());
-                if (axes[0] - axes[1]).abs() > 1e-6 * axes[0] || (axes[0] - axes[2]).abs() > 1e-6 * axes[0] {
-                    return Err(node.error("sphere: to_world must not scale non-uniformly (use a mesh for ellipsoids)"));
-                }
-                let rot = glam::DMat3::from_mat4(m) * (1.0 / axes[0]);
-                Shape::sphere_rotated(center.as_vec3(), axes[0] as f32, rot.as_mat3(), flip)
-            }
-            "disk" => Shape::disk(to_world.as_mat4(), flip),
-            "cylinder" => {
-                let p0 = node.get_point("p0")?.unwrap_or(DVec3::ZERO);
-                let p1 = node.get_point("p1")?.unwrap_or(DVec3::Z);
-                let r = node.float("radius", 1.0)?;
-                let c =
-                    penumbra_render::geometry::Cylinder::new(to_world, p0, p1, r, flip).map_err(|e| node.error(e))?;
-                Shape::Cylinder(c)
-            }
-            _ => return Err(unsupported(node, SHAPES)),
+        let ShapeBuilder::Geometry(geometry) = plugin(SHAPES, node)? else {
+            // Builder::shape places these, and shape groups refuse them.
+            return Err(node.error(format!("a {} cannot be placed here", node.plugin)));
         };
+        let (shape, attributes) = geometry(node, &to_world, flip)?;
         if shape.prim_count() == 0 {
             return Err(node.error(format!("{} has no triangles", node.describe())));
         }
@@ -197,8 +171,72 @@ impl Builder {
     }
 }
 
+/// A mesh of `m`'s triangles placed by `to_world`.
+fn placed_mesh(mut m: TriangleMesh, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    m.transform(&to_world.as_mat4());
+    if flip {
+        m.flip();
+    }
+    Ok((Shape::Mesh(Mesh::new(m, false)), Vec::new()))
+}
+
+fn rectangle(_: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    placed_mesh(TriangleMesh::rectangle(), to_world, flip)
+}
+
+fn cube(_: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    placed_mesh(TriangleMesh::cube(), to_world, flip)
+}
+
+/// Mitsuba's `obj` and `ply`.
+fn mesh_file(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    let (file, loc) =
+        node.get_string("filename")?.ok_or_else(|| node.error(format!("{} needs a 'filename'", node.describe())))?;
+    let path = resolve(&loc, &file, "mesh file")?;
+    // Mitsuba flips v for OBJ by default, not for PLY.
+    let flip_uv = node.bool("flip_tex_coords", node.plugin == "obj")?;
+    let (mut m, attributes) = if node.plugin == "obj" {
+        (obj::load_obj_with(&path, flip_uv)?, Vec::new())
+    } else {
+        ply::load_ply_with_attributes(&path, flip_uv)?
+    };
+    let face_normals = node.bool("face_normals", false)?;
+    m.transform(&to_world.as_mat4());
+    if flip {
+        m.flip();
+    }
+    m.validate().map_err(|e| LoadError::at(&loc, format!("mesh '{}': {e}", path.display())))?;
+    Ok((Shape::Mesh(Mesh::new(m, face_normals)), attributes))
+}
+
+fn sphere(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    let c = node.get_point("center")?.unwrap_or(DVec3::ZERO);
+    let r = node.float("radius", 1.0)?;
+    // The sphere's own parameters compose with to_world, as in Mitsuba.
+    let m = *to_world * DMat4::from_translation(c) * DMat4::from_scale(DVec3::splat(r));
+    let center = m.transform_point3(DVec3::ZERO);
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a).length());
+    if (axes[0] - axes[1]).abs() > 1e-6 * axes[0] || (axes[0] - axes[2]).abs() > 1e-6 * axes[0] {
+        return Err(node.error("sphere: to_world must not scale non-uniformly (use a mesh for ellipsoids)"));
+    }
+    let rot = glam::DMat3::from_mat4(m) * (1.0 / axes[0]);
+    Ok((Shape::sphere_rotated(center.as_vec3(), axes[0] as f32, rot.as_mat3(), flip), Vec::new()))
+}
+
+fn disk(_: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    Ok((Shape::disk(to_world.as_mat4(), flip), Vec::new()))
+}
+
+fn cylinder(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    let p0 = node.get_point("p0")?.unwrap_or(DVec3::ZERO);
+    let p1 = node.get_point("p1")?.unwrap_or(DVec3::Z);
+    let r = node.float("radius", 1.0)?;
+    let c = penumbra_render::geometry::Cylinder::new(*to_world, p0, p1, r, flip).map_err(|e| node.error(e))?;
+    Ok((Shape::Cylinder(c), Vec::new()))
+}
+
 /// Mitsuba's `serialized` shape: one mesh (`shape_index`) of a `.serialized` file.
-fn serialized_shape(node: &Node, to_world: &DMat4, flip: bool) -> Result<Shape> {
+fn serialized(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
     let (file, loc) =
         node.get_string("filename")?.ok_or_else(|| node.error("serialized needs a 'filename'".to_string()))?;
     let path = resolve(&loc, &file, "mesh file")?;
@@ -219,5 +257,5 @@ fn serialized_shape(node: &Node, to_world: &DMat4, flip: bool) -> Result<Shape> 
     if flip {
         m.flip();
     }
-    Ok(Shape::Mesh(Mesh::new(m, face_normals)))
+    Ok((Shape::Mesh(Mesh::new(m, face_normals)), Vec::new()))
 }
