@@ -15,7 +15,7 @@ pub mod props;
 pub mod serialized;
 pub mod spectrum;
 
-pub use build::Overrides;
+pub use build::{supported_plugins, Overrides};
 pub use error::{FileLoc, LoadError, Result};
 
 use penumbra_render::render::RenderJob;

@@ -3,7 +3,7 @@
 //! read through [`Textures`].
 
 use super::texture::Textures;
-use super::unsupported;
+use super::{plugin, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use glam::Vec3;
@@ -17,23 +17,26 @@ use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
 
-pub(crate) const BSDFS: &[&str] = &[
-    "diffuse",
-    "dielectric",
-    "thindielectric",
-    "roughdielectric",
-    "conductor",
-    "roughconductor",
-    "plastic",
-    "roughplastic",
-    "twosided",
-    "mask",
-    "normalmap",
-    "bumpmap",
-    "null",
-    "blendbsdf",
-    "principled",
-    "principledthin",
+/// A builder of a material from its `<bsdf>` node.
+type BuildBsdf = fn(&Node, &mut Textures) -> Result<Material>;
+
+pub(crate) const BSDFS: &Plugins<BuildBsdf> = &[
+    ("diffuse", diffuse),
+    ("dielectric", dielectric),
+    ("thindielectric", dielectric),
+    ("roughdielectric", roughdielectric),
+    ("conductor", conductor),
+    ("roughconductor", roughconductor),
+    ("plastic", plastic),
+    ("roughplastic", plastic),
+    ("twosided", twosided),
+    ("mask", mask),
+    ("normalmap", normalmap),
+    ("bumpmap", bumpmap),
+    ("null", |_, _| Ok(Material::Null)),
+    ("blendbsdf", blendbsdf),
+    ("principled", principled),
+    ("principledthin", principledthin),
 ];
 
 /// An IOR given as a number or one of Mitsuba's named materials.
@@ -234,147 +237,158 @@ fn principled(node: &Node, tex: &mut Textures) -> Result<Material> {
 }
 
 pub(crate) fn build_material(node: &Node, tex: &mut Textures) -> Result<Material> {
-    let one = Spectrum::ONE;
-    let m = match node.plugin.as_str() {
-        "diffuse" => {
-            Material::Diffuse(DiffuseParams { reflectance: tex.spectrum(node, "reflectance", Spectrum::splat(0.5))? })
-        }
-        "dielectric" | "thindielectric" => {
-            let eta = relative_ior(node, "bk7", false)?;
-            let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
-            let specular_transmittance = tex.spectrum(node, "specular_transmittance", one)?;
-            if node.plugin == "dielectric" {
-                Material::Dielectric(DielectricParams { eta, specular_reflectance, specular_transmittance })
-            } else {
-                Material::ThinDielectric(ThinDielectricParams { eta, specular_reflectance, specular_transmittance })
-            }
-        }
-        "roughdielectric" => Material::RoughDielectric(RoughDielectricParams {
-            eta: relative_ior(node, "bk7", true)?,
-            roughness: roughness(node, tex)?,
-            specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
-            specular_transmittance: tex.spectrum(node, "specular_transmittance", one)?,
-        }),
-        "conductor" => {
-            let (eta, k) = complex_ior(node, tex)?;
-            Material::Conductor(ConductorParams {
-                eta,
-                k,
-                specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
-            })
-        }
-        "roughconductor" => {
-            let (eta, k) = complex_ior(node, tex)?;
-            Material::RoughConductor(RoughConductorParams {
-                roughness: roughness(node, tex)?,
-                eta,
-                k,
-                specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
-            })
-        }
-        "plastic" | "roughplastic" => {
-            let eta = relative_ior(node, "polypropylene", node.plugin == "roughplastic")?;
-            let diffuse_reflectance = tex.spectrum(node, "diffuse_reflectance", Spectrum::splat(0.5))?;
-            let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
-            let nonlinear = node.bool("nonlinear", false)?;
-            // Mitsuba steers lobe selection by the textures' mean values.
-            if !diffuse_reflectance.has_mean() || !specular_reflectance.has_mean() {
-                return Err(node.error(format!(
-                    "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
-                     for lobe selection and fails the same way)",
-                    node.plugin
-                )));
-            }
-            let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
-            let specular_sampling_weight = s_mean / (d_mean + s_mean);
-            if node.plugin == "plastic" {
-                Material::Plastic(PlasticParams {
-                    eta,
-                    diffuse_reflectance,
-                    specular_reflectance,
-                    nonlinear,
-                    fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
-                    specular_sampling_weight,
-                })
-            } else {
-                let r = roughness(node, tex)?;
-                let (Some(au), Some(av)) = (r.alpha_u.constant(), r.alpha_v.constant()) else {
-                    return Err(node.error("roughplastic: alpha must be a number, not a texture (as in Mitsuba)"));
-                };
-                if au != av {
-                    return Err(node.error("roughplastic does not support anisotropic roughness (as in Mitsuba)"));
-                }
-                let distr = Microfacet { kind: r.kind, alpha_u: au.x, alpha_v: av.x };
-                Material::RoughPlastic(RoughPlasticParams {
-                    distr,
-                    eta,
-                    diffuse_reflectance,
-                    specular_reflectance,
-                    nonlinear,
-                    specular_sampling_weight,
-                    tables: RoughPlasticTables::new(distr, eta),
-                })
-            }
-        }
-        "twosided" => {
-            let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
-            let (front, back) = match inner.as_slice() {
-                [one] => (build_material(&one.node, tex)?, build_material(&one.node, tex)?),
-                [a, b] => (build_material(&a.node, tex)?, build_material(&b.node, tex)?),
-                _ => return Err(node.error("twosided needs one or two nested BSDFs")),
-            };
-            if matches!(front, Material::TwoSided(..)) || matches!(back, Material::TwoSided(..)) {
-                return Err(node.error("twosided cannot wrap another twosided BSDF"));
-            }
-            Material::TwoSided(Box::new(front), Box::new(back))
-        }
-        "mask" => Material::Mask { opacity: tex.float(node, "opacity", 0.5)?, inner: nested(node, tex)? },
-        "normalmap" => {
-            let child = node
-                .children_of(Kind::Texture)
-                .find(|c| c.name.as_deref() == Some("normalmap"))
-                .ok_or_else(|| node.error("normalmap needs a texture named 'normalmap'"))?;
-            let normals = tex.build(&child.node)?;
-            wrapper_defaults(node)?;
-            Material::NormalMap { normals, inner: nested(node, tex)? }
-        }
-        "bumpmap" => {
-            let textures: Vec<_> = node.children_of(Kind::Texture).collect();
-            let [t] = textures.as_slice() else {
-                return Err(node.error("bumpmap needs exactly one nested texture (the height field)"));
-            };
-            let height = tex.build(&t.node)?;
-            if !height.has_gradient() {
-                return Err(LoadError::at(
-                    &t.loc,
-                    "bumpmap: this texture has no gradient (Mitsuba rejects it too); use a bitmap height map",
-                ));
-            }
-            wrapper_defaults(node)?;
-            Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? }
-        }
-        "principled" => principled(node, tex)?,
-        "principledthin" => principledthin(node, tex)?,
-        "null" => Material::Null,
-        "blendbsdf" => {
-            let has_weight =
-                node.has("weight") || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some("weight"));
-            if !has_weight {
-                return Err(node.error("blendbsdf needs a 'weight' (a float or a texture)"));
-            }
-            let weight = tex.float(node, "weight", 0.5)?;
-            let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
-            let [a, b] = inner.as_slice() else {
-                return Err(node.error("blendbsdf needs exactly two nested BSDFs"));
-            };
-            Material::Blend {
-                weight,
-                first: Box::new(build_material(&a.node, tex)?),
-                second: Box::new(build_material(&b.node, tex)?),
-            }
-        }
-        _ => return Err(unsupported(node, BSDFS)),
-    };
+    let m = plugin(BSDFS, node)?(node, tex)?;
     node.check_all_used(&[Kind::Bsdf, Kind::Texture])?;
     Ok(m)
+}
+
+fn diffuse(node: &Node, tex: &mut Textures) -> Result<Material> {
+    Ok(Material::Diffuse(DiffuseParams { reflectance: tex.spectrum(node, "reflectance", Spectrum::splat(0.5))? }))
+}
+
+/// Mitsuba's `dielectric` and `thindielectric`.
+fn dielectric(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let one = Spectrum::ONE;
+    let eta = relative_ior(node, "bk7", false)?;
+    let specular_reflectance = tex.spectrum(node, "specular_reflectance", one)?;
+    let specular_transmittance = tex.spectrum(node, "specular_transmittance", one)?;
+    Ok(if node.plugin == "dielectric" {
+        Material::Dielectric(DielectricParams { eta, specular_reflectance, specular_transmittance })
+    } else {
+        Material::ThinDielectric(ThinDielectricParams { eta, specular_reflectance, specular_transmittance })
+    })
+}
+
+fn roughdielectric(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let one = Spectrum::ONE;
+    Ok(Material::RoughDielectric(RoughDielectricParams {
+        eta: relative_ior(node, "bk7", true)?,
+        roughness: roughness(node, tex)?,
+        specular_reflectance: tex.spectrum(node, "specular_reflectance", one)?,
+        specular_transmittance: tex.spectrum(node, "specular_transmittance", one)?,
+    }))
+}
+
+fn conductor(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let (eta, k) = complex_ior(node, tex)?;
+    Ok(Material::Conductor(ConductorParams {
+        eta,
+        k,
+        specular_reflectance: tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?,
+    }))
+}
+
+fn roughconductor(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let (eta, k) = complex_ior(node, tex)?;
+    Ok(Material::RoughConductor(RoughConductorParams {
+        roughness: roughness(node, tex)?,
+        eta,
+        k,
+        specular_reflectance: tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?,
+    }))
+}
+
+/// Mitsuba's `plastic` and `roughplastic`.
+fn plastic(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let eta = relative_ior(node, "polypropylene", node.plugin == "roughplastic")?;
+    let diffuse_reflectance = tex.spectrum(node, "diffuse_reflectance", Spectrum::splat(0.5))?;
+    let specular_reflectance = tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?;
+    let nonlinear = node.bool("nonlinear", false)?;
+    // Mitsuba steers lobe selection by the textures' mean values.
+    if !diffuse_reflectance.has_mean() || !specular_reflectance.has_mean() {
+        return Err(node.error(format!(
+            "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
+             for lobe selection and fails the same way)",
+            node.plugin
+        )));
+    }
+    let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
+    let specular_sampling_weight = s_mean / (d_mean + s_mean);
+    if node.plugin == "plastic" {
+        return Ok(Material::Plastic(PlasticParams {
+            eta,
+            diffuse_reflectance,
+            specular_reflectance,
+            nonlinear,
+            fdr_int: fresnel_diffuse_reflectance(1.0 / eta),
+            specular_sampling_weight,
+        }));
+    }
+    let r = roughness(node, tex)?;
+    let (Some(au), Some(av)) = (r.alpha_u.constant(), r.alpha_v.constant()) else {
+        return Err(node.error("roughplastic: alpha must be a number, not a texture (as in Mitsuba)"));
+    };
+    if au != av {
+        return Err(node.error("roughplastic does not support anisotropic roughness (as in Mitsuba)"));
+    }
+    let distr = Microfacet { kind: r.kind, alpha_u: au.x, alpha_v: av.x };
+    Ok(Material::RoughPlastic(RoughPlasticParams {
+        distr,
+        eta,
+        diffuse_reflectance,
+        specular_reflectance,
+        nonlinear,
+        specular_sampling_weight,
+        tables: RoughPlasticTables::new(distr, eta),
+    }))
+}
+
+fn twosided(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
+    let (front, back) = match inner.as_slice() {
+        [one] => (build_material(&one.node, tex)?, build_material(&one.node, tex)?),
+        [a, b] => (build_material(&a.node, tex)?, build_material(&b.node, tex)?),
+        _ => return Err(node.error("twosided needs one or two nested BSDFs")),
+    };
+    if matches!(front, Material::TwoSided(..)) || matches!(back, Material::TwoSided(..)) {
+        return Err(node.error("twosided cannot wrap another twosided BSDF"));
+    }
+    Ok(Material::TwoSided(Box::new(front), Box::new(back)))
+}
+
+fn mask(node: &Node, tex: &mut Textures) -> Result<Material> {
+    Ok(Material::Mask { opacity: tex.float(node, "opacity", 0.5)?, inner: nested(node, tex)? })
+}
+
+fn normalmap(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let child = node
+        .children_of(Kind::Texture)
+        .find(|c| c.name.as_deref() == Some("normalmap"))
+        .ok_or_else(|| node.error("normalmap needs a texture named 'normalmap'"))?;
+    let normals = tex.build(&child.node)?;
+    wrapper_defaults(node)?;
+    Ok(Material::NormalMap { normals, inner: nested(node, tex)? })
+}
+
+fn bumpmap(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let textures: Vec<_> = node.children_of(Kind::Texture).collect();
+    let [t] = textures.as_slice() else {
+        return Err(node.error("bumpmap needs exactly one nested texture (the height field)"));
+    };
+    let height = tex.build(&t.node)?;
+    if !height.has_gradient() {
+        return Err(LoadError::at(
+            &t.loc,
+            "bumpmap: this texture has no gradient (Mitsuba rejects it too); use a bitmap height map",
+        ));
+    }
+    wrapper_defaults(node)?;
+    Ok(Material::BumpMap { height, scale: node.float("scale", 1.0)? as f32, inner: nested(node, tex)? })
+}
+
+fn blendbsdf(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let has_weight = node.has("weight") || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some("weight"));
+    if !has_weight {
+        return Err(node.error("blendbsdf needs a 'weight' (a float or a texture)"));
+    }
+    let weight = tex.float(node, "weight", 0.5)?;
+    let inner: Vec<_> = node.children_of(Kind::Bsdf).collect();
+    let [a, b] = inner.as_slice() else {
+        return Err(node.error("blendbsdf needs exactly two nested BSDFs"));
+    };
+    Ok(Material::Blend {
+        weight,
+        first: Box::new(build_material(&a.node, tex)?),
+        second: Box::new(build_material(&b.node, tex)?),
+    })
 }

@@ -2,6 +2,7 @@
 //! `<float>`, `<spectrum>`) or as a nested / referenced `<texture>`
 //! (Mitsuba's `bitmap`, `checkerboard` and `mesh_attribute`).
 
+use super::{find_plugin, listed, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
@@ -14,7 +15,14 @@ use std::collections::HashMap;
 use std::rc::Rc;
 use std::sync::Arc;
 
-const TEXTURES: &[&str] = &["bitmap", "checkerboard", "mesh_attribute"];
+/// A builder of a texture from its `<texture>` node.
+type BuildTexture = fn(&mut Textures, &Node) -> Result<Texture>;
+
+pub(super) const TEXTURES: &Plugins<BuildTexture> = &[
+    ("bitmap", |_, node| build_bitmap(node)),
+    ("checkerboard", Textures::checkerboard),
+    ("mesh_attribute", |_, node| mesh_attribute(node)),
+];
 
 /// Textures already built, by node identity (shared through `<ref>`).
 #[derive(Default)]
@@ -61,46 +69,42 @@ impl Textures {
     }
 
     fn build_texture(&mut self, node: &Node) -> Result<Texture> {
-        let t = match node.plugin.as_str() {
-            "bitmap" => build_bitmap(node)?,
-            "checkerboard" => {
-                if let Some(c) = node
-                    .children_of(Kind::Texture)
-                    .find(|c| !matches!(c.name.as_deref(), Some("color0") | Some("color1")))
-                {
-                    return Err(LoadError::at(
-                        &c.loc,
-                        "a texture nested in a checkerboard must be named 'color0' or 'color1'",
-                    ));
-                }
-                let color0 = self.spectrum(node, "color0", Spectrum::splat(0.4))?;
-                let color1 = self.spectrum(node, "color1", Spectrum::splat(0.2))?;
-                let to_uv = to_uv(node)?;
-                Texture::Checkerboard(Arc::new(Checkerboard { color0, color1, to_uv }))
-            }
-            "mesh_attribute" => {
-                let (name, loc) = node
-                    .get_string("name")?
-                    .ok_or_else(|| node.error("mesh_attribute needs a 'name', e.g. \"vertex_color\""))?;
-                if !name.contains("vertex_") && !name.contains("face_") {
-                    return Err(LoadError::at(
-                        &loc,
-                        format!("invalid mesh attribute name \"{name}\": it must start with \"vertex_\" or \"face_\""),
-                    ));
-                }
-                let scale = node.float("scale", 1.0)? as f32;
-                Texture::MeshAttribute(Arc::new(MeshAttribute::new(name, scale)))
-            }
-            other => {
-                return Err(node.error(format!(
-                    "texture type '{other}' is not supported; Penumbra supports {}",
-                    TEXTURES.iter().map(|t| format!("'{t}'")).collect::<Vec<_>>().join(" and ")
-                )))
-            }
+        let Some(build) = find_plugin(TEXTURES, &node.plugin) else {
+            return Err(node.error(format!(
+                "texture type '{}' is not supported; Penumbra supports {}",
+                node.plugin,
+                listed(TEXTURES).iter().map(|t| format!("'{t}'")).collect::<Vec<_>>().join(" and ")
+            )));
         };
+        let t = build(self, node)?;
         node.check_all_used(&[Kind::Texture])?;
         Ok(t)
     }
+
+    fn checkerboard(&mut self, node: &Node) -> Result<Texture> {
+        if let Some(c) =
+            node.children_of(Kind::Texture).find(|c| !matches!(c.name.as_deref(), Some("color0") | Some("color1")))
+        {
+            return Err(LoadError::at(&c.loc, "a texture nested in a checkerboard must be named 'color0' or 'color1'"));
+        }
+        let color0 = self.spectrum(node, "color0", Spectrum::splat(0.4))?;
+        let color1 = self.spectrum(node, "color1", Spectrum::splat(0.2))?;
+        let to_uv = to_uv(node)?;
+        Ok(Texture::Checkerboard(Arc::new(Checkerboard { color0, color1, to_uv })))
+    }
+}
+
+fn mesh_attribute(node: &Node) -> Result<Texture> {
+    let (name, loc) =
+        node.get_string("name")?.ok_or_else(|| node.error("mesh_attribute needs a 'name', e.g. \"vertex_color\""))?;
+    if !name.contains("vertex_") && !name.contains("face_") {
+        return Err(LoadError::at(
+            &loc,
+            format!("invalid mesh attribute name \"{name}\": it must start with \"vertex_\" or \"face_\""),
+        ));
+    }
+    let scale = node.float("scale", 1.0)? as f32;
+    Ok(Texture::MeshAttribute(Arc::new(MeshAttribute::new(name, scale))))
 }
 
 impl Textures {

@@ -1,0 +1,126 @@
+//! `<emitter>` nodes → [`Light`]s: area emitters inside shapes and the
+//! emitters declared at the top level.
+
+use super::{plugin, resolve, Plugins};
+use crate::desc::Node;
+use crate::error::{LoadError, Result};
+use crate::image_io;
+use glam::{DVec3, Vec3};
+use penumbra_render::geometry::Shape;
+use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
+use penumbra_render::math::Spectrum;
+
+/// A builder of a top-level emitter.
+type BuildEmitter = fn(&Node) -> Result<PendingLight>;
+
+pub(super) const EMITTERS: &Plugins<BuildEmitter> = &[
+    ("area (inside a shape)", area_at_top_level),
+    ("constant", constant),
+    ("envmap", envmap),
+    ("point", point),
+    ("spot", spot),
+    ("directional", directional),
+];
+
+fn rgb(v: [f64; 3]) -> Spectrum {
+    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
+}
+
+/// A light as declared (parsed and checked where the scene declares it),
+/// made once the geometry's bounding radius is known: a directional light's
+/// flux is that through the scene's bounding disk.
+pub(super) type PendingLight = Box<dyn FnOnce(f32) -> Light>;
+
+/// A light that needs nothing from the rest of the scene.
+fn ready(light: Light) -> PendingLight {
+    Box::new(move |_| light)
+}
+
+/// The area emitter `en` attached to the shape `shape_node`, built as
+/// `shape` with id `shape_id`.
+pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
+    if en.plugin != "area" {
+        return Err(en.error(format!("emitter '{}' cannot be attached to a shape; only 'area' can", en.plugin)));
+    }
+    let radiance = en.get_rgb("radiance")?.ok_or_else(|| en.error("area emitter needs a 'radiance' value"))?;
+    en.check_all_used(&[])?;
+    if shape.area() <= 0.0 {
+        return Err(shape_node.error("an area emitter's shape has zero area"));
+    }
+    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance: rgb(radiance) })))
+}
+
+/// An emitter declared at the top level (not attached to a shape).
+pub(super) fn top_level(node: &Node) -> Result<PendingLight> {
+    let light = plugin(EMITTERS, node)?(node)?;
+    node.check_all_used(&[])?;
+    Ok(light)
+}
+
+fn area_at_top_level(node: &Node) -> Result<PendingLight> {
+    Err(node.error("an 'area' emitter must be nested inside a shape"))
+}
+
+fn constant(node: &Node) -> Result<PendingLight> {
+    let radiance = node.get_rgb("radiance")?.unwrap_or([1.0; 3]);
+    Ok(ready(Light::Constant(ConstantLight { radiance: rgb(radiance) })))
+}
+
+fn point(node: &Node) -> Result<PendingLight> {
+    let to_world = node.transform("to_world")?;
+    let position = match node.get_point("position")? {
+        Some(p) if node.has("to_world") => {
+            return Err(LoadError::at(
+                node.loc_of("position"),
+                format!("point light: give either 'position' ({p}) or 'to_world', not both"),
+            ))
+        }
+        Some(p) => p,
+        None => to_world.transform_point3(DVec3::ZERO),
+    };
+    let intensity = rgb(node.get_rgb("intensity")?.unwrap_or([1.0; 3]));
+    Ok(ready(Light::Point(PointLight { position: position.as_vec3(), intensity })))
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn spot(node: &Node) -> Result<PendingLight> {
+    let to_world = node.transform("to_world")?;
+    let intensity = rgb(node.get_rgb("intensity")?.unwrap_or([1.0; 3]));
+    let cutoff = node.float("cutoff_angle", 20.0)?;
+    let beam = node.float("beam_width", cutoff * 0.75)?;
+    if !(cutoff > 0.0 && cutoff <= 180.0 && beam >= 0.0 && beam < cutoff) {
+        return Err(node.error("spot light: need 0 <= beam_width < cutoff_angle <= 180 (degrees)"));
+    }
+    Ok(ready(Light::Spot(SpotLight::new(to_world.as_mat4(), intensity, cutoff as f32, beam as f32))))
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn directional(node: &Node) -> Result<PendingLight> {
+    let to_world = node.transform("to_world")?;
+    let dir = match node.get_point("direction")? {
+        Some(_) if node.has("to_world") => {
+            return Err(node.error("directional light: give either 'direction' or 'to_world', not both"))
+        }
+        Some(d) => d,
+        None => to_world.transform_vector3(DVec3::Z),
+    };
+    if !(dir.length() > 0.0) {
+        return Err(node.error("directional light: the direction must not be zero"));
+    }
+    let irradiance = rgb(node.get_rgb("irradiance")?.unwrap_or([1.0; 3]));
+    let direction = dir.normalize().as_vec3();
+    Ok(Box::new(move |scene_radius| Light::Directional(DirectionalLight { direction, irradiance, scene_radius })))
+}
+
+fn envmap(node: &Node) -> Result<PendingLight> {
+    let (file, loc) = node
+        .get_string("filename")?
+        .ok_or_else(|| node.error("envmap needs a 'filename' (.exr, .hdr, .png or .jpg)"))?;
+    let path = resolve(&loc, &file, "environment map")?;
+    let img = image_io::read_image(&path).map_err(|e| LoadError::at(&loc, e))?;
+    let scale = node.float("scale", 1.0)?;
+    let to_world = node.transform("to_world")?;
+    let light = EnvMapLight::new(img.width as usize, img.height as usize, img.pixels, to_world.as_mat4(), scale as f32)
+        .map_err(|e| LoadError::at(&loc, format!("'{}': {e}", path.display())))?;
+    Ok(ready(Light::EnvMap(light)))
+}

@@ -1,0 +1,165 @@
+//! `<integrator>` nodes (and `--integrator` specs) → [`Integrator`]s with
+//! the light-selection strategy they ask for.
+
+use super::{plugin, Plugins};
+use crate::desc::{Kind, Node, Property, Value};
+use crate::error::{FileLoc, LoadError, Result};
+use penumbra_render::integrator::{
+    BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
+};
+use penumbra_render::light::LightSelection;
+use std::cell::Cell;
+use std::path::PathBuf;
+
+/// A builder of an integrator and the light-selection strategy it asks for.
+type BuildIntegrator = fn(&Node) -> Result<(Integrator, LightSelection)>;
+
+pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> =
+    &[("path", path), ("direct", direct), ("bruteforce", bruteforce)];
+
+/// Termination parameters shared by `path` and `bruteforce`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn termination(node: &Node) -> Result<Termination> {
+    let max_depth = node.int("max_depth", -1)?;
+    let rr_depth = node.int("rr_depth", 5)?;
+    if max_depth < -1 {
+        return Err(LoadError::at(node.loc_of("max_depth"), "max_depth must be -1 (unbounded) or >= 0"));
+    }
+    if rr_depth <= 0 {
+        return Err(LoadError::at(node.loc_of("rr_depth"), "rr_depth must be positive"));
+    }
+    let threshold = node.float("throughput_threshold", 0.0)?;
+    if !(threshold >= 0.0) {
+        return Err(LoadError::at(node.loc_of("throughput_threshold"), "throughput_threshold must be >= 0"));
+    }
+    Ok(Termination {
+        max_depth: if max_depth < 0 { u32::MAX } else { max_depth.min(u32::MAX as i64 - 1) as u32 },
+        rr_depth: rr_depth.min(u32::MAX as i64) as u32,
+        throughput_threshold: threshold as f32,
+    })
+}
+
+fn light_selection(node: &Node) -> Result<LightSelection> {
+    match node.string("light_selection", "uniform")?.as_str() {
+        "uniform" => Ok(LightSelection::Uniform),
+        "power" => Ok(LightSelection::Power),
+        "bvh" => Ok(LightSelection::Bvh),
+        other => Err(LoadError::at(
+            node.loc_of("light_selection"),
+            format!("light_selection '{other}' is not one of uniform, power, bvh"),
+        )),
+    }
+}
+
+fn count(node: &Node, name: &str, default: i64) -> Result<u32> {
+    let v = node.int(name, default)?;
+    if !(0..=1 << 20).contains(&v) {
+        return Err(LoadError::at(node.loc_of(name), format!("{name} must be between 0 and 2^20")));
+    }
+    Ok(v as u32)
+}
+
+/// Builds an integrator and the light-selection strategy it asks for.
+pub(super) fn build_integrator(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let result = plugin(INTEGRATORS, node)?(node)?;
+    node.check_all_used(&[])?;
+    Ok(result)
+}
+
+fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
+    Ok((
+        Integrator::Path(PathIntegrator {
+            term: termination(node)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
+            mis: node.bool("mis", true)?,
+        }),
+        light_selection(node)?,
+    ))
+}
+
+fn direct(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let shading = node.get_int("shading_samples")?;
+    let default = shading.unwrap_or(1);
+    Ok((
+        Integrator::Direct(DirectIntegrator {
+            emitter_samples: count(node, "emitter_samples", default)?,
+            bsdf_samples: count(node, "bsdf_samples", default)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
+        }),
+        light_selection(node)?,
+    ))
+}
+
+/// Penumbra's `bruteforce`: pure path sampling, no light sampling.
+fn bruteforce(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let sampling = match node.string("sampling", "cosine")?.as_str() {
+        "uniform" => HemisphereSampling::Uniform,
+        "cosine" => HemisphereSampling::Cosine,
+        "bsdf" => HemisphereSampling::Bsdf,
+        other => {
+            return Err(LoadError::at(
+                node.loc_of("sampling"),
+                format!("sampling '{other}' is not one of uniform, cosine, bsdf"),
+            ))
+        }
+    };
+    Ok((
+        Integrator::BruteForce(BruteForceIntegrator {
+            term: termination(node)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
+            sampling,
+        }),
+        LightSelection::Uniform,
+    ))
+}
+
+/// Parameters that carry over from the scene's integrator to one chosen on
+/// the command line, so estimators compare on equal terms.
+const SHARED_INTEGRATOR_PARAMS: &[&str] = &["max_depth", "rr_depth", "hide_emitters"];
+
+/// Turns `--integrator NAME[:key=value,...]` into an integrator node, typing
+/// each value as Mitsuba's XML would (boolean, integer, float, else string)
+/// and filling unset shared parameters from the scene's integrator.
+pub fn integrator_from_spec(spec: &str, scene_integrator: Option<&Node>) -> Result<Node> {
+    let loc = FileLoc::new(std::sync::Arc::new(PathBuf::from("--integrator")), 0, 0);
+    let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
+    let mut props = Vec::new();
+    for kv in rest.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (k, v) = kv.split_once('=').ok_or_else(|| {
+            LoadError::new(None, format!("--integrator: '{kv}' is not of the form key=value (in '{spec}')"))
+        })?;
+        let value = match v {
+            "true" => Value::Boolean(true),
+            "false" => Value::Boolean(false),
+            _ => match (v.parse::<i64>(), v.parse::<f64>()) {
+                (Ok(i), _) => Value::Integer(i),
+                (_, Ok(f)) => Value::Float(f),
+                _ => Value::String(v.to_string()),
+            },
+        };
+        props.push(Property { name: k.to_string(), value, loc: loc.clone(), used: Cell::new(false) });
+    }
+    let accepts = |param: &str| match name {
+        "direct" => param == "hide_emitters",
+        _ => true,
+    };
+    if let Some(scene) = scene_integrator {
+        for p in &scene.props {
+            if SHARED_INTEGRATOR_PARAMS.contains(&p.name.as_str())
+                && accepts(&p.name)
+                && !props.iter().any(|q: &Property| q.name == p.name)
+            {
+                props.push(Property { used: Cell::new(false), ..p.clone() });
+            }
+        }
+    }
+    Ok(Node {
+        kind: Kind::Integrator,
+        plugin: name.to_string(),
+        id: None,
+        name: None,
+        props,
+        children: Vec::new(),
+        loc,
+    })
+}

@@ -1,0 +1,287 @@
+//! `<sensor>` nodes → the camera, with the sensor's `<film>` (and its
+//! `<rfilter>`) and `<sampler>`, as Mitsuba 3.9.1 reads them.
+
+use super::{plugin, Overrides, Plugins};
+use crate::desc::{Kind, Node};
+use crate::error::{LoadError, Result};
+use penumbra_render::camera::{Camera, FovAxis};
+use penumbra_render::film::{Filter, FilterKind, MAX_MARGIN};
+use penumbra_render::sampling::{Sampler, SamplerKind};
+
+/// Sampler names `--sampler` accepts.
+pub const SAMPLER_OVERRIDES: &[&str] =
+    &["independent", "stratified", "multijitter", "orthogonal", "ldsampler", "sobol"];
+
+/// Film geometry: full size and the crop window rendered.
+pub(super) struct FilmRect {
+    pub(super) size: (u32, u32),
+    pub(super) crop_offset: (u32, u32),
+    pub(super) crop_size: (u32, u32),
+}
+
+pub(super) type SensorParts = (Camera, Filter, FilmRect, Sampler);
+
+/// Field of view in degrees along `fov_axis`: `fov`, or Mitsuba's
+/// `focal_length` ("50mm" by default), a 35 mm-equivalent focal length that
+/// fixes the diagonal field of view (the 36x24 mm frame's diagonal is 43.27 mm).
+fn field_of_view(node: &Node) -> Result<(f64, Option<FovAxis>)> {
+    let fov = node.get_float("fov")?;
+    let focal = node.get_string("focal_length")?;
+    match (fov, focal) {
+        (Some(_), Some((_, loc))) => Err(LoadError::at(&loc, "give either 'fov' or 'focal_length', not both")),
+        (Some(f), None) => {
+            if !(f > 0.0 && f < 180.0) {
+                return Err(LoadError::at(node.loc_of("fov"), "fov must lie in (0, 180) degrees"));
+            }
+            Ok((f, None))
+        }
+        (None, focal) => {
+            let (text, loc) = focal.unwrap_or_else(|| ("50mm".to_string(), node.loc.clone()));
+            let mm: f64 = text
+                .trim()
+                .strip_suffix("mm")
+                .and_then(|v| v.trim().parse().ok())
+                .filter(|v: &f64| *v > 0.0)
+                .ok_or_else(|| LoadError::at(&loc, format!("focal_length '{text}' is not of the form '50mm'")))?;
+            let diagonal = (36.0f64 * 36.0 + 24.0 * 24.0).sqrt();
+            Ok((2.0 * (diagonal / (2.0 * mm)).atan().to_degrees(), Some(FovAxis::Diagonal)))
+        }
+    }
+}
+
+/// The sensor's projection parameters, read as Mitsuba 3.9.1's
+/// `perspective`, `thinlens` and `orthographic` read them.
+pub(super) enum SensorModel {
+    Perspective { fov: f64, axis: FovAxis },
+    ThinLens { fov: f64, axis: FovAxis, aperture_radius: f64, focus_distance: f64 },
+    Orthographic,
+}
+
+fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
+    let (fov, forced_axis) = field_of_view(node)?;
+    let axis = match node.string("fov_axis", "x")?.as_str() {
+        _ if forced_axis.is_some() => forced_axis.unwrap_or(FovAxis::X),
+        "x" => FovAxis::X,
+        "y" => FovAxis::Y,
+        "diagonal" => FovAxis::Diagonal,
+        "smaller" => FovAxis::Smaller,
+        "larger" => FovAxis::Larger,
+        other => {
+            return Err(LoadError::at(
+                node.loc_of("fov_axis"),
+                format!("fov_axis '{other}' is not one of x, y, diagonal, smaller, larger"),
+            ))
+        }
+    };
+    Ok((fov, axis))
+}
+
+/// Whether a camera-to-world matrix scales (Mitsuba's `has_scale`: some
+/// column of the linear part is not of unit length).
+fn has_scale(m: &glam::DMat4) -> bool {
+    [m.x_axis, m.y_axis, m.z_axis].iter().any(|c| (c.truncate().length_squared() - 1.0).abs() > 1e-3)
+}
+
+/// A builder of a sensor's projection, from its node, camera-to-world
+/// transform and far clip distance.
+type BuildSensor = fn(&Node, &glam::DMat4, f64) -> Result<SensorModel>;
+
+pub(super) const SENSORS: &Plugins<BuildSensor> =
+    &[("perspective", perspective), ("thinlens", thinlens), ("orthographic", orthographic)];
+
+/// A builder of a film's geometry and reconstruction filter.
+type BuildFilm = fn(&Node) -> Result<(FilmRect, Filter)>;
+
+pub(super) const FILMS: &Plugins<BuildFilm> = &[("hdrfilm", hdrfilm)];
+
+pub(super) const RFILTERS: &Plugins<fn(&Node) -> Result<FilterKind>> = &[
+    ("box", |_| Ok(FilterKind::Box)),
+    ("tent", |f| Ok(FilterKind::Tent { radius: f.float("radius", 1.0)? as f32 })),
+    ("gaussian", |f| Ok(FilterKind::Gaussian { stddev: f.float("stddev", 0.5)? as f32 })),
+];
+
+pub(super) const SAMPLERS: &Plugins<fn(&Node) -> Result<SamplerKind>> = &[
+    ("independent", |_| Ok(SamplerKind::Independent)),
+    ("stratified", stratified),
+    ("multijitter", |s| Ok(SamplerKind::Multijitter { jitter: s.bool("jitter", true)? })),
+    ("orthogonal", orthogonal),
+    ("ldsampler", |_| Ok(SamplerKind::LowDiscrepancy)),
+];
+
+fn perspective(node: &Node, _: &glam::DMat4, _: f64) -> Result<SensorModel> {
+    let (fov, axis) = fov_and_axis(node)?;
+    Ok(SensorModel::Perspective { fov, axis })
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn thinlens(node: &Node, to_world: &glam::DMat4, far: f64) -> Result<SensorModel> {
+    let (fov, axis) = fov_and_axis(node)?;
+    let aperture_radius =
+        node.get_float("aperture_radius")?.ok_or_else(|| node.error("thinlens: 'aperture_radius' is required"))?;
+    if !(aperture_radius >= 0.0) {
+        return Err(LoadError::at(node.loc_of("aperture_radius"), "aperture_radius must not be negative"));
+    }
+    // Mitsuba replaces a zero radius by machine epsilon (with a warning).
+    let aperture_radius = if aperture_radius == 0.0 { f32::EPSILON as f64 } else { aperture_radius };
+    let focus_distance = node.float("focus_distance", far)?;
+    if !(focus_distance > 0.0) {
+        return Err(LoadError::at(node.loc_of("focus_distance"), "focus_distance must be positive"));
+    }
+    if has_scale(to_world) {
+        return Err(
+            node.error("thinlens: scale factors in the camera-to-world transformation are not allowed (as in Mitsuba)")
+        );
+    }
+    Ok(SensorModel::ThinLens { fov, axis, aperture_radius, focus_distance })
+}
+
+fn orthographic(_: &Node, _: &glam::DMat4, _: f64) -> Result<SensorModel> {
+    Ok(SensorModel::Orthographic)
+}
+
+/// Mitsuba's `hdrfilm`: its size, crop window and `<rfilter>`.
+fn hdrfilm(film: &Node) -> Result<(FilmRect, Filter)> {
+    let width = film.int("width", 768)?;
+    let height = film.int("height", 576)?;
+    if !(1..=1 << 16).contains(&width) || !(1..=1 << 16).contains(&height) {
+        return Err(film.error("film width and height must be between 1 and 65536"));
+    }
+    let (w, h) = (width as u32, height as u32);
+    let cx = film.int("crop_offset_x", 0)?;
+    let cy = film.int("crop_offset_y", 0)?;
+    let cw = film.int("crop_width", width)?;
+    let ch = film.int("crop_height", height)?;
+    if cx < 0 || cy < 0 || cw < 1 || ch < 1 || cx + cw > width || cy + ch > height {
+        return Err(film.error(format!(
+            "the crop window ({cx}, {cy}) + ({cw} x {ch}) does not lie inside the {width} x {height} film"
+        )));
+    }
+    let rect = FilmRect { size: (w, h), crop_offset: (cx as u32, cy as u32), crop_size: (cw as u32, ch as u32) };
+    // Output-format settings that cannot change the rendered values.
+    film.accept(&["pixel_format", "component_format", "file_format", "sample_border", "compensate"]);
+    Ok((rect, rfilter(film)?))
+}
+
+/// The film's reconstruction filter: its `<rfilter>`, else Mitsuba's
+/// default, a Gaussian of standard deviation 0.5.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn rfilter(film: &Node) -> Result<Filter> {
+    Ok(match film.single_child(Kind::Rfilter)? {
+        None => Filter::new(FilterKind::Gaussian { stddev: 0.5 }),
+        Some(f) => {
+            let kind = plugin(RFILTERS, &f)?(&f)?;
+            f.check_all_used(&[])?;
+            let filter = Filter::new(kind);
+            if filter.margin() > MAX_MARGIN || !(filter.radius > 0.0) {
+                return Err(f.error(format!(
+                    "the {} filter's radius {} is not supported: it must be positive and reach at most {MAX_MARGIN} pixels",
+                    f.plugin, filter.radius
+                )));
+            }
+            filter
+        }
+    })
+}
+
+fn stratified(s: &Node) -> Result<SamplerKind> {
+    if !s.bool("jitter", true)? {
+        return Err(LoadError::at(s.loc_of("jitter"), "stratified: jitter=false is not supported"));
+    }
+    Ok(SamplerKind::Stratified)
+}
+
+fn orthogonal(s: &Node) -> Result<SamplerKind> {
+    if s.int("strength", 2)? != 2 {
+        return Err(LoadError::at(
+            s.loc_of("strength"),
+            "orthogonal: only strength 2 (Bose construction, the default) is supported",
+        ));
+    }
+    Ok(SamplerKind::Orthogonal { jitter: s.bool("jitter", true)? })
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
+    let sensor_model = plugin(SENSORS, node)?;
+    let to_world = node.transform("to_world")?;
+    let near = node.float("near_clip", 0.01)?;
+    let far = node.float("far_clip", 10000.0)?;
+    if !(near > 0.0 && far > near) {
+        return Err(node.error("near_clip must be positive and smaller than far_clip"));
+    }
+    let model = sensor_model(node, &to_world, far)?;
+    if !matches!(model, SensorModel::Orthographic) {
+        for p in ["principal_point_offset_x", "principal_point_offset_y"] {
+            if node.float(p, 0.0)? != 0.0 {
+                return Err(LoadError::at(node.loc_of(p), format!("{p} is not supported yet")));
+            }
+        }
+    }
+    node.accept(&["shutter_open", "shutter_close"]);
+    // Every projective camera of Mitsuba reads it; only thinlens uses it.
+    node.accept(&["focus_distance"]);
+
+    // Film.
+    let film =
+        node.single_child(Kind::Film)?.ok_or_else(|| node.error("the sensor needs a <film type=\"hdrfilm\">"))?;
+    let (rect, filter) = plugin(FILMS, &film)?(&film)?;
+    film.check_all_used(&[Kind::Rfilter])?;
+
+    // Sampler.
+    let (kind, mut spp, mut seed) = match node.single_child(Kind::Sampler)? {
+        None => (SamplerKind::Independent, 4, 0),
+        Some(s) => {
+            let kind = plugin(SAMPLERS, &s)?(&s)?;
+            let spp = s.int("sample_count", 4)?;
+            let seed = s.int("seed", 0)?;
+            if spp < 1 || spp > u32::MAX as i64 {
+                return Err(LoadError::at(s.loc_of("sample_count"), "sample_count must be a positive integer"));
+            }
+            s.check_all_used(&[])?;
+            (kind, spp as u32, seed as u64)
+        }
+    };
+    let kind = match ov.sampler.as_deref() {
+        None => kind,
+        Some("independent") => SamplerKind::Independent,
+        Some("stratified") => SamplerKind::Stratified,
+        Some("multijitter") => SamplerKind::Multijitter { jitter: true },
+        Some("orthogonal") => SamplerKind::Orthogonal { jitter: true },
+        Some("ldsampler") => SamplerKind::LowDiscrepancy,
+        Some("sobol") => SamplerKind::Sobol,
+        Some(other) => {
+            return Err(LoadError::new(
+                None,
+                format!("--sampler {other}: unknown sampler; use one of {}", SAMPLER_OVERRIDES.join(", ")),
+            ))
+        }
+    };
+    if let Some(o) = ov.spp {
+        spp = o;
+    }
+    // Mitsuba's stratified samplers round the count up to what their
+    // construction needs (checked with 3.9.1, e.g. stratified 10 -> 16,
+    // multijitter 10 -> 12, orthogonal 16 -> 25, ldsampler 17 -> 64).
+    spp = kind.round_sample_count(spp);
+    if let Some(o) = ov.seed {
+        seed = o;
+    }
+    node.check_all_used(&[Kind::Film, Kind::Sampler])?;
+    let (m, (w, h)) = (to_world.as_mat4(), rect.size);
+    let camera = match model {
+        SensorModel::Perspective { fov, axis } => Camera::new(m, fov as f32, axis, w, h, near as f32, far as f32),
+        SensorModel::ThinLens { fov, axis, aperture_radius, focus_distance } => Camera::thin_lens(
+            m,
+            fov as f32,
+            axis,
+            w,
+            h,
+            near as f32,
+            far as f32,
+            aperture_radius as f32,
+            focus_distance as f32,
+        ),
+        SensorModel::Orthographic => Camera::orthographic(m, w, h, near as f32, far as f32),
+    };
+    Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))
+}
