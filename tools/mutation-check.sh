@@ -20,7 +20,7 @@ git -C "$repo" worktree add -q --detach "$wt" HEAD
 export CARGO_TARGET_DIR="$repo/target/mutation"
 run_tests() { # $1: log file
     (cd "$wt" && cargo test --profile mutation -p penumbra-render -p penumbra-scene --no-fail-fast >"$1" 2>&1) || true
-    grep -E '^test .* \.\.\. FAILED$' "$1" | sed -E 's/^test (.*) \.\.\. FAILED$/\1/' | sort -u
+    { grep -E '^test .* \.\.\. FAILED$' "$1" || true; } | sed -E 's/^test (.*) \.\.\. FAILED$/\1/' | sort -u
 }
 logs=$(mktemp -d /tmp/penumbra-mutation-logs.XXXXXX)
 echo "baseline (no bug): building and testing"
