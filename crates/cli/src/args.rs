@@ -58,7 +58,7 @@ pub struct RenderArgs {
     /// a Mitsuba sampler (independent, stratified, multijitter, orthogonal,
     /// ldsampler) or `sobol`, Owen-scrambled Sobol' (Burley 2020), which
     /// stratifies at any sample count and so suits --time and progressive renders.
-    #[arg(long, value_name = "NAME", value_parser = clap::builder::PossibleValuesParser::new(penumbra_scene::build::SAMPLER_OVERRIDES))]
+    #[arg(long, value_name = "NAME", value_parser = clap::builder::PossibleValuesParser::new(penumbra_scene::builder::SAMPLER_OVERRIDES))]
     pub sampler: Option<String>,
     /// Never show the progress bar.
     #[arg(long)]

@@ -20,7 +20,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         writeln!(out, "integrator: path (Mitsuba's default)")?;
     }
     let notes = approximations(&desc);
-    let built = penumbra_scene::build::build(&desc, &Overrides::default());
+    let built = penumbra_scene::builder::build(&desc, &Overrides::default());
     if let Ok(job) = &built {
         let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
         for shape in &job.scene.shapes {

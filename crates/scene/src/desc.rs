@@ -1,6 +1,6 @@
 //! Format-neutral scene description: a tree of plugin nodes with typed
 //! properties, each carrying its file position. The Mitsuba XML reader
-//! produces it; `build.rs` turns it into a render scene.
+//! produces it; `builder/` turns it into a render scene.
 
 use crate::error::FileLoc;
 use glam::{DMat4, DVec3};

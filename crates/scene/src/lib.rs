@@ -4,7 +4,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
-pub mod build;
+pub mod builder;
 pub mod desc;
 pub mod error;
 pub mod image_io;
@@ -15,7 +15,7 @@ pub mod props;
 pub mod serialized;
 pub mod spectrum;
 
-pub use build::{supported_plugins, Overrides};
+pub use builder::{supported_plugins, Overrides};
 pub use error::{FileLoc, LoadError, Result};
 
 use penumbra_render::render::RenderJob;
@@ -24,5 +24,5 @@ use std::path::Path;
 /// Loads a Mitsuba 3 XML scene with `-D name=value` definitions.
 pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<RenderJob> {
     let desc = mitsuba::parse_file(path, defines)?;
-    build::build(&desc, ov)
+    builder::build(&desc, ov)
 }

@@ -1,7 +1,7 @@
 //! Scene description → render job: conventions checked against values
 //! printed by Mitsuba 3.9.1 (see the comments for the Python used).
 
-use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::mitsuba::parse_str;
 use std::path::Path;
 

@@ -6,7 +6,7 @@
 use penumbra_render::light::Light;
 use penumbra_render::material::Material;
 use penumbra_render::texture::Texture;
-use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::desc::{Kind, Node, SceneDesc, Value};
 use penumbra_scene::mitsuba::{parse_file, parse_str};
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! drives both dispatch and the list in the "not supported" error, and the
 //! README's table of Mitsuba plugins says the same.
 
-use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::desc::Kind;
 use penumbra_scene::mitsuba::parse_str;
 use penumbra_scene::supported_plugins;

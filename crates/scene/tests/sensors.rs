@@ -6,7 +6,7 @@ use penumbra_render::camera::Projection;
 use penumbra_render::film::Film;
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::SamplerKind;
-use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::mitsuba::parse_str;
 use std::path::Path;
 

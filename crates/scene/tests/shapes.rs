@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 use penumbra_render::geometry::{Aabb, Shape, TriangleMesh};
-use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::mitsuba::parse_str;
 use penumbra_scene::serialized::{load_serialized, write_serialized, WriteOptions};
 use std::path::{Path, PathBuf};

@@ -6,7 +6,7 @@ use penumbra_render::geometry::SurfaceInteraction;
 use penumbra_render::material::Material;
 use penumbra_render::math::Frame;
 use penumbra_render::texture::Texture;
-use penumbra_scene::build::{build, Overrides};
+use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::mitsuba::parse_str;
 use std::path::{Path, PathBuf};
 

@@ -18,7 +18,7 @@
 //!
 //! Adding a light: its own file with its parameters documented, a variant
 //! here and its arm in each `match` below (the compiler lists them), and its
-//! plugin in the scene builder (`crates/scene/src/build`).
+//! plugin in the scene builder (`crates/scene/src/builder`).
 
 pub mod area;
 pub mod bvh;
