@@ -10,20 +10,21 @@
 //! u32, the film's layers (string: AOV names, comma-separated; u8: 1 when
 //! variance moments follow), per pixel R, G, B sums and the weight sum as
 //! f64, then the AOV sums (f64, the AOVs' channels per pixel), then the
-//! moments (7 f64 per pixel), and a CRC-32 of everything before it.
-//! Format 1 (no layers) is refused with a message.
+//! moments (`film::MOMENTS` = 8 f64 per pixel), and a CRC-32 of everything
+//! before it. Formats 1 (no layers) and 2 (7 moments, no Σ w³) are refused
+//! with a message.
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
 use penumbra_render::film::AovKind;
-use penumbra_render::film::{Film, FilmLayers};
+use penumbra_render::film::{Film, FilmLayers, MOMENTS};
 use penumbra_scene::atomic;
 use std::fs;
 use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
-const FORMAT: u32 = 2;
+const FORMAT: u32 = 3;
 
 /// A render's state after `passes` whole passes.
 #[derive(Debug, Clone)]
@@ -102,7 +103,7 @@ impl Checkpoint {
             layers.aovs.push(AovKind::from_name(name).ok_or_else(|| corrupt(&format!("unknown AOV '{name}'")))?);
         }
         let mut film = Film::with_layers(width, height, &layers);
-        let values = n * 4 + film.aov.len() + film.moments.len() * 7;
+        let values = n * 4 + film.aov.len() + film.moments.len() * MOMENTS;
         if r.b.len() - r.at != values * 8 {
             return Err(corrupt("its size does not match its resolution"));
         }

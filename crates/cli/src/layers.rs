@@ -6,14 +6,15 @@
 //! pixel's mean). Parts (`--part`) also carry what `merge` needs to add the
 //! second moments (`Film::moments`) without cancellation: Σ w² as
 //! `penumbra.m0`, and per channel, centred on the stored pixel value r,
-//! Σ w²(L − r) as `penumbra.m1.R/G/B` and Σ w²(L − r)² as `penumbra.m2.R/G/B`;
+//! Σ w²(L − r) as `penumbra.m1.R/G/B` and Σ w²(L − r)² as `penumbra.m2.R/G/B`,
+//! and Σ w³ as `penumbra.w3`;
 //! each f64 split into two f32 channels (the value rounded to f32, and `.lo`
 //! the rest), which keeps about 48 bits.
 
 use crate::exrmeta::{ExrImage, WEIGHT_CHANNEL};
 use anyhow::{bail, Result};
 use penumbra_render::film::AovKind;
-use penumbra_render::film::{Film, FilmLayers};
+use penumbra_render::film::{Film, FilmLayers, MOMENTS};
 
 /// What `--aov` names, besides the AOV kinds.
 pub const VARIANCE: &str = "variance";
@@ -46,13 +47,15 @@ pub fn describe(l: &FilmLayers) -> String {
     names.join(",")
 }
 
-/// The seven moment channels: Σ w², then Σ w²(L − r) and Σ w²(L − r)² per channel.
+/// The eight moment channels: Σ w², then Σ w²(L − r) and Σ w²(L − r)² per
+/// channel, then Σ w³.
 fn moment_name(k: usize) -> String {
     const RGB: [&str; 3] = ["R", "G", "B"];
     match k {
         0 => "penumbra.m0".into(),
         1..=3 => format!("penumbra.m1.{}", RGB[k - 1]),
-        _ => format!("penumbra.m2.{}", RGB[k - 4]),
+        4..=6 => format!("penumbra.m2.{}", RGB[k - 4]),
+        _ => "penumbra.w3".into(),
     }
 }
 
@@ -72,12 +75,12 @@ pub fn channels(film: &Film, part: bool) -> Vec<(String, Vec<f32>)> {
         }
         if part {
             let rgb = film.develop();
-            let centred: Vec<[f64; 7]> = film
+            let centred: Vec<[f64; MOMENTS]> = film
                 .moments
                 .iter()
                 .zip(&rgb)
                 .map(|(m, p)| {
-                    let mut c = [m[0], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+                    let mut c = [m[0], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, m[7]];
                     for ch in 0..3 {
                         let r = p[ch] as f64;
                         c[1 + ch] = m[1 + ch] - r * m[0];
@@ -86,7 +89,7 @@ pub fn channels(film: &Film, part: bool) -> Vec<(String, Vec<f32>)> {
                     c
                 })
                 .collect();
-            for k in 0..7 {
+            for k in 0..MOMENTS {
                 let hi: Vec<f32> = centred.iter().map(|m| m[k] as f32).collect();
                 let lo = centred.iter().zip(&hi).map(|(m, &h)| (m[k] - h as f64) as f32).collect();
                 out.push((moment_name(k), hi));
@@ -125,7 +128,7 @@ pub fn film_of_part(img: &ExrImage, what: &str) -> Result<Film> {
         }
     }
     if variance {
-        for k in 0..7 {
+        for k in 0..MOMENTS {
             let (Some(hi), Some(lo)) = (img.layer(&moment_name(k)), img.layer(&format!("{}.lo", moment_name(k))))
             else {
                 bail!("'{what}' has no channel {}", moment_name(k))

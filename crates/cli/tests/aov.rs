@@ -214,12 +214,12 @@ fn gaussian_weight_moments(spp: f64) -> (f64, f64, f64) {
 /// R̂ = Σ wL / Σ w, Σ w²(L − R̂)² / (Σ w)², times n/(n − 1) with Kish's
 /// n = (Σw)²/Σw². Given the weights, with W = Σw, S_k = Σw^k and L of
 /// variance σ² independent of them, E[Σ w²(L − R̂)²] = σ²(S2 − 2 S3/W +
-/// S2²/W²), so E[layer] / Var = (1 − 2a + b)/(1 − b) with a = S3/(W S2),
-/// b = S2/W². `box`: equal weights, a = b = 1/n (n = spp = 8), R = 1
-/// exactly. `gaussian`: a = 0.0531, b = 0.0399 (n = 25.07), so the layer is
-/// low by that factor and R = (1 − b)/(1 − 2a + b) = 1.0284 (measured
-/// 1.0283 ± 0.0031; an unbiased layer would divide by 1 − 2a + b instead of
-/// 1 − b, and then expect R = 1 here).
+/// S2²/W²), and the layer divides by 1 − 2a + b (a = S3/(W S2), b = S2/W²)
+/// to make it unbiased: R = 1 for every filter. `box`: equal weights,
+/// a = b = 1/n (n = spp = 8), the familiar n/(n − 1). `gaussian`:
+/// a = 0.0531, b = 0.0399 (n = 25.07); the plain n/(n − 1) correction would
+/// leave R = (1 − b)/(1 − 2a + b) = 1.0284 (measured 1.0283 ± 0.0031 before
+/// the layer divided by 1 − 2a + b), which this test also rejects.
 ///
 /// Threshold: |R − R_expected| < Z·se with Z = 4, a two-sided false-alarm
 /// rate of 6.3e-5 per check (R is a sum over 8464 pixels and 40 seeds, near
@@ -227,7 +227,8 @@ fn gaussian_weight_moments(spp: f64) -> (f64, f64, f64) {
 /// two independent checks, 1.3e-4 in all.
 ///
 /// Power: the errors guarded against scale the layer by f: n/(n − 1) (the
-/// factor applied twice), (n − 1)/n (dropped), 1.5 or 1/1.5, moving R to
+/// factor applied twice), (n − 1)/n (dropped), 1.5 or 1/1.5, the plain
+/// n/(n − 1) under the Gaussian (f = 1.0284), moving R to
 /// R_expected/f. The closest is |R − R_expected| = R_expected·δ with
 /// δ = 1/n (0.125 for the box, 0.040 for the Gaussian). With
 /// se ≤ R_expected·δ/(Z + 3) the check misses such an error with
@@ -241,7 +242,9 @@ fn variance_layer_matches_the_empirical_variance_over_seeds() {
     const SPP: u32 = 8;
     let d = tmpdir("variance");
     let (n_gauss, a, b) = gaussian_weight_moments(SPP as f64);
-    let configs = [("box", SPP as f64, 1.0), ("gaussian", n_gauss, (1.0 - b) / (1.0 - 2.0 * a + b))];
+    let configs = [("box", SPP as f64, 1.0), ("gaussian", n_gauss, 1.0)];
+    // The n/(n − 1) correction alone, as under a box filter: must fail.
+    let kish_only = (1.0 - b) / (1.0 - 2.0 * a + b);
     for (filter, n, expect) in configs {
         let scene = sky_wall(&d, filter, 96, SPP);
         let delta = 1.0 / n;
@@ -253,7 +256,8 @@ fn variance_layer_matches_the_empirical_variance_over_seeds() {
             );
             assert!((ratio - expect).abs() < Z * se, "{filter} {c}: ratio {ratio} ± {se}, expected {expect}");
             assert!(se <= se_max, "{filter} {c}: standard error {se} too large to detect a factor 1 + 1/n");
-            for f in [n / (n - 1.0), (n - 1.0) / n, 1.5, 1.0 / 1.5] {
+            let plain = if filter == "gaussian" { vec![kish_only] } else { vec![] };
+            for f in [n / (n - 1.0), (n - 1.0) / n, 1.5, 1.0 / 1.5].into_iter().chain(plain) {
                 assert!(
                     (ratio / f - expect).abs() > Z * se / f,
                     "{filter} {c}: a layer off by {f} would pass ({ratio} / {f} vs {expect} ± {se})"
