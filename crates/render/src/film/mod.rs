@@ -361,7 +361,7 @@ impl Film {
         let n_eff = if m[0] > 0.0 { w * w / m[0] } else { 0.0 };
         let (a, b) = (m[7] / (w * m[0]), m[0] / (w * w));
         let unbias = 1.0 - 2.0 * a + b;
-        if n_eff < 1.5 || !(unbias > 1e-9) {
+        if n_eff < 1.5 || unbias.is_nan() || unbias <= 1e-9 {
             return Some([f64::INFINITY; 3]);
         }
         let mut v = [0.0; 3];
