@@ -542,3 +542,27 @@ fn missing_scene_file() {
     assert!(e.to_string().contains("/nonexistent/dir/scene.xml"), "{e}");
     assert!(e.to_string().contains("not found"), "{e}");
 }
+
+/// NaN and infinity, which Rust's float parser accepts, are refused in every
+/// kind of number (floats, colours, vectors, transforms, spectra) with the
+/// file and line.
+#[test]
+fn non_finite_numbers_are_errors_naming_file_and_line() {
+    let bodies = [
+        r#"<shape type="sphere"><float name="radius" value="nan"/></shape>"#,
+        r#"<shape type="sphere"><float name="radius" value="inf"/></shape>"#,
+        r#"<emitter type="constant"><rgb name="radiance" value="1, NaN, 1"/></emitter>"#,
+        r#"<emitter type="point"><point name="position" x="0" y="-infinity" z="0"/></emitter>"#,
+        r#"<shape type="sphere"><transform name="to_world"><translate x="inf"/></transform></shape>"#,
+        r#"<shape type="sphere"><transform name="to_world"><matrix value="1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 nan"/></transform></shape>"#,
+        r#"<emitter type="constant"><spectrum name="radiance" value="400:1, 500:inf"/></emitter>"#,
+    ];
+    for body in bodies {
+        let e = err(&scene(body));
+        assert_err(&e, FILE, 2, &[]);
+        let shown = e.to_string();
+        assert!(shown.contains("finite") || shown.contains("spectrum"), "{body}: {shown}");
+    }
+    // Finite spellings still parse.
+    parse(&scene(r#"<shape type="sphere"><float name="radius" value=" 1e-3 "/></shape>"#)).unwrap();
+}

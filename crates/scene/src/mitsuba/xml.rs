@@ -193,8 +193,9 @@ impl Elem<'_, '_> {
     }
 
     fn float(&self, text: &str, what: &str) -> Result<f64> {
-        parse_float(text)
-            .ok_or_else(|| self.err(format!("could not parse {what} \"{text}\" of {} as a number", self.describe())))
+        parse_float(text).ok_or_else(|| {
+            self.err(format!("could not parse {what} \"{text}\" of {} as a finite number", self.describe()))
+        })
     }
 }
 
@@ -203,9 +204,11 @@ fn tokenize(text: &str) -> Vec<&str> {
     text.split(|c: char| c == ',' || c.is_whitespace()).filter(|t| !t.is_empty()).collect()
 }
 
-/// A floating point number that must make up the whole string.
+/// A finite floating point number that must make up the whole string:
+/// "nan" and "inf", which Rust's parser accepts, would render silently
+/// wrong images (a NaN colour, an infinite radius), so they are refused.
 fn parse_float(text: &str) -> Option<f64> {
-    text.trim().parse().ok()
+    text.trim().parse().ok().filter(|v: &f64| v.is_finite())
 }
 
 /// `major.minor.patch`, all three required (Mitsuba's `util::Version`).
