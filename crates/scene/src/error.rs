@@ -85,3 +85,15 @@ impl fmt::Display for LoadError {
 
 /// Result of scene loading.
 pub type Result<T> = std::result::Result<T, LoadError>;
+
+/// `bytes` as UTF-8 text, or a message naming the first byte that is not:
+/// "not valid UTF-8 text: line L, column C (byte B)", so a binary file or a
+/// file in another encoding is located, not just refused.
+pub fn utf8_text(bytes: Vec<u8>) -> std::result::Result<String, String> {
+    String::from_utf8(bytes).map_err(|e| {
+        let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
+        let col = 1 + good.iter().rev().take_while(|&&b| b != b'\n').count();
+        format!("not valid UTF-8 text: line {line}, column {col} (byte {}); save the file as UTF-8", good.len())
+    })
+}

@@ -15,6 +15,7 @@ use crate::error::{FileLoc, LoadError, Result};
 use glam::{Vec2, Vec3};
 use penumbra_render::geometry::TriangleMesh;
 use penumbra_render::texture::MeshAttributeData;
+use std::cell::Cell;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -166,18 +167,56 @@ fn push_prop(elements: &mut [Element], name: &str, ty: PropType) -> std::result:
     Ok(())
 }
 
-/// The data after the header.
+/// Where in the file the value being read starts, for messages.
+#[derive(Clone, Copy)]
+enum At {
+    /// ASCII data: the line (1-based, header lines counted).
+    Line(usize),
+    /// Binary data: the byte offset from the start of the file.
+    Byte(usize),
+    /// ASCII data: past its last value.
+    End,
+}
+
+impl std::fmt::Display for At {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            At::Line(l) => write!(f, "line {l}"),
+            At::Byte(b) => write!(f, "byte {b}"),
+            At::End => write!(f, "the end of the data"),
+        }
+    }
+}
+
+/// The data after the header; `at` follows the value being read.
 enum Body<'a> {
-    Ascii(std::str::SplitAsciiWhitespace<'a>),
-    Binary { data: &'a [u8], pos: usize, big_endian: bool },
+    /// `pos`: byte offset in `text`; `line`: the file's line at `pos`.
+    Ascii { text: &'a str, pos: usize, line: usize, at: &'a Cell<At> },
+    /// `base`: the data's offset in the file.
+    Binary { data: &'a [u8], pos: usize, base: usize, big_endian: bool, at: &'a Cell<At> },
 }
 
 impl Body<'_> {
     /// One value; `None` at the end of the data or on an unparsable token.
     fn read(&mut self, ty: Scalar) -> Option<f64> {
         match self {
-            Body::Ascii(tokens) => tokens.next()?.parse().ok(),
-            Body::Binary { data, pos, big_endian } => {
+            Body::Ascii { text, pos, line, at } => {
+                let rest = &text.as_bytes()[*pos..];
+                let skip = rest.iter().take_while(|b| b.is_ascii_whitespace()).count();
+                if skip == rest.len() {
+                    at.set(At::End);
+                    return None;
+                }
+                *line += rest[..skip].iter().filter(|&&b| b == b'\n').count();
+                *pos += skip;
+                at.set(At::Line(*line));
+                let len = text.as_bytes()[*pos..].iter().take_while(|b| !b.is_ascii_whitespace()).count();
+                let token = &text[*pos..*pos + len];
+                *pos += len;
+                token.parse().ok()
+            }
+            Body::Binary { data, pos, base, big_endian, at } => {
+                at.set(At::Byte(*base + *pos));
                 macro_rules! num {
                     ($t:ty) => {{
                         const N: usize = std::mem::size_of::<$t>();
@@ -249,13 +288,20 @@ pub fn parse_ply_with_attributes(
     let file = Arc::new(path.to_path_buf());
     let header = parse_header(bytes, &file)?;
     let data = &bytes[header.body..];
+    let at = Cell::new(At::Byte(header.body));
+    let header_lines = 1 + bytes[..header.body].iter().filter(|&&b| b == b'\n').count();
     let mut body = match header.format {
-        Format::Ascii => Body::Ascii(
-            std::str::from_utf8(data)
-                .map_err(|_| LoadError::in_file(path, "ASCII PLY data is not text"))?
-                .split_ascii_whitespace(),
-        ),
-        f => Body::Binary { data, pos: 0, big_endian: f == Format::BinaryBe },
+        Format::Ascii => Body::Ascii {
+            text: std::str::from_utf8(data).map_err(|e| {
+                let bad = header.body + e.valid_up_to();
+                let line = header_lines + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+                LoadError::in_file(path, format!("ASCII PLY data is not text: line {line} (byte {bad}) is not UTF-8"))
+            })?,
+            pos: 0,
+            line: header_lines,
+            at: &at,
+        },
+        f => Body::Binary { data, pos: 0, base: header.body, big_endian: f == Format::BinaryBe, at: &at },
     };
     let vertex_count = match header.elements.iter().find(|e| e.name == "vertex") {
         Some(el) => el.count,
@@ -283,7 +329,7 @@ pub fn parse_ply_with_attributes(
         let truncated = |i: usize| {
             LoadError::in_file(
                 path,
-                format!("{} {i} of {}: unexpected end of data or invalid number", el.name, el.count),
+                format!("{} {i} of {} at {}: unexpected end of data or invalid number", el.name, el.count, at.get()),
             )
         };
         match el.name.as_str() {
@@ -740,8 +786,14 @@ mod tests {
         check(b"ply\nformat ascii 1.0\nbogus line\nend_header\n", &["bogus line"]);
         check(b"ply\nformat ascii 1.0\nelement face 0\nend_header\n", &["no vertex element"]);
         let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
-        check(format!("{head}end_header\n0 0 0\n1 0\n").as_bytes(), &["vertex 1 of 3"]);
-        check(format!("{head}end_header\n0 0 0\n1 0 0\n0 1 zero\n").as_bytes(), &["vertex 2 of 3"]);
+        // ASCII data: the line of the value (header lines counted; line 9 is the first after end_header).
+        check(format!("{head}end_header\n0 0 0\n1 0\n").as_bytes(), &["vertex 1 of 3 at the end of the data"]);
+        check(format!("{head}end_header\n0 0 0\n1 0 0\n0 1 zero\n").as_bytes(), &["vertex 2 of 3 at line 10"]);
+        check(format!("{head}end_header\n0 0 0\n\n\n1 0 0\n0 1 zero\n").as_bytes(), &["vertex 2 of 3 at line 12"]);
+        check(
+            &[format!("{head}end_header\n0 0 0\n1 ").as_bytes(), b"\xff 0\n"].concat(),
+            &["line 9 (byte 108) is not UTF-8"],
+        );
         let faces = "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
         check(format!("{head}{faces}3 0 1 3\n").as_bytes(), &["face 0", "vertex 3"]);
         check(format!("{head}{faces}3 0 1 -1\n").as_bytes(), &["face 0", "vertex -1"]);
@@ -755,7 +807,7 @@ mod tests {
         // Truncated binary data.
         let mut b = binary(false);
         b.truncate(b.len() - 3);
-        check(&b, &["face 1 of 2"]);
+        check(&b, &["face 1 of 2 at byte"]);
     }
 
     /// Mesh attributes as Mitsuba 3.9.1 groups and converts them; expected

@@ -113,7 +113,8 @@ pub fn sampled_to_srgb(pairs: &[(f64, f64)], usage: ColorUse) -> [f64; 3] {
 /// `Properties::Spectrum(path)`). Wavelengths must increase, and there must
 /// be at least two.
 pub fn read_spd(path: &Path) -> Result<Vec<(f64, f64)>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read spectrum file: {e}"))?;
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read spectrum file: {e}"))?;
+    let text = crate::error::utf8_text(bytes).map_err(|e| format!("spectrum file is {e}"))?;
     let mut pairs = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let line = line.trim();

@@ -566,3 +566,15 @@ fn non_finite_numbers_are_errors_naming_file_and_line() {
     // Finite spellings still parse.
     parse(&scene(r#"<shape type="sphere"><float name="radius" value=" 1e-3 "/></shape>"#)).unwrap();
 }
+
+/// A scene file that is not UTF-8 (binary, or saved as Latin-1) is refused
+/// at the position of its first bad byte.
+#[test]
+fn non_utf8_scene_names_the_first_bad_byte() {
+    let dir = temp_dir("latin1");
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, b"<scene version=\"3.0.0\">\n<!-- caf\xe9 -->\n</scene>\n").unwrap();
+    let e = parse_file(&path, &[]).unwrap_err().to_string();
+    assert!(e.contains("scene.xml") && e.contains("line 2, column 9 (byte 32)"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -48,11 +48,11 @@ pub fn parse_str(text: &str, path: &Path, defines: &[(String, String)]) -> Resul
 }
 
 fn read_text(path: &Path) -> std::result::Result<String, String> {
-    std::fs::read_to_string(path).map_err(|e| match e.kind() {
+    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
         std::io::ErrorKind::NotFound => "file not found".to_string(),
-        std::io::ErrorKind::InvalidData => "file is not valid UTF-8 text".to_string(),
         _ => format!("cannot read file: {e}"),
-    })
+    })?;
+    crate::error::utf8_text(bytes).map_err(|e| format!("file is {e}"))
 }
 
 /// Removes repeated directories, keeping the first of each.
