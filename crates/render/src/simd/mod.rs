@@ -1,6 +1,8 @@
 //! f32 lanes for code written once and run one value at a time or eight or
 //! sixteen at once: the [`Float`] trait with its [`Mask`] and [`Int`] lane
-//! types, and its instances.
+//! types, its instances, and elementary functions generic over it
+//! ([`sin`], [`cos`], [`sin_cos`], [`exp`], [`ln`], [`erf`], [`atan`],
+//! [`atan2`], [`acos`]).
 //!
 //! Instances:
 //!
@@ -30,6 +32,7 @@
 //! and their comparisons give the same [`Mask`] type as the float
 //! comparisons, so a test on a quadrant number can select between floats.
 
+mod funcs;
 mod scalar;
 
 // Documented on x86-64 even where the documentation build lacks the
@@ -46,6 +49,7 @@ pub(crate) mod check;
 pub use avx2::{F32x8, I32x8, M32x8};
 #[cfg(all(target_arch = "x86_64", any(doc, target_feature = "avx512f")))]
 pub use avx512::{F32x16, I32x16, M32x16};
+pub use funcs::{acos, atan, atan2, cos, erf, exp, ln, sin, sin_cos, SIN_COS_MAX};
 
 use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
