@@ -1,7 +1,7 @@
 //! Penumbra's rendering core. No file formats live here: the `penumbra-scene`
 //! crate builds a [`render::RenderJob`] and this crate renders it.
 //!
-//! Layers, bottom up: `math` → `sampling` → `geometry` → `accel` →
+//! Layers, bottom up: `math` / `simd` → `sampling` → `geometry` → `accel` →
 //! `texture` → `bsdf` → `material` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
 
 #![warn(missing_docs)]
@@ -18,6 +18,7 @@ pub mod math;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod simd;
 #[cfg(test)]
 pub mod testing;
 pub mod texture;
