@@ -117,9 +117,31 @@ fn encode(out: &mut BufWriter<File>, format: Format, img: &RgbImage) -> io::Resu
     }
 }
 
+/// The most pixels an image read may hold: 2²⁸ (16384 x 16384, 3 GiB as
+/// f32 RGB). A header claiming more is refused before anything is
+/// allocated: a damaged or hostile file must not exhaust memory.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// Refuses an image whose header claims more than [`MAX_PIXELS`].
+fn check_size(path: &Path, width: u64, height: u64) -> Result<(), String> {
+    if width.saturating_mul(height) > MAX_PIXELS {
+        return Err(format!(
+            "cannot read '{}': its header claims {width} x {height} pixels, more than the {MAX_PIXELS} \
+             (16384 x 16384) Penumbra reads; the file is damaged, or must be downscaled",
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
 /// Reads a linear RGB EXR (references, tests).
 pub fn read_exr(path: &Path) -> Result<RgbImage, String> {
     use exr::prelude::*;
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+    for header in &meta.headers {
+        check_size(path, header.layer_size.width() as u64, header.layer_size.height() as u64)?;
+    }
     let img = read_first_rgba_layer_from_file(
         path,
         |res, _| (res.width(), res.height(), vec![[0f32; 3]; res.width() * res.height()]),
@@ -171,7 +193,12 @@ pub fn read_image_with(path: &Path, raw: bool) -> Result<RgbImage, String> {
         let eol = bytes.iter().position(|&b| b == b'\n').unwrap_or(bytes.len());
         bytes.splice(0..eol, b"#?RADIANCE".iter().copied());
     }
-    // Environment maps can exceed the decoder's default 512 MiB allocation limit.
+    let (w, h) = image::ImageReader::with_format(std::io::Cursor::new(&bytes[..]), format)
+        .into_dimensions()
+        .map_err(|e| fail(&e))?;
+    check_size(path, w as u64, h as u64)?;
+    // Environment maps can exceed the decoder's default 512 MiB allocation
+    // limit; the size was checked above instead.
     let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     reader.no_limits();
     let img = reader.decode().map_err(|e| fail(&e))?.to_rgb32f();
@@ -202,6 +229,39 @@ mod tests {
         assert_eq!(pfm.len(), "PF\n3 2\n-1.0\n".len() + 6 * 12);
         assert!(write_image(&dir.join("a.jpg"), &img).is_err());
         assert!(fs::read_dir(&dir).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().contains(".tmp")));
+        fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A PNG whose header claims 100000 x 100000 pixels (valid chunks, no
+    /// pixel data) is refused by its size, before anything is allocated.
+    #[test]
+    fn huge_image_headers_are_refused() {
+        let dir = std::env::temp_dir().join(format!("penumbra-huge-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let mut ihdr = b"IHDR".to_vec();
+        ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+        ihdr.extend_from_slice(&100_000u32.to_be_bytes());
+        ihdr.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB
+        let mut crc = flate2::Crc::new();
+        crc.update(&ihdr);
+        let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+        png.extend_from_slice(&13u32.to_be_bytes());
+        png.extend_from_slice(&ihdr);
+        png.extend_from_slice(&crc.sum().to_be_bytes());
+        for name in [b"IDAT", b"IEND"] {
+            let mut crc = flate2::Crc::new();
+            crc.update(name);
+            png.extend_from_slice(&0u32.to_be_bytes());
+            png.extend_from_slice(name);
+            png.extend_from_slice(&crc.sum().to_be_bytes());
+        }
+        let path = dir.join("huge.png");
+        fs::write(&path, &png).unwrap();
+        let e = read_image(&path).unwrap_err();
+        assert!(e.contains("huge.png") && e.contains("100000 x 100000"), "{e}");
+        // The limit itself.
+        assert!(check_size(&path, 16384, 16384).is_ok());
+        assert!(check_size(&path, 16385, 16384).unwrap_err().contains("16385 x 16384"));
         fs::remove_dir_all(&dir).ok();
     }
 
