@@ -7,8 +7,8 @@ use penumbra_render::film::Film;
 use penumbra_scene::{load_scene, Overrides};
 use std::path::PathBuf;
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("penumbra-stress-{}", std::process::id()));
+fn dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("penumbra-stress-{test}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     // A zero-area triangle (collinear), one with three coincident vertices, and a good one.
     std::fs::write(
@@ -55,7 +55,7 @@ const DEGENERATE: &str = r#"
 
 #[test]
 fn degenerate_and_grazing_scenes_have_no_non_finite_samples() {
-    let d = dir();
+    let d = dir("render");
     // Cameras above the ground plane, barely above it, and exactly in it.
     for (i, y) in [1.0f32, 1e-3, 0.0].into_iter().enumerate() {
         let path = d.join(format!("stress{i}.xml"));
@@ -72,7 +72,7 @@ fn degenerate_and_grazing_scenes_have_no_non_finite_samples() {
 
 #[test]
 fn degenerate_emitters_are_refused_with_file_and_line() {
-    let d = dir();
+    let d = dir("emitters");
     for (i, shape) in [
         r#"<shape type="sphere"><float name="radius" value="0"/><emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>"#,
         r#"<shape type="rectangle"><transform name="to_world"><scale x="0" y="1" z="1"/></transform><emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>"#,
