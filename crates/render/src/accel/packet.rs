@@ -1,0 +1,507 @@
+//! Packet traversal: up to [`MAX_PACKET`] rays walk the 8-wide BVH of
+//! [`super::bvh`] together, one node load shared by all of them.
+//!
+//! At an inner node each child box is tested against every ray of the
+//! packet at once, the rays in the SIMD lanes of a [`Float`] (`F32x8`,
+//! `F32x16`, or `f32` one ray at a time). Each lane performs exactly the
+//! single-ray box test's operations ([`Accel::intersect`]: the dequantised
+//! plane, `(plane - o) * inv_d`, `maxps`/`minps` in the same order, the exit
+//! distance widened by gamma(3)), so a ray enters a box here exactly where
+//! it would enter it alone with the same `t_max`. A stack entry carries the
+//! mask of the rays that entered the child and their entry distances;
+//! popped, it keeps the rays whose entry distance is still <= their closest
+//! hit, the single-ray rule applied per ray. Children are visited front to
+//! back by the entry distance of the lowest ray that enters them.
+//!
+//! Leaves are tested one active ray at a time with the single-ray code:
+//! [`intersect4`] for triangle blocks (lowest lane among equal distances
+//! within a block), [`Shape::intersect_analytic`] for analytic shapes, and
+//! [`Instance::intersect`] / [`Instance::occluded`] for instances, which so
+//! fall back to single rays per lane (their own BVHs are walked by the
+//! single-ray kernel).
+//!
+//! **Agreement with the single-ray kernel.** Both traversals are
+//! conservative (a box whose primitives a ray hits before its `t_max` is
+//! entered) and accept a hit only when it is strictly nearer than the best
+//! so far, so the closest-hit distance `t` of every ray is bitwise the
+//! single-ray one, and so is `occluded`. The order in which leaves are
+//! visited differs (it follows the packet, not the ray), so where two
+//! primitives are hit at exactly the same `t` (a ray through an edge or
+//! vertex shared by two triangles, which the watertight test hits on both
+//! sides), the primitive reported, and with it `uv`, `shape` and `index`,
+//! may be the other one of the tied pair: each kernel keeps the first
+//! visited. Apart from such exact ties, the hit (shape, index, instance,
+//! uv bits) is the single-ray one.
+
+use super::bvh::{dequantize, Accel, Hit, Primitive, OTHER, STACK};
+use super::instance::Instance;
+use super::tri4::{intersect4, RayLanes};
+use crate::geometry::triangle::RayShear;
+use crate::geometry::{Ray, Shape};
+use crate::simd::{Float, Mask};
+use glam::{Vec2, Vec4};
+
+/// Most rays in one packet (the widest [`Float`], `F32x16`).
+pub const MAX_PACKET: usize = 16;
+
+/// A stacked subtree with the rays that enter it and where each enters it.
+#[derive(Clone, Copy)]
+struct Entry<F> {
+    child: u32,
+    info: u32,
+    /// Bit `r` set for ray `r` entering the subtree.
+    mask: u32,
+    /// Entry distance per ray (meaningful where `mask` is set).
+    t0: F,
+    /// Sort key: the entry distance of the lowest ray of `mask`.
+    key: f32,
+}
+
+/// Per-ray state of a packet in lanes.
+struct Lanes<F: Float> {
+    o: [F; 3],
+    inv_d: [F; 3],
+    /// Lanes whose direction component is negative, per axis (the single-ray
+    /// kernel's `neg`: near and far planes swap there).
+    neg: [F::Mask; 3],
+}
+
+impl<F: Float> Lanes<F> {
+    fn new(rays: &[Ray]) -> Lanes<F> {
+        let mut o = [F::Array::default(); 3];
+        let mut id = [F::Array::default(); 3];
+        for l in 0..F::WIDTH {
+            // Padding lanes repeat the first ray; they are never active.
+            let r = rays.get(l).unwrap_or(&rays[0]);
+            let inv = r.d.recip();
+            for a in 0..3 {
+                o[a].as_mut()[l] = r.o[a];
+                id[a].as_mut()[l] = inv[a];
+            }
+        }
+        let inv_d = id.map(F::from_array);
+        let zero = F::splat(0.0);
+        Lanes { o: o.map(F::from_array), inv_d, neg: inv_d.map(|v| v.cmp_lt(zero)) }
+    }
+}
+
+/// The single-ray triangle-test constants of one ray.
+struct Single {
+    lanes: RayLanes,
+    kz: usize,
+}
+
+#[inline(always)]
+fn tri_hit(s: &Single, t_max: f32, tri: &super::tri4::Tri4) -> (u32, Vec4, Vec4, Vec4) {
+    match s.kz {
+        0 => intersect4::<0>(&s.lanes, t_max, tri),
+        1 => intersect4::<1>(&s.lanes, t_max, tri),
+        _ => intersect4::<2>(&s.lanes, t_max, tri),
+    }
+}
+
+impl Accel {
+    /// Closest hits of `rays` (at most `F::WIDTH`, at most [`MAX_PACKET`])
+    /// traversed as one packet, into `out[..rays.len()]`: the same as
+    /// [`Accel::intersect`] per ray, up to exact ties (see the module notes).
+    pub fn intersect_packet<F: Float>(
+        &self,
+        rays: &[Ray],
+        shapes: &[Shape],
+        instances: &[Instance],
+        out: &mut [Option<Hit>],
+    ) {
+        let mut best = [None; MAX_PACKET];
+        self.packet::<F, false>(rays, shapes, instances, &mut best);
+        out[..rays.len()].copy_from_slice(&best[..rays.len()]);
+    }
+
+    /// Bit `r` set where `rays[r]` is blocked before its `t_max` (at most
+    /// `F::WIDTH` rays, at most [`MAX_PACKET`]): [`Accel::occluded`] per ray.
+    pub fn occluded_packet<F: Float>(&self, rays: &[Ray], shapes: &[Shape], instances: &[Instance]) -> u32 {
+        let mut best = [None; MAX_PACKET];
+        self.packet::<F, true>(rays, shapes, instances, &mut best)
+    }
+
+    /// Walks the tree with a packet; fills `best` (closest hits) and returns
+    /// the mask of rays hit (for `ANY`, the rays blocked).
+    #[inline(always)]
+    fn packet<F: Float, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        shapes: &[Shape],
+        instances: &[Instance],
+        best: &mut [Option<Hit>; MAX_PACKET],
+    ) -> u32 {
+        assert!(rays.len() <= F::WIDTH && rays.len() <= MAX_PACKET);
+        let Some((root_child, root_info)) = self.root else { return 0 };
+        if rays.is_empty() {
+            return 0;
+        }
+        let all = (1u32 << rays.len()) - 1;
+        let lanes = Lanes::<F>::new(rays);
+        let singles: [Single; MAX_PACKET] = std::array::from_fn(|l| {
+            let r = rays.get(l).unwrap_or(&rays[0]);
+            let shear = RayShear::new(r.d);
+            Single { lanes: RayLanes::new(r, &shear), kz: shear.kz }
+        });
+        let mut t_max = F::Array::default();
+        for (l, r) in rays.iter().enumerate() {
+            t_max.as_mut()[l] = r.t_max;
+        }
+        let widen = F::splat(1.0 + 2.0 * 3.0 * f32::EPSILON);
+        let zero = F::splat(0.0);
+        // Rays still searching (for `ANY`: not yet blocked).
+        let mut alive = all;
+        let mut hit = 0u32;
+        let mut stack: Vec<Entry<F>> = Vec::with_capacity(STACK);
+        let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
+        loop {
+            if cur.info == 0 {
+                let node = &self.nodes[cur.child as usize];
+                let tm = F::from_array(t_max);
+                let base = stack.len();
+                let mut single: Option<Entry<F>> = None;
+                let mut used = node.used as u32;
+                while used != 0 {
+                    let l = used.trailing_zeros() as usize;
+                    used &= used - 1;
+                    let slab = |row: usize, a: usize| {
+                        let p = F::splat(dequantize(node.q[row][l], node.scale[a], node.origin[a]));
+                        (p - lanes.o[a]) * lanes.inv_d[a]
+                    };
+                    let (lo, hi) = ([slab(0, 0), slab(2, 1), slab(4, 2)], [slab(1, 0), slab(3, 1), slab(5, 2)]);
+                    let near: [F; 3] = std::array::from_fn(|a| F::select(lanes.neg[a], hi[a], lo[a]));
+                    let far: [F; 3] = std::array::from_fn(|a| F::select(lanes.neg[a], lo[a], hi[a]));
+                    let t0 = near[0].max(near[1]);
+                    let t0 = t0.max(near[2].max(zero));
+                    let t1 = far[0].min(far[1]);
+                    let t1 = t1.min(far[2].min(tm));
+                    let mask = t0.cmp_le(t1 * widen).bitmask() & cur.mask;
+                    if mask == 0 {
+                        continue;
+                    }
+                    let key = t0.to_array().as_ref()[mask.trailing_zeros() as usize];
+                    let e = Entry { child: node.child[l], info: node.info[l] as u32, mask, t0, key };
+                    if single.is_none() && stack.len() == base {
+                        single = Some(e);
+                        continue;
+                    }
+                    if let Some(s) = single.take() {
+                        push_sorted::<F, ANY>(&mut stack, base, s);
+                    }
+                    push_sorted::<F, ANY>(&mut stack, base, e);
+                }
+                if let Some(s) = single {
+                    cur = s;
+                    continue;
+                }
+                if stack.len() > base {
+                    cur = stack.pop().unwrap();
+                    continue;
+                }
+            } else if cur.info & OTHER == 0 {
+                for blk in cur.child..cur.child + cur.info {
+                    let tri = &self.tris[blk as usize];
+                    let mut m = cur.mask & alive;
+                    while m != 0 {
+                        let r = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let tr = t_max.as_ref()[r];
+                        let (mut mask, t, b1, b2) = tri_hit(&singles[r], tr, tri);
+                        if mask == 0 {
+                            continue;
+                        }
+                        hit |= 1 << r;
+                        if ANY {
+                            alive &= !(1 << r);
+                            continue;
+                        }
+                        let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
+                        let mut k = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        while mask != 0 {
+                            let j = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            if t[j] < t[k] {
+                                k = j;
+                            }
+                        }
+                        let [shape, index] = self.tri_ids[blk as usize][k];
+                        t_max.as_mut()[r] = t[k];
+                        best[r] = Some(Hit {
+                            t: t[k],
+                            uv: Vec2::new(b1[k], b2[k]),
+                            shape,
+                            index,
+                            instance: Hit::NOT_INSTANCED,
+                        });
+                    }
+                }
+            } else {
+                let first = cur.child as usize;
+                for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
+                    let mut m = cur.mask & alive;
+                    while m != 0 {
+                        let r = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
+                        let found = match *prim {
+                            Primitive::Shape(shape) => {
+                                if ANY {
+                                    shapes[shape as usize].intersect_analytic(&ray).map(|(t, _)| Hit {
+                                        t,
+                                        uv: Vec2::ZERO,
+                                        shape,
+                                        index: 0,
+                                        instance: Hit::NOT_INSTANCED,
+                                    })
+                                } else {
+                                    shapes[shape as usize].intersect_analytic(&ray).map(|(t, uv)| Hit {
+                                        t,
+                                        uv,
+                                        shape,
+                                        index: 0,
+                                        instance: Hit::NOT_INSTANCED,
+                                    })
+                                }
+                            }
+                            Primitive::Instance(i) => {
+                                let inst = &instances[i as usize];
+                                if ANY {
+                                    inst.occluded(&ray, shapes).then_some(Hit {
+                                        t: ray.t_max,
+                                        uv: Vec2::ZERO,
+                                        shape: 0,
+                                        index: 0,
+                                        instance: i,
+                                    })
+                                } else {
+                                    inst.intersect(&ray, shapes).map(|h| Hit { instance: i, ..h })
+                                }
+                            }
+                        };
+                        if let Some(h) = found {
+                            hit |= 1 << r;
+                            if ANY {
+                                alive &= !(1 << r);
+                            } else {
+                                t_max.as_mut()[r] = h.t;
+                                best[r] = Some(h);
+                            }
+                        }
+                    }
+                }
+            }
+            if ANY && alive == 0 {
+                return hit;
+            }
+            // Pop the next subtree some ray still enters before its closest hit.
+            loop {
+                let Some(mut e) = stack.pop() else { return hit };
+                e.mask &= alive;
+                if !ANY {
+                    e.mask &= e.t0.cmp_le(F::from_array(t_max)).bitmask();
+                }
+                if e.mask != 0 {
+                    cur = e;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Pushes `e` among the entries `stack[base..]`, kept sorted far to near
+/// (the nearest on top); any-hit traversal keeps them unsorted, as the
+/// single-ray kernel does.
+#[inline(always)]
+fn push_sorted<F: Copy, const ANY: bool>(stack: &mut Vec<Entry<F>>, base: usize, e: Entry<F>) {
+    if stack.len() == STACK {
+        debug_assert!(false, "BVH packet traversal stack overflow");
+        return;
+    }
+    let mut k = stack.len();
+    stack.push(e);
+    while !ANY && k > base && stack[k - 1].key < e.key {
+        stack[k] = stack[k - 1];
+        k -= 1;
+    }
+    stack[k] = e;
+}
+
+/// Whether a packet's closest hit `packet` agrees with the single-ray
+/// kernel's `single` for `ray` under the tie rule of the module notes:
+/// the same hit (t bits, shape, index, instance, uv bits), or, where the
+/// primitive differs, the same t bits with the packet's primitive, tested
+/// alone against `ray`, hit at exactly that t with exactly that uv.
+pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Option<Hit>, single: Option<Hit>) -> bool {
+    let key = |h: &Hit| (h.t.to_bits(), h.shape, h.index, h.instance, h.uv.x.to_bits(), h.uv.y.to_bits());
+    match (packet, single) {
+        (None, None) => true,
+        (Some(p), Some(s)) if key(&p) == key(&s) => true,
+        (Some(p), Some(s)) if p.t.to_bits() == s.t.to_bits() => {
+            let alone = if p.instance != Hit::NOT_INSTANCED {
+                instances[p.instance as usize].intersect(ray, shapes).map(|h| (h.t, h.uv))
+            } else {
+                match &shapes[p.shape as usize] {
+                    Shape::Mesh(m) => crate::geometry::triangle::intersect_triangle(
+                        ray,
+                        &RayShear::new(ray.d),
+                        &m.vertices(p.index as usize),
+                    )
+                    .map(|(t, b1, b2)| (t, Vec2::new(b1, b2))),
+                    shape => shape.intersect_analytic(ray),
+                }
+            };
+            // An instance reports its own closest hit, which ties too.
+            alone.is_some_and(|(t, uv)| {
+                t.to_bits() == p.t.to_bits()
+                    && (p.instance != Hit::NOT_INSTANCED
+                        || (uv.x.to_bits(), uv.y.to_bits()) == (p.uv.x.to_bits(), p.uv.y.to_bits()))
+            })
+        }
+        _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Mesh, TriangleMesh};
+    use crate::sampling::rng::{hash_words, to_unit_f32};
+    use glam::Vec3;
+
+    fn rnd(i: u64, k: u64) -> f32 {
+        to_unit_f32(hash_words(&[i, 77, k]))
+    }
+
+    /// A triangle soup, a grid of quads (shared edges and vertices, hit
+    /// exactly by axis-aligned rays through them), and spheres.
+    fn scene() -> Vec<Shape> {
+        let mut m = TriangleMesh::default();
+        for i in 0..3000u64 {
+            let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 10.0;
+            for k in 0..3 {
+                m.positions.push(c + Vec3::new(rnd(i, 3 + 3 * k), rnd(i, 4 + 3 * k), rnd(i, 5 + 3 * k)) - 0.5);
+            }
+            let b = 3 * i as u32;
+            m.indices.push([b, b + 1, b + 2]);
+        }
+        let mut g = TriangleMesh::default();
+        let n = 10u32;
+        for y in 0..=n {
+            for x in 0..=n {
+                g.positions.push(Vec3::new(x as f32, y as f32, -2.0));
+            }
+        }
+        for y in 0..n {
+            for x in 0..n {
+                let v = y * (n + 1) + x;
+                g.indices.push([v, v + 1, v + n + 2]);
+                g.indices.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        vec![
+            Shape::Mesh(Mesh::new(m, false)),
+            Shape::Mesh(Mesh::new(g, false)),
+            Shape::sphere(Vec3::splat(5.0), 1.0, false),
+            Shape::sphere(Vec3::new(2.0, 7.0, 3.0), 0.7, false),
+        ]
+    }
+
+    /// Coherent bundles (a pinhole's rays over a small patch, some aimed
+    /// exactly at the grid's shared vertices), incoherent rays, and short
+    /// shadow-like segments.
+    fn rays() -> Vec<Ray> {
+        let mut v = Vec::new();
+        for i in 0..6000u64 {
+            let kind = (i / 16) % 4;
+            let b = i / 16;
+            let o = match kind {
+                0 | 1 => Vec3::new(5.0, 5.0, 20.0) + Vec3::new(rnd(b, 10), rnd(b, 11), 0.0),
+                _ => Vec3::new(rnd(i, 10), rnd(i, 11), rnd(i, 12)) * 12.0 - 1.0,
+            };
+            let (d, t_max) = match kind {
+                0 => (
+                    (Vec3::new(rnd(b, 13) * 10.0, rnd(b, 14) * 10.0, 0.0) - o
+                        + Vec3::new(rnd(i, 15), rnd(i, 16), 0.0) * 0.5)
+                        .normalize(),
+                    f32::INFINITY,
+                ),
+                // Straight down through the grid's vertices.
+                1 => (Vec3::NEG_Z, f32::INFINITY),
+                2 => ((Vec3::new(rnd(i, 13), rnd(i, 14), rnd(i, 15)) - 0.5).normalize(), f32::INFINITY),
+                _ => ((Vec3::new(rnd(i, 13), rnd(i, 14), rnd(i, 15)) - 0.5).normalize(), 3.0 * rnd(i, 16)),
+            };
+            let o = if kind == 1 { Vec3::new((i % 11) as f32, ((i / 11) % 11) as f32, 1.0 + rnd(i, 17)) } else { o };
+            v.push(Ray::new(o, d, t_max));
+        }
+        v
+    }
+
+    fn check<F: Float>() {
+        let shapes = scene();
+        let accel = Accel::build_shapes(&shapes);
+        let rays = rays();
+        let (mut hits, mut ties) = (0, 0);
+        for n in [F::WIDTH, 3.min(F::WIDTH)] {
+            for (c, chunk) in rays.chunks(n).enumerate() {
+                let mut out = [None; MAX_PACKET];
+                accel.intersect_packet::<F>(chunk, &shapes, &[], &mut out);
+                let blocked = accel.occluded_packet::<F>(chunk, &shapes, &[]);
+                for (r, ray) in chunk.iter().enumerate() {
+                    let single = accel.intersect(ray, &shapes, &[]);
+                    assert!(
+                        agrees(&shapes, &[], ray, out[r], single),
+                        "{} chunk {c} ray {r}: {:?} vs {:?}",
+                        F::NAME,
+                        out[r],
+                        single
+                    );
+                    hits += single.is_some() as usize;
+                    ties += (out[r].map(|h| (h.shape, h.index)) != single.map(|h| (h.shape, h.index))) as usize;
+                    assert_eq!(
+                        blocked & (1 << r) != 0,
+                        accel.occluded(ray, &shapes, &[]),
+                        "{} chunk {c} ray {r}",
+                        F::NAME
+                    );
+                }
+                assert_eq!(blocked >> chunk.len(), 0);
+            }
+        }
+        assert!(hits > 3000, "{hits}");
+        eprintln!("{}: {hits} hits, {ties} resolved by the tie rule", F::NAME);
+    }
+
+    #[test]
+    fn packets_match_single_rays_scalar() {
+        check::<f32>();
+    }
+
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+    #[test]
+    fn packets_match_single_rays_x8() {
+        check::<crate::simd::F32x8>();
+    }
+
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+    #[test]
+    fn packets_match_single_rays_x16() {
+        check::<crate::simd::F32x16>();
+    }
+
+    #[test]
+    fn empty_tree_and_empty_packet() {
+        let accel = Accel::build_shapes(&[]);
+        let ray = Ray::new(Vec3::ZERO, Vec3::X, f32::INFINITY);
+        let mut out = [Some(Hit { t: 1.0, uv: Vec2::ZERO, shape: 0, index: 0, instance: 0 })];
+        accel.intersect_packet::<f32>(&[ray], &[], &[], &mut out);
+        assert!(out[0].is_none());
+        assert_eq!(accel.occluded_packet::<f32>(&[ray], &[], &[]), 0);
+        let shapes = scene();
+        let accel = Accel::build_shapes(&shapes);
+        assert_eq!(accel.occluded_packet::<f32>(&[], &shapes, &[]), 0);
+    }
+}
