@@ -40,6 +40,7 @@ use crate::geometry::triangle::RayShear;
 use crate::geometry::{Ray, Shape};
 use crate::simd::{Float, Mask};
 use glam::{Vec2, Vec4};
+use std::mem::MaybeUninit;
 
 /// Most rays in one packet (the widest [`Float`], `F32x16`).
 pub const MAX_PACKET: usize = 16;
@@ -154,7 +155,7 @@ impl Accel {
         // Rays still searching (for `ANY`: not yet blocked).
         let mut alive = all;
         let mut hit = 0u32;
-        let mut stack: Vec<Entry<F>> = Vec::with_capacity(STACK);
+        let mut stack = Stack::<F>::new();
         let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
         loop {
             if cur.info == 0 {
@@ -188,16 +189,16 @@ impl Accel {
                         continue;
                     }
                     if let Some(s) = single.take() {
-                        push_sorted::<F, ANY>(&mut stack, base, s);
+                        stack.push_sorted::<ANY>(base, s);
                     }
-                    push_sorted::<F, ANY>(&mut stack, base, e);
+                    stack.push_sorted::<ANY>(base, e);
                 }
                 if let Some(s) = single {
                     cur = s;
                     continue;
                 }
                 if stack.len() > base {
-                    cur = stack.pop().unwrap();
+                    cur = stack.pop().expect("entries were pushed");
                     continue;
                 }
             } else if cur.info & OTHER == 0 {
@@ -312,22 +313,53 @@ impl Accel {
     }
 }
 
-/// Pushes `e` among the entries `stack[base..]`, kept sorted far to near
-/// (the nearest on top); any-hit traversal keeps them unsorted, as the
-/// single-ray kernel does.
-#[inline(always)]
-fn push_sorted<F: Copy, const ANY: bool>(stack: &mut Vec<Entry<F>>, base: usize, e: Entry<F>) {
-    if stack.len() == STACK {
-        debug_assert!(false, "BVH packet traversal stack overflow");
-        return;
+/// The traversal stack, left uninitialised: entries are written before
+/// they are read (a heap allocation per packet would cost as much as
+/// traversing it in small scenes).
+struct Stack<F> {
+    entries: [MaybeUninit<Entry<F>>; STACK],
+    len: usize,
+}
+
+impl<F: Copy> Stack<F> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack { entries: [const { MaybeUninit::uninit() }; STACK], len: 0 }
     }
-    let mut k = stack.len();
-    stack.push(e);
-    while !ANY && k > base && stack[k - 1].key < e.key {
-        stack[k] = stack[k - 1];
-        k -= 1;
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.len
     }
-    stack[k] = e;
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry<F>> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: entries[..len] were written by `push_sorted`.
+        Some(unsafe { self.entries[self.len].assume_init() })
+    }
+
+    /// Pushes `e` among the entries `base..`, kept sorted far to near (the
+    /// nearest on top); any-hit traversal keeps them unsorted, as the
+    /// single-ray kernel does. A full stack drops `e`, as there.
+    #[inline(always)]
+    fn push_sorted<const ANY: bool>(&mut self, base: usize, e: Entry<F>) {
+        if self.len == STACK {
+            debug_assert!(false, "BVH packet traversal stack overflow");
+            return;
+        }
+        let mut k = self.len;
+        // SAFETY: entries[base..len] were written before.
+        while !ANY && k > base && unsafe { self.entries[k - 1].assume_init_ref() }.key < e.key {
+            self.entries[k] = self.entries[k - 1];
+            k -= 1;
+        }
+        self.entries[k].write(e);
+        self.len += 1;
+    }
 }
 
 /// Whether a packet's closest hit `packet` agrees with the single-ray
