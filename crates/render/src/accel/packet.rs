@@ -13,9 +13,14 @@
 //! hit, the single-ray rule applied per ray. Children are visited front to
 //! back by the entry distance of the lowest ray that enters them.
 //!
-//! Leaves are tested one active ray at a time with the single-ray code:
-//! [`intersect4`] for triangle blocks (lowest lane among equal distances
-//! within a block), [`Shape::intersect_analytic`] for analytic shapes, and
+//! Triangle blocks reached by several active rays are tested a triangle
+//! at a time against all rays in lanes (`RayTri`: the lane form of the
+//! watertight test, bitwise the scalar one per lane, each ray's dominant
+//! axis picked per lane); reached by one ray, with the single-ray
+//! [`intersect4`]. Either way a ray's hit in a block is the nearest, the
+//! lowest lane among equal distances, as for a single ray. Other leaves
+//! are tested one active ray at a time with the single-ray code:
+//! [`Shape::intersect_analytic`] for analytic shapes, and
 //! [`Instance::intersect`] / [`Instance::occluded`] for instances, which so
 //! fall back to single rays per lane (their own BVHs are walked by the
 //! single-ray kernel).
@@ -41,6 +46,10 @@ use crate::geometry::{Ray, Shape};
 use crate::simd::{Float, Mask};
 use glam::{Vec2, Vec4};
 use std::mem::MaybeUninit;
+
+/// Active rays from which a triangle block is tested a triangle against
+/// all rays at once rather than a ray against its four triangles.
+const LANE_TRIANGLES: u32 = 2;
 
 /// Most rays in one packet (the widest [`Float`], `F32x16`).
 pub const MAX_PACKET: usize = 16;
@@ -101,6 +110,96 @@ fn tri_hit(s: &Single, t_max: f32, tri: &super::tri4::Tri4) -> (u32, Vec4, Vec4,
     }
 }
 
+/// One triangle against every ray of a packet: the ray-lane form of
+/// [`intersect4`] (the watertight test of Woop et al. 2013), each lane
+/// performing the scalar test's operations in its order, with the ray's own
+/// dominant axis chosen per lane by selects, so each lane's answer is
+/// bitwise the single-ray one.
+struct RayTri<F: Float> {
+    /// The origin permuted to (kx, ky, kz) per lane.
+    o: [F; 3],
+    /// Shear constants (sx, sy, sz) per lane.
+    s: [F; 3],
+    /// Per permuted axis: lanes where it is x, lanes where it is y (else z).
+    axis: [[F::Mask; 2]; 3],
+}
+
+impl<F: Float> RayTri<F> {
+    fn new(rays: &[Ray]) -> RayTri<F> {
+        let (mut o, mut s) = ([F::Array::default(); 3], [F::Array::default(); 3]);
+        let mut ax = [F::Array::default(); 3];
+        for l in 0..F::WIDTH {
+            let r = rays.get(l).unwrap_or(&rays[0]);
+            let sh = RayShear::new(r.d);
+            let kx = if sh.kz == 2 { 0 } else { sh.kz + 1 };
+            let ky = if kx == 2 { 0 } else { kx + 1 };
+            for (a, k) in [kx, ky, sh.kz].into_iter().enumerate() {
+                o[a].as_mut()[l] = r.o[k];
+                ax[a].as_mut()[l] = k as f32;
+            }
+            (s[0].as_mut()[l], s[1].as_mut()[l], s[2].as_mut()[l]) = (sh.sx, sh.sy, sh.sz);
+        }
+        let axis = ax.map(|a| {
+            let a = F::from_array(a);
+            [a.cmp_eq(F::splat(0.0)), a.cmp_eq(F::splat(1.0))]
+        });
+        RayTri { o: o.map(F::from_array), s: s.map(F::from_array), axis }
+    }
+
+    /// Hits of triangle `v` (`v[vertex][coordinate]`) with 0 < t < `t_max`
+    /// per lane: the mask of lanes hit, distances and barycentrics (b1, b2).
+    #[inline(always)]
+    fn hit(&self, v: &[[f32; 3]; 3], t_max: F) -> (u32, F, F, F) {
+        let zero = F::splat(0.0);
+        let coord = |k: usize, a: usize| {
+            let [x, y] = self.axis[a];
+            F::select(x, F::splat(v[k][0]), F::select(y, F::splat(v[k][1]), F::splat(v[k][2]))) - self.o[a]
+        };
+        let p = |k: usize| {
+            let z = coord(k, 2);
+            (coord(k, 0) + self.s[0] * z, coord(k, 1) + self.s[1] * z, z)
+        };
+        let (p0x, p0y, p0z) = p(0);
+        let (p1x, p1y, p1z) = p(1);
+        let (p2x, p2y, p2z) = p(2);
+        let mut e0 = p1x * p2y - p1y * p2x;
+        let mut e1 = p2x * p0y - p2y * p0x;
+        let mut e2 = p0x * p1y - p0y * p1x;
+        let exact = (e0.cmp_eq(zero) | e1.cmp_eq(zero) | e2.cmp_eq(zero)).bitmask();
+        if exact != 0 {
+            // Rare: an edge function is exactly zero; redo those lanes in f64.
+            let (mut a0, mut a1, mut a2) = (e0.to_array(), e1.to_array(), e2.to_array());
+            let (x0, y0, x1, y1, x2, y2) =
+                (p0x.to_array(), p0y.to_array(), p1x.to_array(), p1y.to_array(), p2x.to_array(), p2y.to_array());
+            let (x0, y0, x1, y1, x2, y2) =
+                (x0.as_ref(), y0.as_ref(), x1.as_ref(), y1.as_ref(), x2.as_ref(), y2.as_ref());
+            for l in 0..F::WIDTH {
+                if exact & (1 << l) != 0 {
+                    a0.as_mut()[l] = (x1[l] as f64 * y2[l] as f64 - y1[l] as f64 * x2[l] as f64) as f32;
+                    a1.as_mut()[l] = (x2[l] as f64 * y0[l] as f64 - y2[l] as f64 * x0[l] as f64) as f32;
+                    a2.as_mut()[l] = (x0[l] as f64 * y1[l] as f64 - y0[l] as f64 * x1[l] as f64) as f32;
+                }
+            }
+            (e0, e1, e2) = (F::from_array(a0), F::from_array(a1), F::from_array(a2));
+        }
+        let any_neg = e0.cmp_lt(zero) | e1.cmp_lt(zero) | e2.cmp_lt(zero);
+        let any_pos = e0.cmp_gt(zero) | e1.cmp_gt(zero) | e2.cmp_gt(zero);
+        let det = e0 + e1 + e2;
+        let t_scaled = (e0 * p0z + e1 * p1z + e2 * p2z) * self.s[2];
+        let tmax_det = t_max * det;
+        let neg_ok = det.cmp_lt(zero) & !(t_scaled.cmp_ge(zero) | t_scaled.cmp_lt(tmax_det));
+        let pos_ok = det.cmp_gt(zero) & !(t_scaled.cmp_le(zero) | t_scaled.cmp_gt(tmax_det));
+        let valid = !(any_neg & any_pos) & (neg_ok | pos_ok);
+        if !valid.any() {
+            return (0, zero, zero, zero);
+        }
+        let inv_det = F::splat(1.0) / det;
+        let t = t_scaled * inv_det;
+        let valid = valid & t.cmp_gt(zero) & t.cmp_lt(t_max);
+        (valid.bitmask(), t, e1 * inv_det, e2 * inv_det)
+    }
+}
+
 impl Accel {
     /// Closest hits of `rays` (at most `F::WIDTH`, at most [`MAX_PACKET`])
     /// traversed as one packet, into `out[..rays.len()]`: the same as
@@ -146,6 +245,7 @@ impl Accel {
             let shear = RayShear::new(r.d);
             Single { lanes: RayLanes::new(r, &shear), kz: shear.kz }
         });
+        let ray_tri = RayTri::<F>::new(rays);
         let mut t_max = F::Array::default();
         for (l, r) in rays.iter().enumerate() {
             t_max.as_mut()[l] = r.t_max;
@@ -204,6 +304,49 @@ impl Accel {
             } else if cur.info & OTHER == 0 {
                 for blk in cur.child..cur.child + cur.info {
                     let tri = &self.tris[blk as usize];
+                    if (cur.mask & alive).count_ones() >= LANE_TRIANGLES {
+                        // Each triangle against all rays at once. The same
+                        // rule as one ray against the block: every lane is
+                        // tested with the block's starting t_max, and the
+                        // nearest hit wins, the lowest lane among equals.
+                        let tm = F::from_array(t_max);
+                        let v = tri.v.map(|k| k.map(|c| c.to_array()));
+                        #[allow(clippy::needless_range_loop)] // `k` indexes the ids too
+                        for k in 0..4 {
+                            if v[0][0][k].is_nan() {
+                                break; // padding lanes come last
+                            }
+                            let tv = [0, 1, 2].map(|j| [v[j][0][k], v[j][1][k], v[j][2][k]]);
+                            let (mask, t, b1, b2) = ray_tri.hit(&tv, tm);
+                            let mut mask = mask & cur.mask & alive;
+                            if mask == 0 {
+                                continue;
+                            }
+                            hit |= mask;
+                            if ANY {
+                                alive &= !mask;
+                                continue;
+                            }
+                            let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
+                            let [shape, index] = self.tri_ids[blk as usize][k];
+                            while mask != 0 {
+                                let r = mask.trailing_zeros() as usize;
+                                mask &= mask - 1;
+                                let tr = t.as_ref()[r];
+                                if tr < t_max.as_ref()[r] {
+                                    t_max.as_mut()[r] = tr;
+                                    best[r] = Some(Hit {
+                                        t: tr,
+                                        uv: Vec2::new(b1.as_ref()[r], b2.as_ref()[r]),
+                                        shape,
+                                        index,
+                                        instance: Hit::NOT_INSTANCED,
+                                    });
+                                }
+                            }
+                        }
+                        continue;
+                    }
                     let mut m = cur.mask & alive;
                     while m != 0 {
                         let r = m.trailing_zeros() as usize;
