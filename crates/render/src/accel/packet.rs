@@ -240,11 +240,6 @@ impl Accel {
         }
         let all = (1u32 << rays.len()) - 1;
         let lanes = Lanes::<F>::new(rays);
-        let singles: [Single; MAX_PACKET] = std::array::from_fn(|l| {
-            let r = rays.get(l).unwrap_or(&rays[0]);
-            let shear = RayShear::new(r.d);
-            Single { lanes: RayLanes::new(r, &shear), kz: shear.kz }
-        });
         let ray_tri = RayTri::<F>::new(rays);
         let mut t_max = F::Array::default();
         for (l, r) in rays.iter().enumerate() {
@@ -352,7 +347,10 @@ impl Accel {
                         let r = m.trailing_zeros() as usize;
                         m &= m - 1;
                         let tr = t_max.as_ref()[r];
-                        let (mut mask, t, b1, b2) = tri_hit(&singles[r], tr, tri);
+                        // Built here, not per packet: most blocks are reached by several rays.
+                        let shear = RayShear::new(rays[r].d);
+                        let single = Single { lanes: RayLanes::new(&rays[r], &shear), kz: shear.kz };
+                        let (mut mask, t, b1, b2) = tri_hit(&single, tr, tri);
                         if mask == 0 {
                             continue;
                         }
