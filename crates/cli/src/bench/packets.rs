@@ -92,25 +92,25 @@ fn occluded<F: Float>(t: Target, rays: &[Ray], width: usize) -> u64 {
     rays.chunks(width).map(|c| t.accel.occluded_packet::<F>(c, t.shapes, t.instances).count_ones() as u64).sum()
 }
 
-/// Seconds (median of [`ROUNDS`]) and hits for the closest-hit rays `c`
-/// and shadow rays `s`, in parallel chunks of 4096 rays.
+/// Seconds and hits for the closest-hit rays `c` and shadow rays `s`, in
+/// parallel chunks of 4096 rays.
 fn time<F: Float>(t: Target, c: &[Ray], s: &[Ray], width: usize) -> (f64, u64) {
-    let mut secs = Vec::new();
-    let mut hits = 0;
-    for _ in 0..ROUNDS {
-        let start = Instant::now();
-        hits = c.par_chunks(4096).map(|k| closest::<F>(t, k, width)).sum::<u64>()
-            + s.par_chunks(4096).map(|k| occluded::<F>(t, k, width)).sum::<u64>();
-        secs.push(start.elapsed().as_secs_f64());
-    }
-    secs.sort_by(f64::total_cmp);
-    (secs[secs.len() / 2], hits)
+    let start = Instant::now();
+    let hits = c.par_chunks(4096).map(|k| closest::<F>(t, k, width)).sum::<u64>()
+        + s.par_chunks(4096).map(|k| occluded::<F>(t, k, width)).sum::<u64>();
+    (start.elapsed().as_secs_f64(), hits)
+}
+
+/// The median of `v`'s seconds, with the hits (the same in every round).
+fn median(mut v: Vec<(f64, u64)>) -> Option<(f64, u64)> {
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v.get(v.len() / 2).copied()
 }
 
 /// One row per scene and ray kind: rays/s single and in packets, and the ratio.
 pub fn table(pool: &rayon::ThreadPool) -> anyhow::Result<()> {
     println!(
-        "\npacket traversal (rays recorded on one thread, replayed on {} threads; median of {ROUNDS}):",
+        "\npacket traversal (rays recorded on one thread, replayed on {} threads; median of {ROUNDS} alternating rounds):",
         pool.current_num_threads()
     );
     println!(
@@ -127,9 +127,16 @@ pub fn table(pool: &rayon::ThreadPool) -> anyhow::Result<()> {
             [("camera", &rec.camera, &[]), ("shadow", &[], &rec.shadow), ("all", &rec.closest, &rec.shadow)];
         for (kind, c, s) in kinds {
             let n = (c.len() + s.len()) as f64;
-            let (t1, h1) = pool.install(|| time::<f32>(t, c, s, 1));
-            let x8 = x8(pool, t, c, s);
-            let x16 = x16(pool, t, c, s);
+            // Rounds alternate between the kernels, so that they share
+            // the machine's load (it is noisy); medians are compared.
+            let (mut single, mut p8, mut p16) = (Vec::new(), Vec::new(), Vec::new());
+            for _ in 0..ROUNDS {
+                single.push(pool.install(|| time::<f32>(t, c, s, 1)));
+                p8.extend(x8(pool, t, c, s));
+                p16.extend(x16(pool, t, c, s));
+            }
+            let (t1, h1) = median(single).expect("ROUNDS > 0");
+            let (x8, x16) = (median(p8), median(p16));
             for (w, h) in [(8, x8.map(|x| x.1)), (16, x16.map(|x| x.1))] {
                 if let Some(h) = h {
                     anyhow::ensure!(h == h1, "{scene} {kind}: packets of {w} found {h} hits, single rays {h1}");
