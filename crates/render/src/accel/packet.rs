@@ -36,7 +36,14 @@
 //! sides), the primitive reported, and with it `uv`, `shape` and `index`,
 //! may be the other one of the tied pair: each kernel keeps the first
 //! visited. Apart from such exact ties, the hit (shape, index, instance,
-//! uv bits) is the single-ray one.
+//! uv bits) is the single-ray one. One narrower case is left open in
+//! principle: the triangle test checks its range before dividing
+//! (`t_scaled` against `t_max * det`, both rounded), so of two hits a few
+//! ulps apart the nearer can fail that check against the farther one's
+//! distance when the farther is found first; then the kernel that finds
+//! the farther first keeps it, and the two kernels differ in the last bits
+//! of t. No recorded ray of the tests shows it (see `agrees`, which treats
+//! only equal t bits as a tie).
 
 use super::bvh::{dequantize, Accel, Hit, Primitive, OTHER, STACK};
 use super::instance::Instance;
