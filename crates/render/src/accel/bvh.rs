@@ -344,37 +344,58 @@ impl Accel {
     /// the tree was built over.
     #[inline]
     pub fn intersect(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> Option<Hit> {
+        let root = self.root?;
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, false>(ray, &shear, shapes, instances),
-            1 => self.traverse::<1, false>(ray, &shear, shapes, instances),
-            _ => self.traverse::<2, false>(ray, &shear, shapes, instances),
+            0 => self.traverse::<0, false>(ray, &shear, root, shapes, instances),
+            1 => self.traverse::<1, false>(ray, &shear, root, shapes, instances),
+            _ => self.traverse::<2, false>(ray, &shear, root, shapes, instances),
         }
     }
 
     /// Whether anything blocks the ray before `ray.t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> bool {
+        let Some(root) = self.root else { return false };
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, true>(ray, &shear, shapes, instances),
-            1 => self.traverse::<1, true>(ray, &shear, shapes, instances),
-            _ => self.traverse::<2, true>(ray, &shear, shapes, instances),
+            0 => self.traverse::<0, true>(ray, &shear, root, shapes, instances),
+            1 => self.traverse::<1, true>(ray, &shear, root, shapes, instances),
+            _ => self.traverse::<2, true>(ray, &shear, root, shapes, instances),
         }
         .is_some()
     }
 
-    /// Walks the tree. `ANY`: stop at the first hit (its fields other than
-    /// `t` are then meaningless).
+    /// The single-ray walk of the subtree of slot `start` (child, info),
+    /// for the packet traversal's rays left alone in a subtree.
+    #[inline]
+    pub(super) fn traverse_slot<const ANY: bool>(
+        &self,
+        ray: &Ray,
+        start: (u32, u32),
+        shapes: &[Shape],
+        instances: &[Instance],
+    ) -> Option<Hit> {
+        let shear = RayShear::new(ray.d);
+        match shear.kz {
+            0 => self.traverse::<0, ANY>(ray, &shear, start, shapes, instances),
+            1 => self.traverse::<1, ANY>(ray, &shear, start, shapes, instances),
+            _ => self.traverse::<2, ANY>(ray, &shear, start, shapes, instances),
+        }
+    }
+
+    /// Walks the subtree of slot `start` (the root for a whole query).
+    /// `ANY`: stop at the first hit (its fields other than `t` are then
+    /// meaningless).
     #[inline(always)]
     fn traverse<const KZ: usize, const ANY: bool>(
         &self,
         ray: &Ray,
         shear: &RayShear,
+        (root_child, root_info): (u32, u32),
         shapes: &[Shape],
         instances: &[Instance],
     ) -> Option<Hit> {
-        let (root_child, root_info) = self.root?;
         let mut ray = *ray;
         let inv_d = ray.d.recip();
         let o = [F8::splat(ray.o.x), F8::splat(ray.o.y), F8::splat(ray.o.z)];

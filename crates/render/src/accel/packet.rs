@@ -11,7 +11,11 @@
 //! mask of the rays that entered the child and their entry distances;
 //! popped, it keeps the rays whose entry distance is still <= their closest
 //! hit, the single-ray rule applied per ray. Children are visited front to
-//! back by the entry distance of the lowest ray that enters them.
+//! back by the entry distance of the lowest ray that enters them. A
+//! subtree that only one ray still enters is handed to the single-ray
+//! kernel ([`Accel::intersect`]'s walk, started at that subtree with the
+//! ray's closest hit so far as its `t_max`), which tests its boxes for one
+//! ray eight at a time instead of eight boxes one at a time.
 //!
 //! Triangle blocks reached by several active rays are tested a triangle
 //! at a time against all rays in lanes (`RayTri`: the lane form of the
@@ -260,7 +264,21 @@ impl Accel {
         let mut stack = Stack::<F>::new();
         let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
         loop {
-            if cur.info == 0 {
+            if cur.info == 0 && cur.mask & alive & (cur.mask & alive).wrapping_sub(1) == 0 {
+                // One ray left in this subtree: walk it with the single-ray
+                // kernel (its hits count as here: strictly nearer ones only).
+                let r = (cur.mask & alive).trailing_zeros() as usize;
+                let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
+                if let Some(h) = self.traverse_slot::<ANY>(&ray, (cur.child, cur.info), shapes, instances) {
+                    hit |= 1 << r;
+                    if ANY {
+                        alive &= !(1 << r);
+                    } else {
+                        t_max.as_mut()[r] = h.t;
+                        best[r] = Some(h);
+                    }
+                }
+            } else if cur.info == 0 {
                 let node = &self.nodes[cur.child as usize];
                 let tm = F::from_array(t_max);
                 let base = stack.len();
