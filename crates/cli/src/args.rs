@@ -188,8 +188,10 @@ pub struct BenchArgs {
     /// built with `--features embree`), `efficiency` (relMSE after equal
     /// render time, against Mitsuba 3), `all` (these three), or `scale`
     /// (build and render a mesh of `--triangles` triangles, default 10
-    /// million, and report peak memory).
-    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "efficiency", "scale"])]
+    /// million, and report peak memory), or `packets` (the Cornell box's and
+    /// envmap_sun's recorded rays traced one at a time against packets of 8
+    /// and 16).
+    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "efficiency", "scale", "packets"])]
     pub suite: String,
     /// Render seconds per renderer and scene in the `efficiency` suite.
     #[arg(long, default_value_t = 4.0)]

@@ -5,6 +5,7 @@
 mod efficiency;
 #[cfg(feature = "embree")]
 mod embree;
+mod packets;
 mod rays;
 mod scale;
 mod trace_only;
@@ -90,6 +91,9 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         if let Err(e) = efficiency::table(py.as_deref(), &a.mitsuba_variant, a.budget, pool.current_num_threads()) {
             println!("equal-time error: skipped ({e:#})");
         }
+    }
+    if a.suite == "packets" {
+        packets::table(&pool)?;
     }
     if a.suite == "scale" {
         scale::run(a.triangles.unwrap_or(10_000_000), pool.current_num_threads())?;

@@ -31,7 +31,7 @@ pub enum Primitive {
 /// level's node load, so a wide, shallow tree pays: going from 4 to 8
 /// children raised closest-hit throughput from 0.65-0.72x of Embree's to
 /// about 0.8x (`penumbra bench --suite rays`, 1M triangles).
-const WIDTH: usize = 8;
+pub(super) const WIDTH: usize = 8;
 
 /// A wide node: the children's boxes quantised to bytes on a per-axis grid
 /// (plane = origin + q·scale, as in Ylitie et al. 2017 and Embree's
@@ -44,16 +44,16 @@ const WIDTH: usize = 8;
 /// instead of 61.1 bytes per triangle.
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
-struct Node {
-    origin: [f32; 3],
-    scale: [f32; 3],
+pub(super) struct Node {
+    pub(super) origin: [f32; 3],
+    pub(super) scale: [f32; 3],
     /// Rows: min x, max x, min y, max y, min z, max z.
-    q: [[u8; WIDTH]; 6],
-    child: [u32; WIDTH],
+    pub(super) q: [[u8; WIDTH]; 6],
+    pub(super) child: [u32; WIDTH],
     /// See [`OTHER`].
-    info: [u8; WIDTH],
+    pub(super) info: [u8; WIDTH],
     /// Bit `l` set where slot `l` holds a child.
-    used: u8,
+    pub(super) used: u8,
 }
 
 /// `info` of a child slot: 0 for an inner node (`child` is its index), the
@@ -61,7 +61,7 @@ struct Node {
 /// block), or `OTHER | count` for a leaf of analytic shapes and instances
 /// (`child` is the first index into `prims`). Leaves hold at most
 /// `MAX_LEAF` items, so counts fit beside the flag in a byte.
-const OTHER: u32 = 0x80;
+pub(super) const OTHER: u32 = 0x80;
 
 impl Node {
     /// Quantises the boxes of up to `WIDTH` children.
@@ -103,7 +103,7 @@ impl Node {
 
 /// A quantised plane as the traversal computes it ([`F8::mul_add`]: one rounding).
 #[inline]
-fn dequantize(q: u8, scale: f32, origin: f32) -> f32 {
+pub(super) fn dequantize(q: u8, scale: f32, origin: f32) -> f32 {
     f32::from(q).mul_add(scale, origin)
 }
 
@@ -173,14 +173,14 @@ impl Hit {
 /// default value is the empty tree, which nothing hits.
 #[derive(Debug, Clone, Default)]
 pub struct Accel {
-    nodes: HugeArray<Node>,
-    tris: HugeArray<Tri4>,
+    pub(super) nodes: HugeArray<Node>,
+    pub(super) tris: HugeArray<Tri4>,
     /// (shape id, triangle index) of each lane of `tris`.
-    tri_ids: HugeArray<[[u32; 2]; 4]>,
+    pub(super) tri_ids: HugeArray<[[u32; 2]; 4]>,
     /// The analytic shapes and instances of the leaves, in leaf order.
     pub prims: Vec<Primitive>,
     /// The root slot, `None` when there is nothing to hit.
-    root: Option<(u32, u32)>,
+    pub(super) root: Option<(u32, u32)>,
     /// Bounds of everything in the tree, in the space of its primitives
     /// (world space; object space for a [`ShapeGroup`](super::ShapeGroup)'s).
     pub bounds: Aabb,
@@ -193,7 +193,7 @@ pub struct Accel {
 /// Trees of more bytes than this are prefetched during traversal.
 const PREFETCH_BYTES: usize = 256 << 10;
 
-const STACK: usize = 192;
+pub(super) const STACK: usize = 192;
 
 /// The arrays of a tree being written out in place, sized beforehand by
 /// [`count_wide`], with how many of each are written so far.
@@ -344,37 +344,58 @@ impl Accel {
     /// the tree was built over.
     #[inline]
     pub fn intersect(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> Option<Hit> {
+        let root = self.root?;
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, false>(ray, &shear, shapes, instances),
-            1 => self.traverse::<1, false>(ray, &shear, shapes, instances),
-            _ => self.traverse::<2, false>(ray, &shear, shapes, instances),
+            0 => self.traverse::<0, false>(ray, &shear, root, shapes, instances),
+            1 => self.traverse::<1, false>(ray, &shear, root, shapes, instances),
+            _ => self.traverse::<2, false>(ray, &shear, root, shapes, instances),
         }
     }
 
     /// Whether anything blocks the ray before `ray.t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> bool {
+        let Some(root) = self.root else { return false };
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, true>(ray, &shear, shapes, instances),
-            1 => self.traverse::<1, true>(ray, &shear, shapes, instances),
-            _ => self.traverse::<2, true>(ray, &shear, shapes, instances),
+            0 => self.traverse::<0, true>(ray, &shear, root, shapes, instances),
+            1 => self.traverse::<1, true>(ray, &shear, root, shapes, instances),
+            _ => self.traverse::<2, true>(ray, &shear, root, shapes, instances),
         }
         .is_some()
     }
 
-    /// Walks the tree. `ANY`: stop at the first hit (its fields other than
-    /// `t` are then meaningless).
+    /// The single-ray walk of the subtree of slot `start` (child, info),
+    /// for the packet traversal's rays left alone in a subtree.
+    #[inline]
+    pub(super) fn traverse_slot<const ANY: bool>(
+        &self,
+        ray: &Ray,
+        start: (u32, u32),
+        shapes: &[Shape],
+        instances: &[Instance],
+    ) -> Option<Hit> {
+        let shear = RayShear::new(ray.d);
+        match shear.kz {
+            0 => self.traverse::<0, ANY>(ray, &shear, start, shapes, instances),
+            1 => self.traverse::<1, ANY>(ray, &shear, start, shapes, instances),
+            _ => self.traverse::<2, ANY>(ray, &shear, start, shapes, instances),
+        }
+    }
+
+    /// Walks the subtree of slot `start` (the root for a whole query).
+    /// `ANY`: stop at the first hit (its fields other than `t` are then
+    /// meaningless).
     #[inline(always)]
     fn traverse<const KZ: usize, const ANY: bool>(
         &self,
         ray: &Ray,
         shear: &RayShear,
+        (root_child, root_info): (u32, u32),
         shapes: &[Shape],
         instances: &[Instance],
     ) -> Option<Hit> {
-        let (root_child, root_info) = self.root?;
         let mut ray = *ray;
         let inv_d = ray.d.recip();
         let o = [F8::splat(ray.o.x), F8::splat(ray.o.y), F8::splat(ray.o.z)];

@@ -10,6 +10,7 @@ pub mod bvh;
 pub mod instance;
 pub mod lanes8;
 pub mod memory;
+pub mod packet;
 pub mod tri4;
 
 pub use bvh::{Accel, Hit, Primitive};

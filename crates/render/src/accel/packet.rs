@@ -1,0 +1,705 @@
+//! Packet traversal: up to [`MAX_PACKET`] rays walk the 8-wide BVH of
+//! [`super::bvh`] together, one node load shared by all of them.
+//!
+//! At an inner node each child box is tested against every ray of the
+//! packet at once, the rays in the SIMD lanes of a [`Float`] (`F32x8`,
+//! `F32x16`, or `f32` one ray at a time). Each lane performs exactly the
+//! single-ray box test's operations ([`Accel::intersect`]: the dequantised
+//! plane, `(plane - o) * inv_d`, `maxps`/`minps` in the same order, the exit
+//! distance widened by gamma(3)), so a ray enters a box here exactly where
+//! it would enter it alone with the same `t_max`. A stack entry carries the
+//! mask of the rays that entered the child and their entry distances;
+//! popped, it keeps the rays whose entry distance is still <= their closest
+//! hit, the single-ray rule applied per ray. Children are visited front to
+//! back by the entry distance of the lowest ray that enters them. A
+//! subtree that only one ray still enters is handed to the single-ray
+//! kernel ([`Accel::intersect`]'s walk, started at that subtree with the
+//! ray's closest hit so far as its `t_max`), which tests its boxes for one
+//! ray eight at a time instead of eight boxes one at a time.
+//!
+//! Triangle blocks reached by several active rays are tested a triangle
+//! at a time against all rays in lanes (`RayTri`: the lane form of the
+//! watertight test, bitwise the scalar one per lane, each ray's dominant
+//! axis picked per lane); reached by one ray, with the single-ray
+//! [`intersect4`]. Either way a ray's hit in a block is the nearest, the
+//! lowest lane among equal distances, as for a single ray. Other leaves
+//! are tested one active ray at a time with the single-ray code:
+//! [`Shape::intersect_analytic`] for analytic shapes, and
+//! [`Instance::intersect`] / [`Instance::occluded`] for instances, which so
+//! fall back to single rays per lane (their own BVHs are walked by the
+//! single-ray kernel).
+//!
+//! **Agreement with the single-ray kernel.** Both traversals are
+//! conservative (a box whose primitives a ray hits before its `t_max` is
+//! entered) and accept a hit only when it is strictly nearer than the best
+//! so far, so the closest-hit distance `t` of every ray is bitwise the
+//! single-ray one, and so is `occluded`. The order in which leaves are
+//! visited differs (it follows the packet, not the ray), so where two
+//! primitives are hit at exactly the same `t` (a ray through an edge or
+//! vertex shared by two triangles, which the watertight test hits on both
+//! sides), the primitive reported, and with it `uv`, `shape` and `index`,
+//! may be the other one of the tied pair: each kernel keeps the first
+//! visited. Apart from such exact ties, the hit (shape, index, instance,
+//! uv bits) is the single-ray one. One narrower case is left open in
+//! principle: the triangle test checks its range before dividing
+//! (`t_scaled` against `t_max * det`, both rounded), so of two hits a few
+//! ulps apart the nearer can fail that check against the farther one's
+//! distance when the farther is found first; then the kernel that finds
+//! the farther first keeps it, and the two kernels differ in the last bits
+//! of t. No recorded ray of the tests shows it (see `agrees`, which treats
+//! only equal t bits as a tie).
+
+use super::bvh::{dequantize, Accel, Hit, Primitive, OTHER, STACK};
+use super::instance::Instance;
+use super::tri4::{intersect4, RayLanes};
+use crate::geometry::triangle::RayShear;
+use crate::geometry::{Ray, Shape};
+use crate::simd::{Float, Mask};
+use glam::{Vec2, Vec4};
+use std::mem::MaybeUninit;
+
+/// Active rays from which a triangle block is tested a triangle against
+/// all rays at once rather than a ray against its four triangles.
+const LANE_TRIANGLES: u32 = 2;
+
+/// Most rays in one packet (the widest [`Float`], `F32x16`).
+pub const MAX_PACKET: usize = 16;
+
+/// A stacked subtree with the rays that enter it and where each enters it.
+#[derive(Clone, Copy)]
+struct Entry<F> {
+    child: u32,
+    info: u32,
+    /// Bit `r` set for ray `r` entering the subtree.
+    mask: u32,
+    /// Entry distance per ray (meaningful where `mask` is set).
+    t0: F,
+    /// Sort key: the entry distance of the lowest ray of `mask`.
+    key: f32,
+}
+
+/// Per-ray state of a packet in lanes.
+struct Lanes<F: Float> {
+    o: [F; 3],
+    inv_d: [F; 3],
+    /// Lanes whose direction component is negative, per axis (the single-ray
+    /// kernel's `neg`: near and far planes swap there).
+    neg: [F::Mask; 3],
+}
+
+impl<F: Float> Lanes<F> {
+    fn new(rays: &[Ray]) -> Lanes<F> {
+        let mut o = [F::Array::default(); 3];
+        let mut id = [F::Array::default(); 3];
+        for l in 0..F::WIDTH {
+            // Padding lanes repeat the first ray; they are never active.
+            let r = rays.get(l).unwrap_or(&rays[0]);
+            let inv = r.d.recip();
+            for a in 0..3 {
+                o[a].as_mut()[l] = r.o[a];
+                id[a].as_mut()[l] = inv[a];
+            }
+        }
+        let inv_d = id.map(F::from_array);
+        let zero = F::splat(0.0);
+        Lanes { o: o.map(F::from_array), inv_d, neg: inv_d.map(|v| v.cmp_lt(zero)) }
+    }
+}
+
+/// The single-ray triangle-test constants of one ray.
+struct Single {
+    lanes: RayLanes,
+    kz: usize,
+}
+
+#[inline(always)]
+fn tri_hit(s: &Single, t_max: f32, tri: &super::tri4::Tri4) -> (u32, Vec4, Vec4, Vec4) {
+    match s.kz {
+        0 => intersect4::<0>(&s.lanes, t_max, tri),
+        1 => intersect4::<1>(&s.lanes, t_max, tri),
+        _ => intersect4::<2>(&s.lanes, t_max, tri),
+    }
+}
+
+/// One triangle against every ray of a packet: the ray-lane form of
+/// [`intersect4`] (the watertight test of Woop et al. 2013), each lane
+/// performing the scalar test's operations in its order, with the ray's own
+/// dominant axis chosen per lane by selects, so each lane's answer is
+/// bitwise the single-ray one.
+struct RayTri<F: Float> {
+    /// The origin permuted to (kx, ky, kz) per lane.
+    o: [F; 3],
+    /// Shear constants (sx, sy, sz) per lane.
+    s: [F; 3],
+    /// Per permuted axis: lanes where it is x, lanes where it is y (else z).
+    axis: [[F::Mask; 2]; 3],
+}
+
+impl<F: Float> RayTri<F> {
+    fn new(rays: &[Ray]) -> RayTri<F> {
+        let (mut o, mut s) = ([F::Array::default(); 3], [F::Array::default(); 3]);
+        let mut ax = [F::Array::default(); 3];
+        for l in 0..F::WIDTH {
+            let r = rays.get(l).unwrap_or(&rays[0]);
+            let sh = RayShear::new(r.d);
+            let kx = if sh.kz == 2 { 0 } else { sh.kz + 1 };
+            let ky = if kx == 2 { 0 } else { kx + 1 };
+            for (a, k) in [kx, ky, sh.kz].into_iter().enumerate() {
+                o[a].as_mut()[l] = r.o[k];
+                ax[a].as_mut()[l] = k as f32;
+            }
+            (s[0].as_mut()[l], s[1].as_mut()[l], s[2].as_mut()[l]) = (sh.sx, sh.sy, sh.sz);
+        }
+        let axis = ax.map(|a| {
+            let a = F::from_array(a);
+            [a.cmp_eq(F::splat(0.0)), a.cmp_eq(F::splat(1.0))]
+        });
+        RayTri { o: o.map(F::from_array), s: s.map(F::from_array), axis }
+    }
+
+    /// Hits of triangle `v` (`v[vertex][coordinate]`) with 0 < t < `t_max`
+    /// per lane: the mask of lanes hit, distances and barycentrics (b1, b2).
+    #[inline(always)]
+    fn hit(&self, v: &[[f32; 3]; 3], t_max: F) -> (u32, F, F, F) {
+        let zero = F::splat(0.0);
+        let coord = |k: usize, a: usize| {
+            let [x, y] = self.axis[a];
+            F::select(x, F::splat(v[k][0]), F::select(y, F::splat(v[k][1]), F::splat(v[k][2]))) - self.o[a]
+        };
+        let p = |k: usize| {
+            let z = coord(k, 2);
+            (coord(k, 0) + self.s[0] * z, coord(k, 1) + self.s[1] * z, z)
+        };
+        let (p0x, p0y, p0z) = p(0);
+        let (p1x, p1y, p1z) = p(1);
+        let (p2x, p2y, p2z) = p(2);
+        let mut e0 = p1x * p2y - p1y * p2x;
+        let mut e1 = p2x * p0y - p2y * p0x;
+        let mut e2 = p0x * p1y - p0y * p1x;
+        let exact = (e0.cmp_eq(zero) | e1.cmp_eq(zero) | e2.cmp_eq(zero)).bitmask();
+        if exact != 0 {
+            // Rare: an edge function is exactly zero; redo those lanes in f64.
+            let (mut a0, mut a1, mut a2) = (e0.to_array(), e1.to_array(), e2.to_array());
+            let (x0, y0, x1, y1, x2, y2) =
+                (p0x.to_array(), p0y.to_array(), p1x.to_array(), p1y.to_array(), p2x.to_array(), p2y.to_array());
+            let (x0, y0, x1, y1, x2, y2) =
+                (x0.as_ref(), y0.as_ref(), x1.as_ref(), y1.as_ref(), x2.as_ref(), y2.as_ref());
+            for l in 0..F::WIDTH {
+                if exact & (1 << l) != 0 {
+                    a0.as_mut()[l] = (x1[l] as f64 * y2[l] as f64 - y1[l] as f64 * x2[l] as f64) as f32;
+                    a1.as_mut()[l] = (x2[l] as f64 * y0[l] as f64 - y2[l] as f64 * x0[l] as f64) as f32;
+                    a2.as_mut()[l] = (x0[l] as f64 * y1[l] as f64 - y0[l] as f64 * x1[l] as f64) as f32;
+                }
+            }
+            (e0, e1, e2) = (F::from_array(a0), F::from_array(a1), F::from_array(a2));
+        }
+        let any_neg = e0.cmp_lt(zero) | e1.cmp_lt(zero) | e2.cmp_lt(zero);
+        let any_pos = e0.cmp_gt(zero) | e1.cmp_gt(zero) | e2.cmp_gt(zero);
+        let det = e0 + e1 + e2;
+        let t_scaled = (e0 * p0z + e1 * p1z + e2 * p2z) * self.s[2];
+        let tmax_det = t_max * det;
+        let neg_ok = det.cmp_lt(zero) & !(t_scaled.cmp_ge(zero) | t_scaled.cmp_lt(tmax_det));
+        let pos_ok = det.cmp_gt(zero) & !(t_scaled.cmp_le(zero) | t_scaled.cmp_gt(tmax_det));
+        let valid = !(any_neg & any_pos) & (neg_ok | pos_ok);
+        if !valid.any() {
+            return (0, zero, zero, zero);
+        }
+        let inv_det = F::splat(1.0) / det;
+        let t = t_scaled * inv_det;
+        let valid = valid & t.cmp_gt(zero) & t.cmp_lt(t_max);
+        (valid.bitmask(), t, e1 * inv_det, e2 * inv_det)
+    }
+}
+
+impl Accel {
+    /// Closest hits of `rays` (at most `F::WIDTH`, at most [`MAX_PACKET`])
+    /// traversed as one packet, into `out[..rays.len()]`: the same as
+    /// [`Accel::intersect`] per ray, up to exact ties (see the module notes).
+    pub fn intersect_packet<F: Float>(
+        &self,
+        rays: &[Ray],
+        shapes: &[Shape],
+        instances: &[Instance],
+        out: &mut [Option<Hit>],
+    ) {
+        let mut best = [None; MAX_PACKET];
+        self.packet::<F, false>(rays, shapes, instances, &mut best);
+        out[..rays.len()].copy_from_slice(&best[..rays.len()]);
+    }
+
+    /// Bit `r` set where `rays[r]` is blocked before its `t_max` (at most
+    /// `F::WIDTH` rays, at most [`MAX_PACKET`]): [`Accel::occluded`] per ray.
+    pub fn occluded_packet<F: Float>(&self, rays: &[Ray], shapes: &[Shape], instances: &[Instance]) -> u32 {
+        let mut best = [None; MAX_PACKET];
+        self.packet::<F, true>(rays, shapes, instances, &mut best)
+    }
+
+    /// Walks the tree with a packet; fills `best` (closest hits) and returns
+    /// the mask of rays hit (for `ANY`, the rays blocked).
+    #[inline(always)]
+    fn packet<F: Float, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        shapes: &[Shape],
+        instances: &[Instance],
+        best: &mut [Option<Hit>; MAX_PACKET],
+    ) -> u32 {
+        assert!(rays.len() <= F::WIDTH && rays.len() <= MAX_PACKET);
+        let Some((root_child, root_info)) = self.root else { return 0 };
+        if rays.is_empty() {
+            return 0;
+        }
+        let all = (1u32 << rays.len()) - 1;
+        let lanes = Lanes::<F>::new(rays);
+        let ray_tri = RayTri::<F>::new(rays);
+        let mut t_max = F::Array::default();
+        for (l, r) in rays.iter().enumerate() {
+            t_max.as_mut()[l] = r.t_max;
+        }
+        let widen = F::splat(1.0 + 2.0 * 3.0 * f32::EPSILON);
+        let zero = F::splat(0.0);
+        // Rays still searching (for `ANY`: not yet blocked).
+        let mut alive = all;
+        let mut hit = 0u32;
+        let mut stack = Stack::<F>::new();
+        let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
+        loop {
+            if cur.info == 0 && cur.mask & alive & (cur.mask & alive).wrapping_sub(1) == 0 {
+                // One ray left in this subtree: walk it with the single-ray
+                // kernel (its hits count as here: strictly nearer ones only).
+                let r = (cur.mask & alive).trailing_zeros() as usize;
+                let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
+                if let Some(h) = self.traverse_slot::<ANY>(&ray, (cur.child, cur.info), shapes, instances) {
+                    hit |= 1 << r;
+                    if ANY {
+                        alive &= !(1 << r);
+                    } else {
+                        t_max.as_mut()[r] = h.t;
+                        best[r] = Some(h);
+                    }
+                }
+            } else if cur.info == 0 {
+                let node = &self.nodes[cur.child as usize];
+                let tm = F::from_array(t_max);
+                let base = stack.len();
+                let mut single: Option<Entry<F>> = None;
+                let mut used = node.used as u32;
+                while used != 0 {
+                    let l = used.trailing_zeros() as usize;
+                    used &= used - 1;
+                    let slab = |row: usize, a: usize| {
+                        let p = F::splat(dequantize(node.q[row][l], node.scale[a], node.origin[a]));
+                        (p - lanes.o[a]) * lanes.inv_d[a]
+                    };
+                    let (lo, hi) = ([slab(0, 0), slab(2, 1), slab(4, 2)], [slab(1, 0), slab(3, 1), slab(5, 2)]);
+                    let near: [F; 3] = std::array::from_fn(|a| F::select(lanes.neg[a], hi[a], lo[a]));
+                    let far: [F; 3] = std::array::from_fn(|a| F::select(lanes.neg[a], lo[a], hi[a]));
+                    let t0 = near[0].max(near[1]);
+                    let t0 = t0.max(near[2].max(zero));
+                    let t1 = far[0].min(far[1]);
+                    let t1 = t1.min(far[2].min(tm));
+                    let mask = t0.cmp_le(t1 * widen).bitmask() & cur.mask;
+                    if mask == 0 {
+                        continue;
+                    }
+                    let key = t0.to_array().as_ref()[mask.trailing_zeros() as usize];
+                    let e = Entry { child: node.child[l], info: node.info[l] as u32, mask, t0, key };
+                    if single.is_none() && stack.len() == base {
+                        single = Some(e);
+                        continue;
+                    }
+                    if let Some(s) = single.take() {
+                        stack.push_sorted::<ANY>(base, s);
+                    }
+                    stack.push_sorted::<ANY>(base, e);
+                }
+                if let Some(s) = single {
+                    cur = s;
+                    continue;
+                }
+                if stack.len() > base {
+                    cur = stack.pop().expect("entries were pushed");
+                    continue;
+                }
+            } else if cur.info & OTHER == 0 {
+                for blk in cur.child..cur.child + cur.info {
+                    let tri = &self.tris[blk as usize];
+                    if (cur.mask & alive).count_ones() >= LANE_TRIANGLES {
+                        // Each triangle against all rays at once. The same
+                        // rule as one ray against the block: every lane is
+                        // tested with the block's starting t_max, and the
+                        // nearest hit wins, the lowest lane among equals.
+                        let tm = F::from_array(t_max);
+                        let v = tri.v.map(|k| k.map(|c| c.to_array()));
+                        #[allow(clippy::needless_range_loop)] // `k` indexes the ids too
+                        for k in 0..4 {
+                            if v[0][0][k].is_nan() {
+                                break; // padding lanes come last
+                            }
+                            let tv = [0, 1, 2].map(|j| [v[j][0][k], v[j][1][k], v[j][2][k]]);
+                            let (mask, t, b1, b2) = ray_tri.hit(&tv, tm);
+                            let mut mask = mask & cur.mask & alive;
+                            if mask == 0 {
+                                continue;
+                            }
+                            hit |= mask;
+                            if ANY {
+                                alive &= !mask;
+                                continue;
+                            }
+                            let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
+                            let [shape, index] = self.tri_ids[blk as usize][k];
+                            while mask != 0 {
+                                let r = mask.trailing_zeros() as usize;
+                                mask &= mask - 1;
+                                let tr = t.as_ref()[r];
+                                if tr < t_max.as_ref()[r] {
+                                    t_max.as_mut()[r] = tr;
+                                    best[r] = Some(Hit {
+                                        t: tr,
+                                        uv: Vec2::new(b1.as_ref()[r], b2.as_ref()[r]),
+                                        shape,
+                                        index,
+                                        instance: Hit::NOT_INSTANCED,
+                                    });
+                                }
+                            }
+                        }
+                        continue;
+                    }
+                    let mut m = cur.mask & alive;
+                    while m != 0 {
+                        let r = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let tr = t_max.as_ref()[r];
+                        // Built here, not per packet: most blocks are reached by several rays.
+                        let shear = RayShear::new(rays[r].d);
+                        let single = Single { lanes: RayLanes::new(&rays[r], &shear), kz: shear.kz };
+                        let (mut mask, t, b1, b2) = tri_hit(&single, tr, tri);
+                        if mask == 0 {
+                            continue;
+                        }
+                        hit |= 1 << r;
+                        if ANY {
+                            alive &= !(1 << r);
+                            continue;
+                        }
+                        let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
+                        let mut k = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        while mask != 0 {
+                            let j = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            if t[j] < t[k] {
+                                k = j;
+                            }
+                        }
+                        let [shape, index] = self.tri_ids[blk as usize][k];
+                        t_max.as_mut()[r] = t[k];
+                        best[r] = Some(Hit {
+                            t: t[k],
+                            uv: Vec2::new(b1[k], b2[k]),
+                            shape,
+                            index,
+                            instance: Hit::NOT_INSTANCED,
+                        });
+                    }
+                }
+            } else {
+                let first = cur.child as usize;
+                for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
+                    let mut m = cur.mask & alive;
+                    while m != 0 {
+                        let r = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
+                        let found = match *prim {
+                            Primitive::Shape(shape) => {
+                                if ANY {
+                                    shapes[shape as usize].intersect_analytic(&ray).map(|(t, _)| Hit {
+                                        t,
+                                        uv: Vec2::ZERO,
+                                        shape,
+                                        index: 0,
+                                        instance: Hit::NOT_INSTANCED,
+                                    })
+                                } else {
+                                    shapes[shape as usize].intersect_analytic(&ray).map(|(t, uv)| Hit {
+                                        t,
+                                        uv,
+                                        shape,
+                                        index: 0,
+                                        instance: Hit::NOT_INSTANCED,
+                                    })
+                                }
+                            }
+                            Primitive::Instance(i) => {
+                                let inst = &instances[i as usize];
+                                if ANY {
+                                    inst.occluded(&ray, shapes).then_some(Hit {
+                                        t: ray.t_max,
+                                        uv: Vec2::ZERO,
+                                        shape: 0,
+                                        index: 0,
+                                        instance: i,
+                                    })
+                                } else {
+                                    inst.intersect(&ray, shapes).map(|h| Hit { instance: i, ..h })
+                                }
+                            }
+                        };
+                        if let Some(h) = found {
+                            hit |= 1 << r;
+                            if ANY {
+                                alive &= !(1 << r);
+                            } else {
+                                t_max.as_mut()[r] = h.t;
+                                best[r] = Some(h);
+                            }
+                        }
+                    }
+                }
+            }
+            if ANY && alive == 0 {
+                return hit;
+            }
+            // Pop the next subtree some ray still enters before its closest hit.
+            loop {
+                let Some(mut e) = stack.pop() else { return hit };
+                e.mask &= alive;
+                if !ANY {
+                    e.mask &= e.t0.cmp_le(F::from_array(t_max)).bitmask();
+                }
+                if e.mask != 0 {
+                    cur = e;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// The traversal stack, left uninitialised: entries are written before
+/// they are read (a heap allocation per packet would cost as much as
+/// traversing it in small scenes).
+struct Stack<F> {
+    entries: [MaybeUninit<Entry<F>>; STACK],
+    len: usize,
+}
+
+impl<F: Copy> Stack<F> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack { entries: [const { MaybeUninit::uninit() }; STACK], len: 0 }
+    }
+
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry<F>> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: entries[..len] were written by `push_sorted`.
+        Some(unsafe { self.entries[self.len].assume_init() })
+    }
+
+    /// Pushes `e` among the entries `base..`, kept sorted far to near (the
+    /// nearest on top); any-hit traversal keeps them unsorted, as the
+    /// single-ray kernel does. A full stack drops `e`, as there.
+    #[inline(always)]
+    fn push_sorted<const ANY: bool>(&mut self, base: usize, e: Entry<F>) {
+        if self.len == STACK {
+            debug_assert!(false, "BVH packet traversal stack overflow");
+            return;
+        }
+        let mut k = self.len;
+        // SAFETY: entries[base..len] were written before.
+        while !ANY && k > base && unsafe { self.entries[k - 1].assume_init_ref() }.key < e.key {
+            self.entries[k] = self.entries[k - 1];
+            k -= 1;
+        }
+        self.entries[k].write(e);
+        self.len += 1;
+    }
+}
+
+/// Whether a packet's closest hit `packet` agrees with the single-ray
+/// kernel's `single` for `ray` under the tie rule of the module notes:
+/// the same hit (t bits, shape, index, instance, uv bits), or, where the
+/// primitive differs, the same t bits with the packet's primitive, tested
+/// alone against `ray`, hit at exactly that t with exactly that uv.
+pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Option<Hit>, single: Option<Hit>) -> bool {
+    let key = |h: &Hit| (h.t.to_bits(), h.shape, h.index, h.instance, h.uv.x.to_bits(), h.uv.y.to_bits());
+    match (packet, single) {
+        (None, None) => true,
+        (Some(p), Some(s)) if key(&p) == key(&s) => true,
+        (Some(p), Some(s)) if p.t.to_bits() == s.t.to_bits() => {
+            let alone = if p.instance != Hit::NOT_INSTANCED {
+                instances[p.instance as usize].intersect(ray, shapes).map(|h| (h.t, h.uv))
+            } else {
+                match &shapes[p.shape as usize] {
+                    Shape::Mesh(m) => crate::geometry::triangle::intersect_triangle(
+                        ray,
+                        &RayShear::new(ray.d),
+                        &m.vertices(p.index as usize),
+                    )
+                    .map(|(t, b1, b2)| (t, Vec2::new(b1, b2))),
+                    shape => shape.intersect_analytic(ray),
+                }
+            };
+            // An instance reports its own closest hit, which ties too.
+            alone.is_some_and(|(t, uv)| {
+                t.to_bits() == p.t.to_bits()
+                    && (p.instance != Hit::NOT_INSTANCED
+                        || (uv.x.to_bits(), uv.y.to_bits()) == (p.uv.x.to_bits(), p.uv.y.to_bits()))
+            })
+        }
+        _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Mesh, TriangleMesh};
+    use crate::sampling::rng::{hash_words, to_unit_f32};
+    use glam::Vec3;
+
+    fn rnd(i: u64, k: u64) -> f32 {
+        to_unit_f32(hash_words(&[i, 77, k]))
+    }
+
+    /// A triangle soup, a grid of quads (shared edges and vertices, hit
+    /// exactly by axis-aligned rays through them), and spheres.
+    fn scene() -> Vec<Shape> {
+        let mut m = TriangleMesh::default();
+        for i in 0..3000u64 {
+            let c = Vec3::new(rnd(i, 0), rnd(i, 1), rnd(i, 2)) * 10.0;
+            for k in 0..3 {
+                m.positions.push(c + Vec3::new(rnd(i, 3 + 3 * k), rnd(i, 4 + 3 * k), rnd(i, 5 + 3 * k)) - 0.5);
+            }
+            let b = 3 * i as u32;
+            m.indices.push([b, b + 1, b + 2]);
+        }
+        let mut g = TriangleMesh::default();
+        let n = 10u32;
+        for y in 0..=n {
+            for x in 0..=n {
+                g.positions.push(Vec3::new(x as f32, y as f32, -2.0));
+            }
+        }
+        for y in 0..n {
+            for x in 0..n {
+                let v = y * (n + 1) + x;
+                g.indices.push([v, v + 1, v + n + 2]);
+                g.indices.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        vec![
+            Shape::Mesh(Mesh::new(m, false)),
+            Shape::Mesh(Mesh::new(g, false)),
+            Shape::sphere(Vec3::splat(5.0), 1.0, false),
+            Shape::sphere(Vec3::new(2.0, 7.0, 3.0), 0.7, false),
+        ]
+    }
+
+    /// Coherent bundles (a pinhole's rays over a small patch, some aimed
+    /// exactly at the grid's shared vertices), incoherent rays, and short
+    /// shadow-like segments.
+    fn rays() -> Vec<Ray> {
+        let mut v = Vec::new();
+        for i in 0..6000u64 {
+            let kind = (i / 16) % 4;
+            let b = i / 16;
+            let o = match kind {
+                0 | 1 => Vec3::new(5.0, 5.0, 20.0) + Vec3::new(rnd(b, 10), rnd(b, 11), 0.0),
+                _ => Vec3::new(rnd(i, 10), rnd(i, 11), rnd(i, 12)) * 12.0 - 1.0,
+            };
+            let (d, t_max) = match kind {
+                0 => (
+                    (Vec3::new(rnd(b, 13) * 10.0, rnd(b, 14) * 10.0, 0.0) - o
+                        + Vec3::new(rnd(i, 15), rnd(i, 16), 0.0) * 0.5)
+                        .normalize(),
+                    f32::INFINITY,
+                ),
+                // Straight down through the grid's vertices.
+                1 => (Vec3::NEG_Z, f32::INFINITY),
+                2 => ((Vec3::new(rnd(i, 13), rnd(i, 14), rnd(i, 15)) - 0.5).normalize(), f32::INFINITY),
+                _ => ((Vec3::new(rnd(i, 13), rnd(i, 14), rnd(i, 15)) - 0.5).normalize(), 3.0 * rnd(i, 16)),
+            };
+            let o = if kind == 1 { Vec3::new((i % 11) as f32, ((i / 11) % 11) as f32, 1.0 + rnd(i, 17)) } else { o };
+            v.push(Ray::new(o, d, t_max));
+        }
+        v
+    }
+
+    fn check<F: Float>() {
+        let shapes = scene();
+        let accel = Accel::build_shapes(&shapes);
+        let rays = rays();
+        let (mut hits, mut ties) = (0, 0);
+        for n in [F::WIDTH, 3.min(F::WIDTH)] {
+            for (c, chunk) in rays.chunks(n).enumerate() {
+                let mut out = [None; MAX_PACKET];
+                accel.intersect_packet::<F>(chunk, &shapes, &[], &mut out);
+                let blocked = accel.occluded_packet::<F>(chunk, &shapes, &[]);
+                for (r, ray) in chunk.iter().enumerate() {
+                    let single = accel.intersect(ray, &shapes, &[]);
+                    assert!(
+                        agrees(&shapes, &[], ray, out[r], single),
+                        "{} chunk {c} ray {r}: {:?} vs {:?}",
+                        F::NAME,
+                        out[r],
+                        single
+                    );
+                    hits += single.is_some() as usize;
+                    ties += (out[r].map(|h| (h.shape, h.index)) != single.map(|h| (h.shape, h.index))) as usize;
+                    assert_eq!(
+                        blocked & (1 << r) != 0,
+                        accel.occluded(ray, &shapes, &[]),
+                        "{} chunk {c} ray {r}",
+                        F::NAME
+                    );
+                }
+                assert_eq!(blocked >> chunk.len(), 0);
+            }
+        }
+        assert!(hits > 3000, "{hits}");
+        eprintln!("{}: {hits} hits, {ties} resolved by the tie rule", F::NAME);
+    }
+
+    #[test]
+    fn packets_match_single_rays_scalar() {
+        check::<f32>();
+    }
+
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+    #[test]
+    fn packets_match_single_rays_x8() {
+        check::<crate::simd::F32x8>();
+    }
+
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+    #[test]
+    fn packets_match_single_rays_x16() {
+        check::<crate::simd::F32x16>();
+    }
+
+    #[test]
+    fn empty_tree_and_empty_packet() {
+        let accel = Accel::build_shapes(&[]);
+        let ray = Ray::new(Vec3::ZERO, Vec3::X, f32::INFINITY);
+        let mut out = [Some(Hit { t: 1.0, uv: Vec2::ZERO, shape: 0, index: 0, instance: 0 })];
+        accel.intersect_packet::<f32>(&[ray], &[], &[], &mut out);
+        assert!(out[0].is_none());
+        assert_eq!(accel.occluded_packet::<f32>(&[ray], &[], &[]), 0);
+        let shapes = scene();
+        let accel = Accel::build_shapes(&shapes);
+        assert_eq!(accel.occluded_packet::<f32>(&[], &shapes, &[]), 0);
+    }
+}
