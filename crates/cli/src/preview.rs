@@ -84,11 +84,15 @@ impl Preview {
         for (b, &p) in self.buffer.iter_mut().zip(pixels) {
             *b = pack(p);
         }
-        w.set_title(&title(&self.name, spp, target));
+        // The image first, then the title: the X server handles a client's
+        // requests in order, so a title that names this pass's spp means the
+        // window already shows this pass (the --preview test relies on it).
         if let Err(e) = w.update_with_buffer(&self.buffer, self.width, self.height) {
             eprintln!("--preview: cannot update the window ({e}): rendering goes on without it");
             self.window = None;
+            return;
         }
+        w.set_title(&title(&self.name, spp, target));
     }
 
     /// Keeps the window open for PENUMBRA_PREVIEW_HOLD seconds (if set), or
