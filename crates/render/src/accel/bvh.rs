@@ -107,6 +107,42 @@ pub(super) fn dequantize(q: u8, scale: f32, origin: f32) -> f32 {
     f32::from(q).mul_add(scale, origin)
 }
 
+/// The hit of `ray` on one analytic shape or instance of a leaf, the test
+/// both the single-ray and the packet traversal run. `ANY`: an instance
+/// only answers whether it blocks the ray (the hit's fields other than `t`
+/// are then meaningless).
+#[inline(always)]
+pub(super) fn prim_hit<const ANY: bool>(
+    prim: Primitive,
+    ray: &Ray,
+    shapes: &[Shape],
+    instances: &[Instance],
+) -> Option<Hit> {
+    match prim {
+        Primitive::Shape(shape) => shapes[shape as usize].intersect_analytic(ray).map(|(t, uv)| Hit {
+            t,
+            uv,
+            shape,
+            index: 0,
+            instance: Hit::NOT_INSTANCED,
+        }),
+        Primitive::Instance(i) => {
+            let inst = &instances[i as usize];
+            if ANY {
+                inst.occluded(ray, shapes).then_some(Hit {
+                    t: ray.t_max,
+                    uv: Vec2::ZERO,
+                    shape: 0,
+                    index: 0,
+                    instance: i,
+                })
+            } else {
+                inst.intersect(ray, shapes).map(|h| Hit { instance: i, ..h })
+            }
+        }
+    }
+}
+
 /// The grid of one axis, (origin, scale), and the byte planes `ql`, `qh` of
 /// `lo` and `hi` (the lanes' minima and maxima): dequantised, every lower
 /// plane is <= its `lo` and every upper plane >= its `hi`, checked with the
@@ -504,27 +540,7 @@ impl Accel {
             } else {
                 let first = cur.child as usize;
                 for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
-                    let found =
-                        match *prim {
-                            Primitive::Shape(shape) => shapes[shape as usize]
-                                .intersect_analytic(&ray)
-                                .map(|(t, uv)| Hit { t, uv, shape, index: 0, instance: Hit::NOT_INSTANCED }),
-                            Primitive::Instance(i) => {
-                                let inst = &instances[i as usize];
-                                if ANY {
-                                    inst.occluded(&ray, shapes).then_some(Hit {
-                                        t: ray.t_max,
-                                        uv: Vec2::ZERO,
-                                        shape: 0,
-                                        index: 0,
-                                        instance: i,
-                                    })
-                                } else {
-                                    inst.intersect(&ray, shapes).map(|h| Hit { instance: i, ..h })
-                                }
-                            }
-                        };
-                    if let Some(h) = found {
+                    if let Some(h) = prim_hit::<ANY>(*prim, &ray, shapes, instances) {
                         if ANY {
                             return Some(h);
                         }

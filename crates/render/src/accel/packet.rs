@@ -49,7 +49,7 @@
 //! of t. No recorded ray of the tests shows it (see `agrees`, which treats
 //! only equal t bits as a tie).
 
-use super::bvh::{dequantize, Accel, Hit, Primitive, OTHER, STACK};
+use super::bvh::{dequantize, prim_hit, Accel, Hit, OTHER, STACK};
 use super::instance::Instance;
 use super::tri4::{intersect4, RayLanes};
 use crate::geometry::triangle::RayShear;
@@ -261,6 +261,19 @@ impl Accel {
         // Rays still searching (for `ANY`: not yet blocked).
         let mut alive = all;
         let mut hit = 0u32;
+        // Ray `r` hit `h`: for `ANY` it stops, else `h` is its closest so far.
+        macro_rules! record {
+            ($r:expr, $h:expr) => {{
+                let (r, h) = ($r, $h);
+                hit |= 1 << r;
+                if ANY {
+                    alive &= !(1 << r);
+                } else {
+                    t_max.as_mut()[r] = h.t;
+                    best[r] = Some(h);
+                }
+            }};
+        }
         let mut stack = Stack::<F>::new();
         let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
         loop {
@@ -270,13 +283,7 @@ impl Accel {
                 let r = (cur.mask & alive).trailing_zeros() as usize;
                 let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
                 if let Some(h) = self.traverse_slot::<ANY>(&ray, (cur.child, cur.info), shapes, instances) {
-                    hit |= 1 << r;
-                    if ANY {
-                        alive &= !(1 << r);
-                    } else {
-                        t_max.as_mut()[r] = h.t;
-                        best[r] = Some(h);
-                    }
+                    record!(r, h);
                 }
             } else if cur.info == 0 {
                 let node = &self.nodes[cur.child as usize];
@@ -413,49 +420,9 @@ impl Accel {
                         let r = m.trailing_zeros() as usize;
                         m &= m - 1;
                         let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
-                        let found = match *prim {
-                            Primitive::Shape(shape) => {
-                                if ANY {
-                                    shapes[shape as usize].intersect_analytic(&ray).map(|(t, _)| Hit {
-                                        t,
-                                        uv: Vec2::ZERO,
-                                        shape,
-                                        index: 0,
-                                        instance: Hit::NOT_INSTANCED,
-                                    })
-                                } else {
-                                    shapes[shape as usize].intersect_analytic(&ray).map(|(t, uv)| Hit {
-                                        t,
-                                        uv,
-                                        shape,
-                                        index: 0,
-                                        instance: Hit::NOT_INSTANCED,
-                                    })
-                                }
-                            }
-                            Primitive::Instance(i) => {
-                                let inst = &instances[i as usize];
-                                if ANY {
-                                    inst.occluded(&ray, shapes).then_some(Hit {
-                                        t: ray.t_max,
-                                        uv: Vec2::ZERO,
-                                        shape: 0,
-                                        index: 0,
-                                        instance: i,
-                                    })
-                                } else {
-                                    inst.intersect(&ray, shapes).map(|h| Hit { instance: i, ..h })
-                                }
-                            }
-                        };
+                        let found = prim_hit::<ANY>(*prim, &ray, shapes, instances);
                         if let Some(h) = found {
-                            hit |= 1 << r;
-                            if ANY {
-                                alive &= !(1 << r);
-                            } else {
-                                t_max.as_mut()[r] = h.t;
-                                best[r] = Some(h);
-                            }
+                            record!(r, h);
                         }
                     }
                 }
