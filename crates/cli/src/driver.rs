@@ -112,6 +112,9 @@ pub struct Options<'a> {
     pub cancel: &'a AtomicBool,
     /// No progress bar.
     pub quiet: bool,
+    /// Also told of the samples of every tile as they are added (Python's
+    /// progress bar): called from the worker threads.
+    pub on_samples: Option<&'a (dyn Fn(u64) + Sync)>,
 }
 
 /// How a run ended.
@@ -142,6 +145,12 @@ pub fn run(
     // Seconds per sample per pixel, from the previous pass; every run
     // renders at least one pass, so that it makes progress.
     let mut per_spp: Option<f64> = None;
+    let tick = |k: u64| {
+        progress.inc(k);
+        if let Some(f) = opts.on_samples {
+            f(k);
+        }
+    };
     let mut stats = RenderStats::default();
     let mut extras = Extras::default();
     let stop = loop {
@@ -169,7 +178,7 @@ pub fn run(
         let t0 = Instant::now();
         let n = range.end - range.start;
         let active = active.as_deref();
-        let r = pool.install(|| job.render_pass_masked(&mut state.film, range, active, &|k| progress.inc(k), cancel));
+        let r = pool.install(|| job.render_pass_masked(&mut state.film, range, active, &tick, cancel));
         let Some(s) = r else {
             break Stop::Cancelled;
         };

@@ -308,7 +308,13 @@ fn run_passes(plan: &Plan, state: &mut State) -> Result<Run> {
     };
     let start = Instant::now();
     let seconds_before = state.seconds;
-    let opts = driver::Options { schedule: plan.schedule.clone(), budget, cancel: &signals.cancel, quiet: a.quiet };
+    let opts = driver::Options {
+        schedule: plan.schedule.clone(),
+        budget,
+        cancel: &signals.cancel,
+        quiet: a.quiet,
+        on_samples: None,
+    };
     let outcome = driver::run(job, &pool, &opts, state, hooks)?;
     Ok(Run { outcome, signals, preview, start, seconds_before })
 }

@@ -174,3 +174,129 @@ pub struct SceneDesc {
     /// The scene's `version` attribute.
     pub version: String,
 }
+
+/// A new value for property `name` of the object with id `id`
+/// (`"red.reflectance"`), as Python's `scene.set` gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Override {
+    /// The object's `id`; `sensor` also names the scene's sensor when no
+    /// object has that id.
+    pub id: String,
+    /// The property's name.
+    pub name: String,
+    /// The new value.
+    pub value: Value,
+}
+
+impl SceneDesc {
+    /// A copy of the scene with `overrides` applied in order (later ones
+    /// win). A property the object has is replaced by a value of a
+    /// compatible type; one it lacks is added (and, as every property, is
+    /// an error at build time if its plugin does not read it). Objects
+    /// shared through `<ref>` stay shared.
+    pub fn with_overrides(&self, overrides: &[Override]) -> std::result::Result<SceneDesc, String> {
+        let mut copies = std::collections::HashMap::new();
+        let root = copy_node(&self.root, overrides, &mut copies)?;
+        let applied: std::collections::HashSet<usize> = copies.values().flat_map(|(_, a)| a.iter().copied()).collect();
+        for (i, o) in overrides.iter().enumerate() {
+            if !applied.contains(&i) {
+                let ids = ids(&self.root);
+                return Err(format!(
+                    "no object with id '{}' (objects with an id: {})",
+                    o.id,
+                    if ids.is_empty() { "none".to_string() } else { ids.join(", ") }
+                ));
+            }
+        }
+        Ok(SceneDesc { root, version: self.version.clone() })
+    }
+}
+
+/// The ids of every object under `node`, in document order (for messages).
+pub fn ids(node: &Node) -> Vec<String> {
+    let mut out: Vec<String> = node.id.iter().cloned().collect();
+    for c in &node.children {
+        for id in ids(&c.node) {
+            if !out.contains(&id) {
+                out.push(id);
+            }
+        }
+    }
+    out
+}
+
+/// Whether `o` addresses `node`.
+fn addresses(node: &Node, o: &Override) -> bool {
+    node.id.as_deref() == Some(o.id.as_str()) || (o.id == "sensor" && node.kind == Kind::Sensor && node.id.is_none())
+}
+
+/// Whether a property of type `old` may take the value `new`.
+fn compatible(old: &Value, new: &Value) -> bool {
+    use Value::*;
+    let colour = |v: &Value| matches!(v, Rgb(_) | SpectrumConstant(_) | SpectrumSampled(_) | Float(_) | Integer(_));
+    match (old, new) {
+        (Float(_) | Integer(_), Float(_) | Integer(_)) => true,
+        (Rgb(_) | SpectrumConstant(_) | SpectrumSampled(_), n) => colour(n),
+        (Point(_) | Vector(_), Point(_) | Vector(_)) => true,
+        (o, n) => o.type_name() == n.type_name(),
+    }
+}
+
+/// A deep copy of `node` with the overrides that address it applied;
+/// `copies` maps each original node to its copy and the overrides applied.
+fn copy_node(
+    node: &Rc<Node>,
+    overrides: &[Override],
+    copies: &mut std::collections::HashMap<*const Node, (Rc<Node>, Vec<usize>)>,
+) -> std::result::Result<Rc<Node>, String> {
+    if let Some((copy, _)) = copies.get(&Rc::as_ptr(node)) {
+        return Ok(copy.clone());
+    }
+    let mut props = node.props.clone();
+    let mut applied = Vec::new();
+    for (i, o) in overrides.iter().enumerate().filter(|(_, o)| addresses(node, o)) {
+        let what = format!("{}.{}", o.id, o.name);
+        match props.iter_mut().find(|p| p.name == o.name) {
+            Some(p) if compatible(&p.value, &o.value) => {
+                // A value given as a float where the file has an integer (or
+                // the reverse) keeps the file's type.
+                p.value = match (&p.value, &o.value) {
+                    (Value::Integer(_), Value::Float(f)) if f.fract() == 0.0 => Value::Integer(*f as i64),
+                    (Value::Float(_), Value::Integer(k)) => Value::Float(*k as f64),
+                    _ => o.value.clone(),
+                };
+            }
+            Some(p) => {
+                return Err(format!("{what} is a {} ({}), not a {}", p.value.type_name(), p.loc, o.value.type_name()))
+            }
+            None if node.children.iter().any(|c| c.name.as_deref() == Some(o.name.as_str())) => {
+                return Err(format!("{what} is a nested object (a texture?), not a value: set its own parameters"))
+            }
+            None => props.push(Property {
+                name: o.name.clone(),
+                value: o.value.clone(),
+                loc: node.loc.clone(),
+                used: Cell::new(false),
+            }),
+        }
+        applied.push(i);
+    }
+    for p in &props {
+        p.used.set(false);
+    }
+    let mut children = Vec::with_capacity(node.children.len());
+    for c in &node.children {
+        children.push(Child { name: c.name.clone(), node: copy_node(&c.node, overrides, copies)?, loc: c.loc.clone() });
+    }
+    let copy = Rc::new(Node {
+        kind: node.kind,
+        plugin: node.plugin.clone(),
+        id: node.id.clone(),
+        name: node.name.clone(),
+        props,
+        children,
+        loc: node.loc.clone(),
+    });
+    copies.insert(Rc::as_ptr(node), (copy.clone(), applied));
+    Ok(copy)
+}

@@ -17,6 +17,7 @@ use integrator::build_integrator;
 pub use integrator::integrator_from_spec;
 use sensor::build_sensor;
 pub use sensor::SAMPLER_OVERRIDES;
+use shape::Geometry;
 use texture::Textures;
 
 use crate::desc::{Kind, Node, SceneDesc};
@@ -106,8 +107,33 @@ pub fn supported_plugins(kind: Kind) -> Vec<&'static str> {
 
 /// Builds the render job for a parsed scene.
 pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
+    build_cached(desc, ov, &mut GeometryCache::default())
+}
+
+/// What rebuilding the same scene with other parameters (Python's
+/// `scene.set`) can reuse: each shape's geometry, keyed by its node's
+/// position, plugin and properties (so a changed radius or transform
+/// rebuilds that shape), and the top-level BVH when every shape it holds
+/// was reused. Reused geometry is bitwise the geometry a fresh build makes
+/// from the same description; mesh files are not read again, so a file
+/// changed on disk needs a fresh load.
+#[derive(Default)]
+pub struct GeometryCache {
+    /// Geometry by shape key, with the properties its builder read.
+    shapes: HashMap<String, (Geometry, Vec<String>)>,
+    /// The last top-level BVH and the shape keys it was built over.
+    accel: Option<(Vec<String>, Accel)>,
+    /// Shapes built (not reused) over the cache's life.
+    pub shapes_built: u64,
+    /// Top-level BVHs built over the cache's life.
+    pub accels_built: u64,
+}
+
+/// [`build`], reusing (and refilling) `cache`: the job is bitwise the one
+/// [`build`] makes.
+pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache) -> Result<RenderJob> {
     let root = &desc.root;
-    let mut b = Builder::default();
+    let mut b = Builder { cache: std::mem::take(&mut cache.shapes), ..Builder::default() };
     let mut sensor = None;
     let mut integrator = None;
     for child in &root.children {
@@ -170,7 +196,19 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     };
     b.textures.finish_mesh_attributes(b.shapes.len());
     // Lights are made once the geometry's bounds are known.
-    let accel = Accel::build(&b.placed, &b.shapes, &b.instances);
+    // Reused only without instances, whose groups have BVHs of their own.
+    let accel = match cache.accel.take() {
+        Some((keys, accel)) if b.instances.is_empty() && keys == b.shape_keys => accel,
+        _ => {
+            cache.accels_built += 1;
+            Accel::build(&b.placed, &b.shapes, &b.instances)
+        }
+    };
+    if b.instances.is_empty() {
+        cache.accel = Some((std::mem::take(&mut b.shape_keys), accel.clone()));
+    }
+    cache.shapes_built += b.shapes_built;
+    cache.shapes = std::mem::take(&mut b.cache);
     let radius = accel.bounds.bounding_radius();
     let lights = b.lights.into_iter().map(|light| light(radius)).collect();
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
@@ -207,6 +245,12 @@ struct Builder {
     default_emitter_bsdf: Option<u32>,
     /// Shape groups already built, by node identity (instanced through `<ref>`).
     groups: HashMap<*const Node, Arc<ShapeGroup>>,
+    /// [`GeometryCache::shapes`], taken for the build.
+    cache: HashMap<String, (Geometry, Vec<String>)>,
+    /// The cache key of each shape, by id.
+    shape_keys: Vec<String>,
+    /// Shapes whose geometry was built, not reused.
+    shapes_built: u64,
 }
 
 impl Builder {

@@ -31,7 +31,7 @@ pub(super) enum ShapeBuilder {
 
 /// A shape's geometry with its mesh attributes (PLY vertex colours and
 /// other properties; Mitsuba's `mesh_attribute` textures read them).
-type Geometry = (Shape, Vec<MeshAttributeData>);
+pub(super) type Geometry = (Shape, Vec<MeshAttributeData>);
 
 pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("rectangle", ShapeBuilder::Geometry(rectangle)),
@@ -131,7 +131,7 @@ impl Builder {
             // Builder::shape places these, and shape groups refuse them.
             return Err(node.error(format!("a {} cannot be placed here", node.plugin)));
         };
-        let (shape, attributes) = geometry(node, &to_world, flip)?;
+        let (shape, attributes) = self.geometry(node, geometry, &to_world, flip)?;
         if shape.prim_count() == 0 {
             return Err(node.error(format!("{} has no triangles", node.describe())));
         }
@@ -168,6 +168,34 @@ impl Builder {
         self.shapes.push(shape);
         self.infos.push(ShapeInfo { material: bsdf, light });
         Ok(shape_id)
+    }
+
+    /// `node`'s geometry from the [`super::GeometryCache`], or built and
+    /// cached. A reused entry marks the properties its builder read, as a
+    /// build would.
+    fn geometry(
+        &mut self,
+        node: &Node,
+        build: fn(&Node, &DMat4, bool) -> Result<Geometry>,
+        to_world: &DMat4,
+        flip: bool,
+    ) -> Result<Geometry> {
+        let props: Vec<String> = node.props.iter().map(|p| format!("{}={:?}", p.name, p.value)).collect();
+        let key = format!("{}|{}|{}", node.loc, node.plugin, props.join(";"));
+        self.shape_keys.push(key.clone());
+        if let Some((geometry, read)) = self.cache.get(&key) {
+            for p in node.props.iter().filter(|p| read.contains(&p.name)) {
+                p.used.set(true);
+            }
+            return Ok(geometry.clone());
+        }
+        let unread: Vec<bool> = node.props.iter().map(|p| !p.used.get()).collect();
+        let geometry = build(node, to_world, flip)?;
+        let read =
+            node.props.iter().zip(unread).filter(|(p, u)| *u && p.used.get()).map(|(p, _)| p.name.clone()).collect();
+        self.shapes_built += 1;
+        self.cache.insert(key, (geometry.clone(), read));
+        Ok(geometry)
     }
 }
 

@@ -1,0 +1,179 @@
+//! `render`: the command line's pass loop (`penumbra::driver::run`, the same
+//! fixed schedule of passes, so the image is bitwise the command line's)
+//! on a thread of its own while the calling thread, with the GIL released
+//! between polls, watches for Ctrl-C and reports progress. A signal sets the
+//! loop's cancel flag: the pass under way stops at its next tile, every
+//! worker thread is joined before `render` returns, and the
+//! KeyboardInterrupt is raised (after saving the checkpoint, if one was
+//! asked for).
+
+use crate::scene::Scene;
+use crate::{anyhow_error, error, load_error};
+use numpy::{PyArray1, PyArrayMethods};
+use penumbra::checkpoint::Checkpoint;
+use penumbra::driver::{self, Budget, Hooks, Schedule, State, Stop, DEFAULT_MAX_PASS_SPP};
+use penumbra::settings::{RenderIdentity, Settings, VERSION};
+use penumbra_render::film::{AovKind, Film};
+use penumbra_scene::Overrides;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Duration;
+
+/// How often the calling thread takes the GIL to check for signals and
+/// report progress.
+const POLL: Duration = Duration::from_millis(50);
+
+/// A flat image as a numpy float32 array of shape (height, width, channels).
+fn array<'py>(py: Python<'py>, v: Vec<f32>, h: u32, w: u32, c: usize) -> PyResult<Bound<'py, PyAny>> {
+    Ok(PyArray1::from_vec(py, v).reshape([h as usize, w as usize, c])?.into_any())
+}
+
+/// Renders `scene`; returns `{"image": (h, w, 3) float32, <aov>: ...}`.
+/// `progress(done, total)` is called with sample counts (in pixels × spp)
+/// from the calling thread; `checkpoint` names a file to resume from when
+/// it matches this render, saved when the render is interrupted and
+/// deleted once it completes (as the command line's `--checkpoint`).
+#[pyfunction]
+#[pyo3(signature = (scene, spp=None, seed=0, threads=None, integrator=None, aovs=Vec::new(), progress=None, checkpoint=None, max_pass_spp=DEFAULT_MAX_PASS_SPP))]
+#[allow(clippy::too_many_arguments)]
+pub fn render<'py>(
+    py: Python<'py>,
+    scene: &mut Scene,
+    spp: Option<u32>,
+    seed: u64,
+    threads: Option<usize>,
+    integrator: Option<String>,
+    aovs: Vec<String>,
+    progress: Option<Bound<'py, PyAny>>,
+    checkpoint: Option<PathBuf>,
+    max_pass_spp: u32,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ov = Overrides { spp, seed: Some(seed), integrator: integrator.clone(), sampler: None };
+    let job = scene.job(&ov).map_err(|e| load_error(py, &e))?;
+    let layers = penumbra::layers::parse(&aovs.join(",")).map_err(anyhow_error)?;
+    let pool = penumbra::thread_pool(threads).map_err(anyhow_error)?;
+    let schedule = Schedule { samples: 0..job.sampler.spp, max_pass_spp: max_pass_spp.max(1) };
+    let bytes = scene.source_bytes();
+    let mut settings = Settings::new(&RenderIdentity {
+        scene_bytes: &bytes,
+        spp: job.sampler.spp,
+        seed: job.sampler.seed,
+        integrator: integrator.as_deref(),
+        defines: scene.defines(),
+        full_size: job.full_size,
+        crop: None,
+        part: None,
+        max_pass_spp: schedule.max_pass_spp,
+    });
+    if !aovs.is_empty() {
+        settings.set("aov", &penumbra::layers::describe(&layers));
+    }
+    let params = scene.overrides_text();
+    if !params.is_empty() {
+        settings.set("params", &params);
+    }
+    let mut state = State { film: Film::with_layers(job.width, job.height, &layers), passes: 0, spp: 0, seconds: 0.0 };
+    if let Some(path) = &checkpoint {
+        if let Some(c) = Checkpoint::load_matching(path, &settings).map_err(anyhow_error)? {
+            if c.film.layers() != layers || (c.film.width, c.film.height) != (job.width, job.height) {
+                return Err(error(format!("checkpoint '{}' holds other layers or another size", path.display())));
+            }
+            state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds };
+        }
+    }
+    let save = |st: &State| -> anyhow::Result<()> {
+        let Some(path) = &checkpoint else { return Ok(()) };
+        let ck = Checkpoint {
+            version: VERSION.to_string(),
+            settings: settings.clone(),
+            seed: job.sampler.seed,
+            passes: st.passes,
+            spp: st.spp,
+            seconds: st.seconds,
+            film: st.film.clone(),
+        };
+        ck.save(path)
+    };
+
+    let cancel = AtomicBool::new(false);
+    let done = AtomicU64::new(state.spp as u64 * job.width as u64 * job.height as u64);
+    let total = schedule.spp() as u64 * job.width as u64 * job.height as u64;
+    let on_samples = |k: u64| {
+        done.fetch_add(k, Ordering::Relaxed);
+    };
+    let opts = driver::Options {
+        schedule,
+        budget: Budget::default(),
+        cancel: &cancel,
+        quiet: true,
+        on_samples: Some(&on_samples),
+    };
+    let mut raised: Option<PyErr> = None;
+    let report = |raised: &mut Option<PyErr>| {
+        if let Some(f) = progress.as_ref().filter(|_| raised.is_none()) {
+            if let Err(e) = f.call1((done.load(Ordering::Relaxed), total)) {
+                cancel.store(true, Ordering::Relaxed);
+                *raised = Some(e);
+            }
+        }
+    };
+    let outcome = std::thread::scope(|s| {
+        let worker = s.spawn(|| {
+            let mut none = |_: &State| Ok(());
+            let mut none2 = |_: &State| Ok(());
+            let hooks = Hooks { checkpoint: &mut none, partial: &mut none2, after_pass: None };
+            let r = driver::run(&job, &pool, &opts, &mut state, hooks);
+            (r, state)
+        });
+        while !worker.is_finished() {
+            py.detach(|| {
+                let t = std::time::Instant::now();
+                while !worker.is_finished() && t.elapsed() < POLL {
+                    std::thread::sleep(Duration::from_millis(2));
+                }
+            });
+            if raised.is_none() {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::Relaxed);
+                    raised = Some(e);
+                }
+            }
+            report(&mut raised);
+        }
+        worker.join()
+    });
+    let (result, state) = outcome.map_err(|_| error("the render thread panicked"))?;
+    drop(pool); // its threads exit before we return
+    let outcome = result.map_err(anyhow_error)?;
+    match outcome.stop {
+        Stop::Complete | Stop::NoiseReached => {
+            report(&mut raised);
+            if let Some(p) = &checkpoint {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+        Stop::Cancelled | Stop::TimeUp => {
+            if state.spp > 0 {
+                save(&state).map_err(anyhow_error)?;
+            }
+        }
+    }
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    let film = &state.film;
+    let (w, h) = (film.width, film.height);
+    let out = PyDict::new(py);
+    let rgb: Vec<f32> = film.develop().into_iter().flatten().collect();
+    out.set_item("image", array(py, rgb, h, w, 3)?)?;
+    for &k in &film.aov_kinds {
+        let v = film.develop_aov(k).expect("layer");
+        out.set_item(k.name(), array(py, v, h, w, AovKind::channels(k).len())?)?;
+    }
+    if let Some(v) = film.develop_variance() {
+        out.set_item(penumbra::layers::VARIANCE, array(py, v.into_iter().flatten().collect(), h, w, 3)?)?;
+    }
+    Ok(out)
+}
