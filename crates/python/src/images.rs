@@ -30,16 +30,20 @@ pub fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>>
     let img = exrmeta::read(&path).map_err(anyhow_error)?;
     let (w, h) = (img.width, img.height);
     out.set_item("image", arr(img.rgb.iter().flatten().copied().collect(), h, w, 3)?)?;
-    // Layers "name.C": one array per name, channels in file order.
-    let mut groups: Vec<(String, Vec<&Vec<f32>>)> = Vec::new();
+    // Layers "name.C": one array per name. EXR files list channels sorted by
+    // name, so R, G, B, A and X, Y, Z are put back in that order.
+    let rank = |c: &str| ["R", "G", "B", "A", "X", "Y", "Z"].iter().position(|&n| n == c).unwrap_or(7);
+    let mut groups: Vec<(String, Vec<(&str, &Vec<f32>)>)> = Vec::new();
     for (name, v) in &img.layers {
-        let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l).to_string();
-        match groups.iter_mut().find(|(l, _)| *l == layer) {
-            Some((_, list)) => list.push(v),
-            None => groups.push((layer, vec![v])),
+        let (layer, suffix) = name.rsplit_once('.').unwrap_or((name.as_str(), ""));
+        match groups.iter_mut().find(|(l, _)| l == layer) {
+            Some((_, list)) => list.push((suffix, v)),
+            None => groups.push((layer.to_string(), vec![(suffix, v)])),
         }
     }
-    for (layer, channels) in groups {
+    for (layer, mut channels) in groups {
+        channels.sort_by_key(|&(suffix, _)| rank(suffix));
+        let channels: Vec<&Vec<f32>> = channels.into_iter().map(|(_, v)| v).collect();
         let n = (w * h) as usize;
         let c = channels.len();
         let mut v = vec![0f32; n * c];

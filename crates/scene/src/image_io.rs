@@ -176,12 +176,13 @@ pub fn read_image_with(path: &Path, raw: bool) -> Result<RgbImage, String> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let (format, srgb) = match ext.as_str() {
         "exr" => return read_exr(path),
+        "pfm" => return read_pfm(path),
         "hdr" => (image::ImageFormat::Hdr, false),
         "png" => (image::ImageFormat::Png, true),
         "jpg" | "jpeg" => (image::ImageFormat::Jpeg, true),
         _ => {
             return Err(format!(
-                "cannot read '{}': unsupported image format; use .exr, .hdr, .png or .jpg",
+                "cannot read '{}': unsupported image format; use .exr, .hdr, .pfm, .png or .jpg",
                 path.display()
             ))
         }
@@ -207,9 +208,111 @@ pub fn read_image_with(path: &Path, raw: bool) -> Result<RgbImage, String> {
     Ok(RgbImage { width: img.width(), height: img.height(), pixels: img.pixels().map(|p| p.0.map(decode)).collect() })
 }
 
+/// Reads a PFM file (`PF` colour or `Pf` grey, expanded to RGB; the scale's
+/// sign gives the byte order; rows bottom to top), as linear RGB. A header
+/// that is not PFM, or data shorter than the header claims, is an error
+/// naming the byte where it goes wrong.
+pub fn read_pfm(path: &Path) -> Result<RgbImage, String> {
+    let fail = |m: String| format!("cannot read '{}': {m}", path.display());
+    let bytes = fs::read(path).map_err(|e| fail(e.to_string()))?;
+    // Three whitespace-separated header fields after the magic, then one
+    // whitespace byte before the data.
+    let mut at = 0usize;
+    let mut field = |what: &str| -> Result<String, String> {
+        while at < bytes.len() && bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        let start = at;
+        while at < bytes.len() && !bytes[at].is_ascii_whitespace() && at - start < 32 {
+            at += 1;
+        }
+        if start == at || at >= bytes.len() {
+            return Err(fail(format!("not a PFM file: no {what} at byte {start}")));
+        }
+        Ok(String::from_utf8_lossy(&bytes[start..at]).into_owned())
+    };
+    let magic = field("PF/Pf signature")?;
+    let channels = match magic.as_str() {
+        "PF" => 3,
+        "Pf" => 1,
+        _ => return Err(fail(format!("not a PFM file: it starts with '{magic}', not PF or Pf"))),
+    };
+    let dim = |s: String, what: &str| -> Result<u64, String> {
+        s.parse::<u64>()
+            .ok()
+            .filter(|&v| v > 0)
+            .ok_or_else(|| fail(format!("PFM {what} '{s}' is not a positive integer")))
+    };
+    let w = dim(field("width")?, "width")?;
+    let h = dim(field("height")?, "height")?;
+    let scale_text = field("scale")?;
+    let scale: f32 = scale_text
+        .parse()
+        .ok()
+        .filter(|s: &f32| s.is_finite() && *s != 0.0)
+        .ok_or_else(|| fail(format!("PFM scale '{scale_text}' is not a non-zero number")))?;
+    let data = at + 1;
+    check_size(path, w, h)?;
+    let need = w * h * channels as u64 * 4;
+    let have = bytes.len().saturating_sub(data) as u64;
+    if have < need {
+        return Err(fail(format!(
+            "the PFM data ends at byte {} of {} ({w} x {h} pixels need {need} bytes from byte {data})",
+            bytes.len(),
+            data as u64 + need
+        )));
+    }
+    let (w, h) = (w as usize, h as usize);
+    let value = |i: usize| {
+        let b: [u8; 4] = bytes[data + 4 * i..data + 4 * i + 4].try_into().unwrap();
+        if scale < 0.0 {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let mut pixels = vec![[0f32; 3]; w * h];
+    for y in 0..h {
+        // File row y is image row h − 1 − y.
+        for x in 0..w {
+            let i = (y * w + x) * channels;
+            let p = if channels == 3 { [value(i), value(i + 1), value(i + 2)] } else { [value(i); 3] };
+            pixels[(h - 1 - y) * w + x] = p;
+        }
+    }
+    Ok(RgbImage { width: w as u32, height: h as u32, pixels })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Written PFM files read back bit for bit; big-endian and grey files
+    /// read; a short or foreign file is an error naming where.
+    #[test]
+    fn pfm_reads_back_and_refuses_damage() {
+        let dir = std::env::temp_dir().join(format!("penumbra-pfm-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let img = RgbImage { width: 3, height: 2, pixels: (0..6).map(|i| [i as f32 * 0.25, -0.5, 1e30]).collect() };
+        let p = dir.join("a.pfm");
+        write_image(&p, &img).unwrap();
+        assert_eq!(read_image(&p).unwrap().pixels, img.pixels);
+        // Big-endian grey, 2 x 1: bottom row first (one row here).
+        let mut be = b"Pf\n2 1\n1.0\n".to_vec();
+        for v in [1.5f32, 2.0] {
+            be.extend_from_slice(&v.to_be_bytes());
+        }
+        fs::write(&p, &be).unwrap();
+        assert_eq!(read_image(&p).unwrap().pixels, vec![[1.5; 3], [2.0; 3]]);
+        fs::write(&p, &be[..be.len() - 1]).unwrap();
+        let e = read_image(&p).unwrap_err();
+        assert!(e.contains("ends at byte 18 of 19"), "{e}");
+        fs::write(&p, b"P6\n2 1\n255\n").unwrap();
+        assert!(read_image(&p).unwrap_err().contains("starts with 'P6'"));
+        fs::write(&p, b"PF\n2 -1\n-1.0\n").unwrap();
+        assert!(read_image(&p).unwrap_err().contains("height '-1'"));
+        fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn formats_round_trip_or_exist() {

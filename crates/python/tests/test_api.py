@@ -1,0 +1,235 @@
+"""The Python API against the command line, closed forms and itself."""
+
+import math
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import penumbra
+
+
+def bits(a):
+    return np.ascontiguousarray(a, dtype=np.float32).view(np.uint32)
+
+
+def run_cli(cli, *args):
+    subprocess.run([cli, "render", "--quiet", *map(str, args)], check=True, capture_output=True)
+
+
+def test_render_is_bitwise_the_command_line_image(cli, cbox, tmp_path):
+    out = tmp_path / "cli.exr"
+    run_cli(cli, cbox, "-D", "res=48", "--spp", 6, "--seed", 5, "-o", out)
+    scene = penumbra.load_file(cbox, res=48)
+    assert (scene.width, scene.height) == (48, 48)
+    img = penumbra.render(scene, spp=6, seed=5, progress=False)
+    assert img.shape == (48, 48, 3) and img.dtype == np.float32
+    ref = penumbra.read(out)
+    assert np.array_equal(bits(img), bits(ref))
+    # Another seed is another image: the comparison above can fail.
+    other = penumbra.render(scene, spp=6, seed=6, progress=False)
+    assert not np.array_equal(bits(other), bits(ref))
+
+
+def test_aovs_are_the_command_line_layers(cli, cbox, tmp_path):
+    out = tmp_path / "cli.exr"
+    run_cli(cli, cbox, "-D", "res=32", "--spp", 4, "--aov", "albedo,depth,variance", "-o", out)
+    scene = penumbra.load_file(cbox, res=32)
+    got = penumbra.render(scene, spp=4, aovs=("albedo", "depth", "variance"), progress=False)
+    ref = penumbra.read(out, metadata=True)
+    assert set(got) == {"image", "albedo", "depth", "variance"}
+    assert got["albedo"].shape == (32, 32, 3) and got["depth"].shape == (32, 32, 1)
+    for k in got:
+        assert np.array_equal(bits(got[k]), bits(ref[k])), k
+    assert ref["metadata"]["spp"] == "4"
+
+
+def test_integrator_and_threads(cli, cbox, tmp_path):
+    out = tmp_path / "cli.exr"
+    run_cli(cli, cbox, "-D", "res=24", "--spp", 3, "--integrator", "direct:emitter_samples=2", "--threads", 1, "-o", out)
+    scene = penumbra.load_file(cbox, res=24)
+    img = penumbra.render(scene, spp=3, integrator="direct:emitter_samples=2", threads=2, progress=False)
+    assert np.array_equal(bits(img), bits(penumbra.read(out)))
+
+
+FURNACE = {
+    "type": "scene",
+    "integrator": {"type": "path", "max_depth": -1, "rr_depth": 1000},
+    "sensor": {
+        "type": "perspective",
+        "fov": 30.0,
+        "to_world": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, -4], [0, 0, 0, 1]],
+        "film": {"type": "hdrfilm", "width": 24, "height": 24, "rfilter": {"type": "box"}},
+        "sampler": {"type": "independent", "sample_count": 16},
+    },
+    "light": {"type": "constant", "radiance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}},
+    "ball": {
+        "type": "sphere",
+        "radius": 1.0,
+        "center": [0, 0, 0],
+        "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}},
+    },
+}
+
+
+def test_load_dict_furnace_renders_one():
+    """A white diffuse sphere under a white sky: every pixel's expectation is
+    exactly 1. The image mean is tested against the spread of its (box
+    filtered, so independent) pixels at a false-alarm rate of 1e-4 per channel."""
+    img = penumbra.render(penumbra.load_dict(FURNACE), progress=False).reshape(-1, 3).astype(np.float64)
+    n = img.shape[0]
+    se = img.std(axis=0, ddof=1) / math.sqrt(n)
+    z = np.abs(img.mean(axis=0) - 1.0) / np.maximum(se, 1e-12)
+    assert np.all(z < 3.9), (img.mean(axis=0), se)
+    # A 2 % darker sky would fail it (the test has the power to see it).
+    d = dict(FURNACE, light={"type": "constant", "radiance": {"type": "rgb", "value": [0.98] * 3}})
+    dark = penumbra.render(penumbra.load_dict(d), progress=False).reshape(-1, 3).astype(np.float64)
+    assert np.all(np.abs(dark.mean(axis=0) - 1.0) / (dark.std(axis=0, ddof=1) / math.sqrt(n)) > 3.9)
+
+
+def test_load_dict_equals_the_same_xml():
+    xml, _ = penumbra._dict.to_xml(FURNACE)
+    a = penumbra.render(penumbra.load_dict(FURNACE), spp=2, progress=False)
+    b = penumbra.render(penumbra.load_string(xml), spp=2, progress=False)
+    assert np.array_equal(bits(a), bits(b))
+    assert 'id="ball"' in xml and '<point name="center"' in xml
+
+
+def test_bad_input_raises_with_file_and_line(tmp_path):
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<scene version="3.0.0">\n  <shape type="sphere">\n    <float name="radius" value="nan"/>\n  </shape>\n</scene>\n')
+    with pytest.raises(penumbra.Error) as e:
+        penumbra.load_file(bad)
+    assert e.value.file.endswith("bad.xml") and e.value.line == 3 and "bad.xml:3:" in str(e.value)
+    with pytest.raises(penumbra.Error) as e:
+        penumbra.load_file(tmp_path / "missing.xml")
+    assert "missing.xml" in str(e.value)
+    with pytest.raises(penumbra.Error) as e:
+        penumbra.load_string('<scene version="3.0.0">\n<bsdf type="diffuse" id="d">\n<float name="roughness" value="1"/>\n</bsdf></scene>')
+    assert e.value.line == 3 and "roughness" in str(e.value)
+
+
+def test_bad_dict_names_the_key():
+    d = dict(FURNACE, ball=dict(FURNACE["ball"], bsdf={"type": "diffuse", "roughnes": 0.5}))
+    with pytest.raises(penumbra.Error) as e:
+        penumbra.load_dict(d)
+    assert "dict['ball']['bsdf']['roughnes']" in str(e.value), str(e.value)
+    with pytest.raises(penumbra.Error, match=r"dict\['ball'\]\['radius'\]: nan is not a finite number"):
+        penumbra.load_dict(dict(FURNACE, ball=dict(FURNACE["ball"], radius=float("nan"))))
+    with pytest.raises(penumbra.Error, match="not one Penumbra builds"):
+        penumbra.load_dict(dict(FURNACE, fog={"type": "homogeneous"}))
+
+
+def test_parameter_sweep_keeps_geometry_and_matches_a_fresh_load(cbox):
+    scene = penumbra.load_file(cbox, res=24)
+    assert scene.get("red.reflectance") == [0.63, 0.065, 0.05]
+    before = scene.geometry_builds
+    base = penumbra.render(scene, spp=2, progress=False)
+    scene.set("red.reflectance", [0.2, 0.2, 0.9])
+    swept = penumbra.render(scene, spp=2, progress=False)
+    assert scene.geometry_builds == before, "a reflectance change rebuilt geometry"
+    assert not np.array_equal(bits(base), bits(swept))
+    text = cbox.read_text().replace('<rgb name="reflectance" value="0.63, 0.065, 0.05"/>', '<rgb name="reflectance" value="0.2, 0.2, 0.9"/>')
+    assert text != cbox.read_text()
+    fresh = penumbra.load_string(text, base_dir=cbox.parent, res=24)
+    assert np.array_equal(bits(swept), bits(penumbra.render(fresh, spp=2, progress=False)))
+    # A shape's own parameter rebuilds that shape only (the BVH too).
+    scene.set("sensor.to_world", np.eye(4))
+    assert scene.geometry_builds == before
+    assert np.array_equal(scene.camera_to_world, np.eye(4))
+    with pytest.raises(penumbra.Error, match="no object with id 'nosuch'"):
+        scene.set("nosuch.reflectance", 0.5)
+    with pytest.raises(penumbra.Error, match="is a rgb"):
+        scene.set("red.reflectance", "text")
+    with pytest.raises(KeyError):
+        scene.set("reflectance", 0.5)
+
+
+def test_progress_reaches_the_total(cbox):
+    calls = []
+    penumbra.render(penumbra.load_file(cbox, res=16), spp=4, progress=lambda d, t: calls.append((d, t)))
+    assert calls and calls[-1][0] == calls[-1][1] == 16 * 16 * 4
+    assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_the_gil_is_released_while_rendering(cbox):
+    scene = penumbra.load_file(cbox, res=64)
+    done = threading.Event()
+    t = threading.Thread(target=lambda: (penumbra.render(scene, spp=64, threads=1, progress=False), done.set()))
+    ticks = 0
+    start = time.monotonic()
+    t.start()
+    while not done.is_set() and time.monotonic() - start < 60:
+        ticks += 1
+        time.sleep(0.001)
+    t.join()
+    # Held for the whole render, the GIL would let this loop run only at
+    # the start and the end.
+    assert ticks > 20, ticks
+
+
+def os_threads():
+    return len(os.listdir("/proc/self/task"))
+
+
+def test_ctrl_c_interrupts_without_leaving_threads(cbox, tmp_path):
+    scene = penumbra.load_file(cbox, res=96)
+    threads_before = os_threads()
+    ck = tmp_path / "render.ckpt"
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    t0 = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        penumbra.render(scene, spp=4096, threads=2, progress=False, checkpoint=ck)
+    assert time.monotonic() - t0 < 30
+    timer.join()
+    deadline = time.monotonic() + 5
+    while os_threads() > threads_before and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert os_threads() <= threads_before
+    assert ck.exists(), "the interrupted render saved no checkpoint"
+
+
+def test_checkpoint_resume_is_bitwise_the_uninterrupted_render(cbox, tmp_path):
+    scene = penumbra.load_file(cbox, res=64)
+    whole = penumbra.render(scene, spp=96, threads=1, progress=False)
+    ck = tmp_path / "r.ckpt"
+    # Interrupt after the first progress report past a third of the samples.
+    def stop(done, total):
+        if done > total // 3:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        penumbra.render(scene, spp=96, threads=1, progress=stop, checkpoint=ck)
+    assert ck.exists()
+    resumed = penumbra.render(scene, spp=96, threads=1, progress=False, checkpoint=ck)
+    assert np.array_equal(bits(whole), bits(resumed))
+    assert not ck.exists(), "a complete render keeps no checkpoint"
+
+
+def test_read_and_write_round_trip(tmp_path):
+    rng = np.random.default_rng(1)
+    img = rng.random((5, 7, 3), dtype=np.float32) * 4
+    albedo = rng.random((5, 7, 3), dtype=np.float32)
+    depth = rng.random((5, 7), dtype=np.float32)
+    penumbra.write(tmp_path / "a.exr", img, layers={"albedo": albedo, "depth": depth}, metadata={"note": "hello"})
+    back = penumbra.read(tmp_path / "a.exr", metadata=True)
+    assert np.array_equal(back["image"], img) and np.array_equal(back["albedo"], albedo)
+    assert np.array_equal(back["depth"][:, :, 0], depth) and back["metadata"]["note"] == "hello"
+    for ext in ("pfm", "hdr", "png"):
+        penumbra.write(tmp_path / ("a." + ext), img)
+        got = penumbra.read(tmp_path / ("a." + ext))
+        assert got.shape == img.shape
+        if ext == "pfm":
+            assert np.array_equal(got, img)
+        elif ext == "hdr":  # RGBE: 8-bit mantissas under the largest channel's exponent
+            assert np.all(np.abs(got - img) <= img.max(axis=2, keepdims=True) / 128)
+        else:  # sRGB 8-bit, clamped to [0, 1]
+            assert np.allclose(got, np.clip(img, 0, 1), atol=0.03)
+    with pytest.raises(penumbra.Error, match="need an EXR"):
+        penumbra.write(tmp_path / "b.png", img, metadata={"a": "b"})
+    with pytest.raises(penumbra.Error):
+        penumbra.read(tmp_path / "missing.exr")
