@@ -33,7 +33,8 @@ pub fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>>
     // Layers "name.C": one array per name. EXR files list channels sorted by
     // name, so R, G, B, A and X, Y, Z are put back in that order.
     let rank = |c: &str| ["R", "G", "B", "A", "X", "Y", "Z"].iter().position(|&n| n == c).unwrap_or(7);
-    let mut groups: Vec<(String, Vec<(&str, &Vec<f32>)>)> = Vec::new();
+    type Channels<'a> = Vec<(&'a str, &'a Vec<f32>)>;
+    let mut groups: Vec<(String, Channels)> = Vec::new();
     for (name, v) in &img.layers {
         let (layer, suffix) = name.rsplit_once('.').unwrap_or((name.as_str(), ""));
         match groups.iter_mut().find(|(l, _)| l == layer) {

@@ -19,6 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
 /// How often the calling thread takes the GIL to check for signals and
@@ -119,21 +120,24 @@ pub fn render<'py>(
             }
         }
     };
+    let finished = (Mutex::new(false), Condvar::new());
     let outcome = std::thread::scope(|s| {
         let worker = s.spawn(|| {
             let mut none = |_: &State| Ok(());
             let mut none2 = |_: &State| Ok(());
             let hooks = Hooks { checkpoint: &mut none, partial: &mut none2, after_pass: None };
             let r = driver::run(&job, &pool, &opts, &mut state, hooks);
+            *finished.0.lock().unwrap_or_else(|e| e.into_inner()) = true;
+            finished.1.notify_all();
             (r, state)
         });
-        while !worker.is_finished() {
-            py.detach(|| {
-                let t = std::time::Instant::now();
-                while !worker.is_finished() && t.elapsed() < POLL {
-                    std::thread::sleep(Duration::from_millis(2));
-                }
-            });
+        // Woken by the worker's message or every POLL: no busy waiting.
+        let wait = || {
+            let done = finished.0.lock().unwrap_or_else(|e| e.into_inner());
+            let (done, _) = finished.1.wait_timeout_while(done, POLL, |d| !*d).unwrap_or_else(|e| e.into_inner());
+            !*done
+        };
+        while py.detach(wait) {
             if raised.is_none() {
                 if let Err(e) = py.check_signals() {
                     cancel.store(true, Ordering::Relaxed);
