@@ -1,8 +1,8 @@
-//! `penumbra render`, in four steps: [`plan`] checks the arguments, loads
+//! `penumbra render`, in four steps: `plan` checks the arguments, loads
 //! the scene and applies --crop and --part (everything decided before the
-//! first pass); [`resume`] opens the checkpoint or starts an empty film;
-//! [`run_passes`] drives the pass loop (driver.rs) with its checkpoint,
-//! partial-image and preview hooks; [`report`] writes the image with its
+//! first pass); `resume` opens the checkpoint or starts an empty film;
+//! `run_passes` drives the pass loop (driver.rs) with its checkpoint,
+//! partial-image and preview hooks; `report` writes the image with its
 //! metadata, settles the checkpoint, prints the summary and picks the exit
 //! code.
 
