@@ -113,6 +113,11 @@ pub struct RenderArgs {
     /// PENUMBRA_PREVIEW_HOLD=SECONDS keeps the window open after the last pass.
     #[arg(long)]
     pub preview: bool,
+    /// Stream the image (and its AOVs as layers) to a running tev image
+    /// viewer after every pass, e.g. localhost:14158 (tev's default port).
+    /// If tev cannot be reached, or goes away, the render goes on without it.
+    #[arg(long, value_name = "HOST:PORT", value_parser = crate::tev::parse_address)]
+    pub display_server: Option<String>,
     /// Extra EXR layers beside the beauty image, comma-separated: albedo,
     /// normal (taken through specular surfaces), depth, position (of the
     /// first hit), variance (of each pixel's mean).

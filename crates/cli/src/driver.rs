@@ -100,7 +100,7 @@ pub struct Extras {
 pub struct Hooks<'a> {
     pub checkpoint: &'a mut dyn FnMut(&State) -> Result<()>,
     pub partial: &'a mut dyn FnMut(&State) -> Result<()>,
-    /// After every pass, the last one included (the `--preview` window).
+    /// After every pass, the last one included (the `--preview` window, tev).
     pub after_pass: Option<&'a mut dyn FnMut(&State)>,
 }
 

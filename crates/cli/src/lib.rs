@@ -22,6 +22,7 @@ pub mod progress;
 pub mod render_cmd;
 pub mod settings;
 pub mod signals;
+pub mod tev;
 
 use anyhow::{anyhow, Context, Result};
 use penumbra_render::film::Film;

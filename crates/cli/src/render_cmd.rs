@@ -2,7 +2,7 @@
 //! the scene and applies --crop and --part (everything decided before the
 //! first pass); `resume` opens the checkpoint or starts an empty film;
 //! `run_passes` drives the pass loop (driver.rs) with its checkpoint,
-//! partial-image and preview hooks; `report` writes the image with its
+//! partial-image, preview and tev hooks; `report` writes the image with its
 //! metadata, settles the checkpoint, prints the summary and picks the exit
 //! code.
 
@@ -14,6 +14,7 @@ use crate::part::{self, Part};
 use crate::preview::Preview;
 use crate::settings::{RenderIdentity, Settings, VERSION};
 use crate::signals::Signals;
+use crate::tev::Display;
 use anyhow::{anyhow, bail, Context, Result};
 use penumbra_render::film::{Film, FilmLayers, Filter, FilterKind};
 use penumbra_render::render::RenderJob;
@@ -296,15 +297,25 @@ fn run_passes(plan: &Plan, state: &mut State) -> Result<Run> {
     if let Some(p) = preview.as_mut().filter(|_| state.spp > 0) {
         p.show(&state.film.develop(), state.spp, target); // resumed
     }
-    let mut preview_hook = |st: &State| {
+    let mut display = a.display_server.as_deref().map(|addr| {
+        let name = a.output.file_name().map_or("penumbra".into(), |n| n.to_string_lossy().into_owned());
+        Display::connect(addr, &name)
+    });
+    if let Some(d) = display.as_mut().filter(|_| state.spp > 0) {
+        d.show(&state.film); // resumed
+    }
+    let mut after_pass = |st: &State| {
         if let Some(p) = preview.as_mut() {
             p.show(&st.film.develop(), st.spp, target);
+        }
+        if let Some(d) = display.as_mut() {
+            d.show(&st.film);
         }
     };
     let hooks = Hooks {
         checkpoint: &mut ck_hook,
         partial: &mut partial_hook,
-        after_pass: if a.preview { Some(&mut preview_hook) } else { None },
+        after_pass: if a.preview || a.display_server.is_some() { Some(&mut after_pass) } else { None },
     };
     let start = Instant::now();
     let seconds_before = state.seconds;

@@ -13,6 +13,7 @@ use numpy::{PyArray1, PyArrayMethods};
 use penumbra::checkpoint::Checkpoint;
 use penumbra::driver::{self, Budget, Hooks, Schedule, State, Stop, DEFAULT_MAX_PASS_SPP};
 use penumbra::settings::{RenderIdentity, Settings, VERSION};
+use penumbra::tev::Display;
 use penumbra_render::film::{AovKind, Film};
 use penumbra_scene::Overrides;
 use pyo3::prelude::*;
@@ -35,9 +36,11 @@ fn array<'py>(py: Python<'py>, v: Vec<f32>, h: u32, w: u32, c: usize) -> PyResul
 /// `progress(done, total)` is called with sample counts (in pixels × spp)
 /// from the calling thread; `checkpoint` names a file to resume from when
 /// it matches this render, saved when the render is interrupted and
-/// deleted once it completes (as the command line's `--checkpoint`).
+/// deleted once it completes (as the command line's `--checkpoint`);
+/// `display_server` (`HOST:PORT`) streams every pass to tev (as
+/// `--display-server`).
 #[pyfunction]
-#[pyo3(signature = (scene, spp=None, seed=0, threads=None, integrator=None, aovs=Vec::new(), progress=None, checkpoint=None, max_pass_spp=DEFAULT_MAX_PASS_SPP))]
+#[pyo3(signature = (scene, spp=None, seed=0, threads=None, integrator=None, aovs=Vec::new(), progress=None, checkpoint=None, max_pass_spp=DEFAULT_MAX_PASS_SPP, display_server=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -50,7 +53,11 @@ pub fn render<'py>(
     progress: Option<Bound<'py, PyAny>>,
     checkpoint: Option<PathBuf>,
     max_pass_spp: u32,
+    display_server: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(a) = &display_server {
+        penumbra::tev::parse_address(a).map_err(|e| error(format!("display_server: {e}")))?;
+    }
     let ov = Overrides { spp, seed: Some(seed), integrator: integrator.clone(), sampler: None };
     let job = scene.job(&ov).map_err(|e| load_error(py, &e))?;
     let layers = penumbra::layers::parse(&aovs.join(",")).map_err(anyhow_error)?;
@@ -125,7 +132,18 @@ pub fn render<'py>(
         let worker = s.spawn(|| {
             let mut none = |_: &State| Ok(());
             let mut none2 = |_: &State| Ok(());
-            let hooks = Hooks { checkpoint: &mut none, partial: &mut none2, after_pass: None };
+            let mut display = display_server.as_deref().map(|a| Display::connect(a, "penumbra"));
+            let streaming = display.is_some();
+            let mut show = |st: &State| {
+                if let Some(d) = display.as_mut() {
+                    d.show(&st.film);
+                }
+            };
+            if state.spp > 0 {
+                show(&state); // resumed
+            }
+            let after_pass: Option<&mut dyn FnMut(&State)> = streaming.then_some(&mut show);
+            let hooks = Hooks { checkpoint: &mut none, partial: &mut none2, after_pass };
             let r = driver::run(&job, &pool, &opts, &mut state, hooks);
             *finished.0.lock().unwrap_or_else(|e| e.into_inner()) = true;
             finished.1.notify_all();

@@ -233,3 +233,62 @@ def test_read_and_write_round_trip(tmp_path):
         penumbra.write(tmp_path / "b.png", img, metadata={"a": "b"})
     with pytest.raises(penumbra.Error):
         penumbra.read(tmp_path / "missing.exr")
+
+
+def _tev_server():
+    """A loopback server speaking tev's protocol: returns its port and a
+    function that waits for the client to close and returns the packets
+    (type, payload bytes)."""
+    import socket
+    import struct
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(1)
+    got = []
+
+    def serve():
+        conn, _ = srv.accept()
+        data = b""
+        while True:
+            chunk = conn.recv(1 << 16)
+            if not chunk:
+                break
+            data += chunk
+        conn.close()
+        at = 0
+        while at < len(data):
+            (n,) = struct.unpack_from("<I", data, at)
+            got.append((data[at + 4], data[at + 5 : at + n]))
+            at += n
+
+    t = threading.Thread(target=serve)
+    t.start()
+
+    def finish():
+        t.join(30)
+        srv.close()
+        return got
+
+    return srv.getsockname()[1], finish
+
+
+def test_display_server_streams_the_image_to_tev(cbox):
+    import struct
+
+    port, finish = _tev_server()
+    scene = penumbra.load_file(cbox, res=24)
+    img = penumbra.render(scene, spp=4, progress=False, display_server=f"127.0.0.1:{port}")
+    packets = finish()
+    kinds = [k for k, _ in packets]
+    # Create, then one update tile per pass (1, 1, 2 spp).
+    assert kinds == [4, 6, 6, 6], kinds
+    last = packets[-1][1]
+    # grab focus, "penumbra\0", 3 channels "R\0G\0B\0", x y w h, 3 offsets, 3 strides.
+    head = 1 + 9 + 4 + 6
+    x, y, w, h = struct.unpack_from("<4i", last, head)
+    assert (x, y, w, h) == (0, 0, 24, 24)
+    data = np.frombuffer(last[head + 16 + 48 :], dtype="<f4").reshape(24, 24, 3)
+    assert np.array_equal(bits(data), bits(img))
+    with pytest.raises(Exception, match="HOST:PORT"):
+        penumbra.render(scene, spp=1, progress=False, display_server="nowhere")

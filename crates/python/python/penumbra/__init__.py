@@ -47,7 +47,9 @@ def load_string(xml, base_dir=None, **params):
     return _load_string(xml, params, None if base_dir is None else str(base_dir))
 
 
-def render(scene, spp=None, seed=0, threads=None, integrator=None, aovs=(), progress=True, checkpoint=None):
+def render(
+    scene, spp=None, seed=0, threads=None, integrator=None, aovs=(), progress=True, checkpoint=None, display_server=None
+):
     """Renders ``scene`` and returns its image as a float32 array of shape
     (height, width, 3), linear RGB.
 
@@ -62,6 +64,8 @@ def render(scene, spp=None, seed=0, threads=None, integrator=None, aovs=(), prog
       none, or a callable ``f(done, total)``.
     - ``checkpoint``: a file to resume from (if it belongs to this render); it is
       written when the render is interrupted (Ctrl-C) and deleted once it completes.
+    - ``display_server``: ``"HOST:PORT"`` of a running tev (default port 14158):
+      the image is streamed to it after every pass (as ``--display-server``).
 
     The GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt once every worker thread has stopped.
@@ -88,6 +92,7 @@ def render(scene, spp=None, seed=0, threads=None, integrator=None, aovs=(), prog
             aovs=list(aovs),
             progress=callback,
             checkpoint=None if checkpoint is None else str(checkpoint),
+            display_server=display_server,
         )
     finally:
         if bar is not None:
