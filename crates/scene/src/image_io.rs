@@ -416,7 +416,7 @@ mod tests {
         let back = read_image(&jpg).unwrap();
         assert!(back.pixels.iter().flatten().all(|c| (c - 0.5029).abs() < 0.01), "{:?}", back.pixels[0]);
         let err = read_image(&dir.join("in.tga")).unwrap_err();
-        assert!(err.contains("in.tga") && err.contains(".exr, .hdr, .png or .jpg"), "{err}");
+        assert!(err.contains("in.tga") && err.contains(".exr, .hdr, .pfm, .png or .jpg"), "{err}");
         let err = read_image(&dir.join("missing.hdr")).unwrap_err();
         assert!(err.contains("missing.hdr"), "{err}");
         fs::remove_dir_all(&dir).ok();
