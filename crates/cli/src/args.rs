@@ -118,6 +118,10 @@ pub struct RenderArgs {
     /// If tev cannot be reached, or goes away, the render goes on without it.
     #[arg(long, value_name = "HOST:PORT", value_parser = crate::tev::parse_address)]
     pub display_server: Option<String>,
+    /// Render `path` one path at a time instead of as a stream of paths
+    /// traced in packets (the same image, bit for bit; for comparison).
+    #[arg(long)]
+    pub no_stream: bool,
     /// Extra EXR layers beside the beauty image, comma-separated: albedo,
     /// normal (taken through specular surfaces), depth, position (of the
     /// first hit), variance (of each pixel's mean).

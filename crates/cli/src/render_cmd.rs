@@ -99,6 +99,7 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
     if let Some(c) = a.crop {
         apply_crop(&mut job, c)?;
     }
+    job.stream = !a.no_stream;
     if a.denoise {
         // A wide filter's splats make neighbouring pixels' noise correlated,
         // which the denoiser keeps as detail (measured: a 16 spp Cornell box

@@ -130,16 +130,23 @@ impl Scene {
             log_ray(log, *ray, false);
         }
         let hit = self.accel.intersect(ray, &self.shapes, &self.instances)?;
+        Some(self.interaction(ray, &hit))
+    }
+
+    /// The surface interaction of `ray`'s closest hit `hit` (from
+    /// [`Scene::intersect`] or a packet traversal of [`Scene::accel`]).
+    #[inline]
+    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let (id, i, t, uv) = (hit.shape, hit.index as usize, hit.t, hit.uv);
         let material = self.shape_info[id as usize].material as usize;
         let param = self.reads_uv.get(material).copied().unwrap_or(true);
         let shape = &self.shapes[id as usize];
         // Instances and their flattened geometry take the same path (the same frames).
-        Some(if hit.instance == Hit::NOT_INSTANCED {
+        if hit.instance == Hit::NOT_INSTANCED {
             shape.interaction_with(id, i, ray, t, uv, param)
         } else {
             self.instances[hit.instance as usize].interaction_with(shape, id, i, ray, t, uv, param)
-        })
+        }
     }
 
     /// Whether the segment from `si` along `wi` is blocked before `dist`.
@@ -151,18 +158,29 @@ impl Scene {
     /// `spawn_ray_to` aims the same way).
     #[inline]
     pub fn occluded(&self, si: &SurfaceInteraction, wi: Vec3, dist: f32) -> bool {
+        self.occluded_ray(&self.shadow_ray(si, wi, dist))
+    }
+
+    /// The shadow ray of [`Scene::occluded`].
+    #[inline]
+    pub fn shadow_ray(&self, si: &SurfaceInteraction, wi: Vec3, dist: f32) -> Ray {
         let o = offset_origin(si.p, si.n, wi);
-        let ray = if dist.is_finite() {
+        if dist.is_finite() {
             let d = si.p + wi * dist - o;
             let len = d.length();
             Ray::new(o, d / len, len * (1.0 - SHADOW_EPSILON))
         } else {
             Ray::new(o, wi, f32::INFINITY)
-        };
-        if let Some(log) = &self.ray_log {
-            log_ray(log, ray, true);
         }
-        self.accel.occluded(&ray, &self.shapes, &self.instances)
+    }
+
+    /// Whether `ray` (a [`Scene::shadow_ray`]) is blocked before its `t_max`.
+    #[inline]
+    pub fn occluded_ray(&self, ray: &Ray) -> bool {
+        if let Some(log) = &self.ray_log {
+            log_ray(log, *ray, true);
+        }
+        self.accel.occluded(ray, &self.shapes, &self.instances)
     }
 
     /// A ray leaving `si` in direction `wi`.

@@ -41,6 +41,7 @@ fn the_log_holds_every_query_and_changes_nothing() {
         height: 12,
         crop_offset: (0, 0),
         full_size: (12, 12),
+        stream: false,
     };
     let mut plain = Film::new(12, 12);
     let plain_stats = job.render_into(&mut plain, 0..4, &|_| {});

@@ -11,8 +11,8 @@
 //! | mis           | boolean | true: power heuristic; false: the lecture's split, emitted light only through light samples, reflected light only through BSDF samples |
 //! | throughput_threshold | float | 0 (off): stop when max(β) falls below it; biased |
 
-use super::{camera_hit, RayStats, Termination};
-use crate::geometry::Ray;
+use super::{RayStats, Termination};
+use crate::geometry::{Ray, SurfaceInteraction};
 use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
@@ -39,10 +39,68 @@ impl Default for PathIntegrator {
     }
 }
 
+/// A path between two vertices: all that [`PathIntegrator::li`] keeps from
+/// one vertex to the next. A stream of paths (the render's stream module) holds many
+/// of these and traces their rays together; [`PathIntegrator::li`] walks one.
+#[derive(Debug, Clone, Copy)]
+pub struct PathState {
+    /// The ray whose closest hit the next vertex needs.
+    pub ray: Ray,
+    /// Radiance gathered so far.
+    l: Spectrum,
+    /// Throughput β.
+    beta: Spectrum,
+    /// Product of relative IORs crossed (for Russian roulette).
+    eta: f32,
+    /// Segments completed.
+    depth: u32,
+    /// The previous vertex, for MIS of emitters hit by BSDF sampling.
+    prev_p: Vec3,
+    prev_n: Vec3,
+    prev_bsdf_pdf: f32,
+    prev_delta: bool,
+    /// The light sample's contribution, added if its shadow ray is unblocked.
+    pending: Spectrum,
+}
+
+impl PathState {
+    /// The radiance gathered so far (all of it once the path has ended).
+    #[inline]
+    pub fn radiance(&self) -> Spectrum {
+        self.l
+    }
+
+    /// The verdict on the shadow ray of the last vertex ([`Vertex::shadow`]):
+    /// the light sample counts if it was not blocked. Called before the
+    /// next vertex, so radiance is summed in the same order as in one loop.
+    #[inline]
+    pub fn shadow_done(&mut self, occluded: bool) {
+        if !occluded {
+            self.l += self.pending;
+        }
+    }
+}
+
+/// What one vertex asks of whoever traces the rays.
+#[derive(Debug, Clone, Copy)]
+pub struct Vertex {
+    /// The shadow ray of the light sample, whose verdict goes to
+    /// [`PathState::shadow_done`].
+    pub shadow: Option<Ray>,
+    /// Whether the path goes on: then the closest hit of `PathState::ray`
+    /// is the next vertex's input.
+    pub go_on: bool,
+}
+
+impl Vertex {
+    const DONE: Vertex = Vertex { shadow: None, go_on: false };
+}
+
 impl PathIntegrator {
     /// Estimates L(x, -d) = Le + ∫ f Li cos dω (the rendering equation,
     /// Kajiya 1986) with one light sample and one BSDF sample per vertex,
-    /// each MIS-weighted against the other (Veach 1997, eq. 9.13).
+    /// each MIS-weighted against the other (Veach 1997, eq. 9.13): the
+    /// path's vertices one after the other, each ray traced alone.
     pub fn li(
         &self,
         scene: &Scene,
@@ -51,100 +109,129 @@ impl PathIntegrator {
         stats: &mut RayStats,
         scratch: &Scratch,
     ) -> Spectrum {
-        if self.term.max_depth == 0 {
-            return Spectrum::ZERO;
-        }
-        let mut l = Spectrum::ZERO;
-        let mut beta = Spectrum::ONE;
-        let mut eta = 1.0f32;
-        let mut ray = *camera_ray;
-        let mut depth = 0u32;
-        // The previous vertex, for MIS of emitters hit by BSDF sampling.
-        let mut prev_p = ray.o;
-        let mut prev_n = Vec3::ZERO;
-        let mut prev_bsdf_pdf = 1.0f32;
-        let mut prev_delta = true;
-
+        let Some(mut st) = self.start(camera_ray) else { return Spectrum::ZERO };
         loop {
-            let hit = if depth == 0 {
-                camera_hit(scene, &ray, self.hide_emitters, stats)
-            } else {
-                stats.rays += 1;
-                scene.intersect(&ray)
-            };
-
-            let Some(mut si) = hit else {
-                // Escaped: environment emission, MIS-weighted against light sampling.
-                if prev_delta {
-                    // Camera ray or specular bounce: weight 1, no density needed.
-                    if !(depth == 0 && self.hide_emitters) {
-                        l += beta * scene.environment_radiance(ray.d);
-                    }
-                } else {
-                    let (le, env_pdf) = scene.environment(prev_p, prev_n, ray.d);
-                    if le != Spectrum::ZERO {
-                        l += beta * le * self.bsdf_weight(prev_bsdf_pdf, env_pdf);
-                    }
-                }
-                break;
-            };
-
-            // Emission at the hit, MIS-weighted against light sampling at the previous vertex.
-            let le = scene.emitted(&si);
-            if le != Spectrum::ZERO {
-                let w = if prev_delta {
-                    1.0
-                } else {
-                    self.bsdf_weight(prev_bsdf_pdf, scene.light_pdf(prev_p, prev_n, &si))
-                };
-                l += beta * le * w;
+            stats.rays += 1;
+            let hit = scene.intersect(&st.ray);
+            let v = self.vertex(scene, &mut st, hit, rng, scratch);
+            if let Some(r) = v.shadow {
+                stats.shadow_rays += 1;
+                st.shadow_done(scene.occluded_ray(&r));
             }
-
-            if depth + 1 >= self.term.max_depth {
-                break;
-            }
-            let bsdf = scene.bsdf(&mut si, scratch);
-            let wo = si.to_local(si.wo);
-
-            // Light sampling (next-event estimation).
-            let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
-            if bsdf.has_smooth() {
-                if let Some(ls) = scene.sample_light(si.p, si.n, u_sel, u_light) {
-                    let wi = si.to_local(ls.wi);
-                    let mis = self.mis && !ls.delta;
-                    // With MIS, value and pdf in one BSDF dispatch.
-                    let (f, bsdf_pdf) = if mis { bsdf.eval_pdf(wo, wi) } else { (bsdf.eval(wo, wi), 0.0) };
-                    let f = f * wi.z.abs();
-                    if f != Spectrum::ZERO {
-                        stats.shadow_rays += 1;
-                        if !scene.occluded(&si, ls.wi, ls.dist) {
-                            let w = if mis { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
-                            l += beta * f * ls.li * (w / ls.pdf);
-                        }
-                    }
-                }
-            }
-
-            // BSDF sampling for the next segment.
-            let u = rng.next_1d();
-            let u2 = rng.next_2d();
-            let Some(bs) = bsdf.sample(wo, u, u2) else { break };
-            beta *= bs.weight;
-            eta *= bs.eta;
-            let wi = si.to_world(bs.wi);
-            prev_p = si.p;
-            prev_n = si.n;
-            prev_bsdf_pdf = bs.pdf;
-            prev_delta = bs.delta;
-            ray = scene.spawn_ray(&si, wi);
-            depth += 1;
-
-            match self.term.survive(beta, eta, depth, rng) {
-                Some(q) => beta /= q,
-                None => break,
+            if !v.go_on {
+                return st.radiance();
             }
         }
-        l
+    }
+
+    /// A path leaving the camera along `camera_ray`, or `None` when
+    /// `max_depth` is 0 (the estimate is then 0).
+    pub fn start(&self, camera_ray: &Ray) -> Option<PathState> {
+        (self.term.max_depth > 0).then_some(PathState {
+            ray: *camera_ray,
+            l: Spectrum::ZERO,
+            beta: Spectrum::ONE,
+            eta: 1.0,
+            depth: 0,
+            prev_p: camera_ray.o,
+            prev_n: Vec3::ZERO,
+            prev_bsdf_pdf: 1.0,
+            prev_delta: true,
+            pending: Spectrum::ZERO,
+        })
+    }
+
+    /// One vertex at `hit`, the closest hit of `st.ray`: emission there
+    /// (MIS-weighted against light sampling at the previous vertex), a light
+    /// sample (its shadow ray returned), a BSDF sample for the next segment
+    /// and Russian roulette. With `hide_emitters`, a camera ray that hits an
+    /// emitter is continued behind it first (as [`super::camera_hit`]).
+    #[inline]
+    pub fn vertex(
+        &self,
+        scene: &Scene,
+        st: &mut PathState,
+        hit: Option<SurfaceInteraction>,
+        rng: &mut SampleStream,
+        scratch: &Scratch,
+    ) -> Vertex {
+        let Some(mut si) = hit else {
+            // Escaped: environment emission, MIS-weighted against light sampling.
+            if st.prev_delta {
+                // Camera ray or specular bounce: weight 1, no density needed.
+                if !(st.depth == 0 && self.hide_emitters) {
+                    st.l += st.beta * scene.environment_radiance(st.ray.d);
+                }
+            } else {
+                let (le, env_pdf) = scene.environment(st.prev_p, st.prev_n, st.ray.d);
+                if le != Spectrum::ZERO {
+                    st.l += st.beta * le * self.bsdf_weight(st.prev_bsdf_pdf, env_pdf);
+                }
+            }
+            return Vertex::DONE;
+        };
+        if st.depth == 0 && self.hide_emitters && scene.shape_info[si.shape as usize].light.is_some() {
+            st.ray = scene.spawn_ray(&si, st.ray.d);
+            return Vertex { shadow: None, go_on: true };
+        }
+
+        // Emission at the hit, MIS-weighted against light sampling at the previous vertex.
+        let le = scene.emitted(&si);
+        if le != Spectrum::ZERO {
+            let w = if st.prev_delta {
+                1.0
+            } else {
+                self.bsdf_weight(st.prev_bsdf_pdf, scene.light_pdf(st.prev_p, st.prev_n, &si))
+            };
+            st.l += st.beta * le * w;
+        }
+
+        if st.depth + 1 >= self.term.max_depth {
+            return Vertex::DONE;
+        }
+        let bsdf = scene.bsdf(&mut si, scratch);
+        let wo = si.to_local(si.wo);
+
+        // Light sampling (next-event estimation).
+        let mut shadow = None;
+        let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
+        if bsdf.has_smooth() {
+            if let Some(ls) = scene.sample_light(si.p, si.n, u_sel, u_light) {
+                let wi = si.to_local(ls.wi);
+                let mis = self.mis && !ls.delta;
+                // With MIS, value and pdf in one BSDF dispatch.
+                let (f, bsdf_pdf) = if mis { bsdf.eval_pdf(wo, wi) } else { (bsdf.eval(wo, wi), 0.0) };
+                let f = f * wi.z.abs();
+                if f != Spectrum::ZERO {
+                    let w = if mis { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
+                    st.pending = st.beta * f * ls.li * (w / ls.pdf);
+                    shadow = Some(scene.shadow_ray(&si, ls.wi, ls.dist));
+                }
+            }
+        }
+
+        // BSDF sampling for the next segment.
+        let u = rng.next_1d();
+        let u2 = rng.next_2d();
+        let Some(bs) = bsdf.sample(wo, u, u2) else { return Vertex { shadow, go_on: false } };
+        st.beta *= bs.weight;
+        st.eta *= bs.eta;
+        let wi = si.to_world(bs.wi);
+        st.prev_p = si.p;
+        st.prev_n = si.n;
+        st.prev_bsdf_pdf = bs.pdf;
+        st.prev_delta = bs.delta;
+        st.ray = scene.spawn_ray(&si, wi);
+        st.depth += 1;
+
+        let go_on = match self.term.survive(st.beta, st.eta, st.depth, rng) {
+            Some(q) => {
+                st.beta /= q;
+                true
+            }
+            None => false,
+        };
+        Vertex { shadow, go_on }
     }
 
     /// MIS weight of emission found by BSDF sampling after a non-delta

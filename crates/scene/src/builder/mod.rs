@@ -223,6 +223,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         height: film.crop_size.1,
         crop_offset: film.crop_offset,
         full_size: film.size,
+        stream: true,
     })
 }
 

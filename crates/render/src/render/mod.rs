@@ -3,12 +3,16 @@
 //! own with the filter's margin, and the tile films are added in tile order,
 //! so the film is bitwise identical for any thread count or scheduling.
 
+mod stream;
+
 use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
 use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
 use crate::material::Scratch;
-use crate::sampling::Sampler;
+use crate::geometry::Ray;
+use crate::math::Spectrum;
+use crate::sampling::{SampleStream, Sampler};
 use crate::scene::Scene;
 use glam::Vec2;
 use rayon::prelude::*;
@@ -41,6 +45,9 @@ pub struct RenderJob {
     pub crop_offset: (u32, u32),
     /// Full film width and height in pixels.
     pub full_size: (u32, u32),
+    /// Render `path` with the stream integrator ([`stream`] module), whose
+    /// image is bitwise the one-path-at-a-time loop's.
+    pub stream: bool,
 }
 
 /// What a render pass did.
@@ -194,12 +201,39 @@ impl RenderJob {
         active: Option<&[bool]>,
     ) -> TileResult {
         let m = self.filter.margin().min(MAX_MARGIN);
-        let mut film = Film::with_layers(w + 2 * m, h + 2 * m, layers);
-        let mut aov_values = vec![0f32; film.aov_channels()];
-        let mut scratch = Scratch::new();
-        let camera_from_world = self.camera.world_from_camera.inverse();
-        let mut stats = RenderStats::default();
-        let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
+        let mut tile = Tile {
+            film: Film::with_layers(w + 2 * m, h + 2 * m, layers),
+            aov_values: Vec::new(),
+            scratch: Scratch::new(),
+            camera_from_world: self.camera.world_from_camera.inverse(),
+            stats: RenderStats::default(),
+            margin: m,
+        };
+        tile.aov_values = vec![0f32; tile.film.aov_channels()];
+        let pixels = self.tile_pixels(x0, y0, (w, h), active);
+        match (&self.integrator, self.stream && self.scene.ray_log.is_none()) {
+            (Integrator::Path(path), true) => stream::render(self, path, &pixels, samples, &mut tile),
+            _ => {
+                for p in &pixels {
+                    for s in samples.clone() {
+                        let mut rng = self.sampler.stream(p.global, s);
+                        let (u, ray) = self.camera_sample(p.global, &mut rng);
+                        tile.scratch.reset();
+                        let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut tile.stats.rays, &tile.scratch);
+                        self.add_sample(&mut tile, p, s, u, &ray, l);
+                    }
+                }
+            }
+        }
+        let Tile { film, stats, .. } = tile;
+        TileResult { x0: x0 - m as i32, y0: y0 - m as i32, film, stats }
+    }
+
+    /// The pixels of the tile [x0, x0+w) × [y0, y0+h) that take samples, in
+    /// the order they are summed (row by row). With `active`, only pixels
+    /// marked there (ring pixels follow the nearest image pixel).
+    fn tile_pixels(&self, x0: i32, y0: i32, (w, h): (u32, u32), active: Option<&[bool]>) -> Vec<TilePixel> {
+        let mut out = Vec::with_capacity((w * h) as usize);
         for y in 0..h {
             for x in 0..w {
                 let (ix, iy) = (x0 + x as i32, y0 + y as i32);
@@ -213,40 +247,69 @@ impl RenderJob {
                 // streams, so a crop renders exactly its part of the full image.
                 let gx = (ix + self.crop_offset.0 as i32) as u32;
                 let gy = (iy + self.crop_offset.1 as i32) as u32;
-                for s in samples.clone() {
-                    let mut rng = self.sampler.stream((gx, gy), s);
-                    let u = rng.next_2d();
-                    let ray = self.camera.sample_ray((Vec2::new(gx as f32, gy as f32) + u) * inv, &mut rng);
-                    scratch.reset();
-                    let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut stats.rays, &scratch);
-                    stats.samples += 1;
-                    if l.is_finite() {
-                        let aov = if aov_values.is_empty() {
-                            None
-                        } else {
-                            // Its own random numbers (a stream of a pixel no
-                            // image has), so the beauty is the same with or
-                            // without AOVs.
-                            let mut aov_rng = self.sampler.stream((gx | AOV_STREAM, gy), s);
-                            let a = aov::query(
-                                &self.scene,
-                                &self.integrator,
-                                &ray,
-                                self.eye(&ray, &camera_from_world),
-                                &mut aov_rng,
-                                &scratch,
-                            );
-                            a.write(&film.aov_kinds, &mut aov_values);
-                            Some(&aov_values[..])
-                        };
-                        // The pixel's place in the tile film (margin included).
-                        film.splat((x + m) as i32, (y + m) as i32, u, l, aov, &self.filter);
-                    } else {
-                        stats.non_finite += 1;
-                    }
-                }
+                out.push(TilePixel { local: (x, y), global: (gx, gy) });
             }
         }
-        TileResult { x0: x0 - m as i32, y0: y0 - m as i32, film, stats }
+        out
+    }
+
+    /// A camera sample of full-film pixel `global`: its position `u` in the
+    /// pixel and the camera ray (the first random numbers of `rng`).
+    #[inline]
+    pub(crate) fn camera_sample(&self, (gx, gy): (u32, u32), rng: &mut SampleStream) -> (Vec2, Ray) {
+        let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
+        let u = rng.next_2d();
+        (u, self.camera.sample_ray((Vec2::new(gx as f32, gy as f32) + u) * inv, rng))
+    }
+
+    /// Splats sample `s` of pixel `p` (taken at `u` in the pixel, along
+    /// `ray`, with radiance `l`) into the tile's film with its AOVs.
+    /// Samples must come in pixel and sample-index order: the film's sums
+    /// are then the same however the radiance was computed.
+    pub(crate) fn add_sample(&self, tile: &mut Tile, p: &TilePixel, s: u32, u: Vec2, ray: &Ray, l: Spectrum) {
+        tile.stats.samples += 1;
+        if !l.is_finite() {
+            tile.stats.non_finite += 1;
+            return;
+        }
+        let (gx, gy) = p.global;
+        let aov = if tile.aov_values.is_empty() {
+            None
+        } else {
+            // Its own random numbers (a stream of a pixel no image has), so
+            // the beauty is the same with or without AOVs.
+            let mut aov_rng = self.sampler.stream((gx | AOV_STREAM, gy), s);
+            let a = aov::query(
+                &self.scene,
+                &self.integrator,
+                ray,
+                self.eye(ray, &tile.camera_from_world),
+                &mut aov_rng,
+                &tile.scratch,
+            );
+            a.write(&tile.film.aov_kinds, &mut tile.aov_values);
+            Some(&tile.aov_values[..])
+        };
+        // The pixel's place in the tile film (margin included).
+        let (x, y) = p.local;
+        tile.film.splat((x + tile.margin) as i32, (y + tile.margin) as i32, u, l, aov, &self.filter);
     }
 }
+
+/// A pixel of a tile: its place in the tile and in the full film.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TilePixel {
+    pub local: (u32, u32),
+    pub global: (u32, u32),
+}
+
+/// What a tile accumulates, and the buffers its samples reuse.
+pub(crate) struct Tile {
+    film: Film,
+    aov_values: Vec<f32>,
+    pub scratch: Scratch,
+    camera_from_world: glam::Mat4,
+    pub stats: RenderStats,
+    margin: u32,
+}
+

@@ -1,0 +1,148 @@
+//! The stream form of the `path` integrator: a tile's samples run as a
+//! stream of paths, whose rays are traced together in packets.
+//!
+//! A tile keeps a pool of [`POOL`] path slots. Slots are filled in the
+//! canonical order (pixel by pixel, each pixel's samples by index), so the
+//! first rays of a packet are consecutive samples of one pixel and nearly
+//! identical. Each round traces the closest hit of every live path's ray
+//! in packets of [`PACKET`] ([`Accel::intersect_packet`]), runs each path's
+//! vertex ([`PathIntegrator::vertex`]: emission, light sample, BSDF sample,
+//! Russian roulette; scalar code, one path at a time, so every BSDF and
+//! light works), traces the light samples' shadow rays in packets
+//! ([`Accel::occluded_packet`]), and refills the slots of paths that ended.
+//!
+//! **Bitwise the scalar loop.** A path's vertices run the same code in the
+//! same order with its own random stream, a pure function of (seed, pixel,
+//! sample index, dimension); a packet finds each ray's single-ray hit (see
+//! `accel::packet`); the light sample of a vertex is settled before the
+//! next vertex, as in [`PathIntegrator::li`]; and finished samples are
+//! splatted into the tile's film afterwards in the canonical order, so the
+//! film's sums are those of the one-path-at-a-time loop.
+//!
+//! [`Accel::intersect_packet`]: crate::accel::Accel::intersect_packet
+//! [`Accel::occluded_packet`]: crate::accel::Accel::occluded_packet
+
+use super::{RenderJob, Tile, TilePixel};
+use crate::accel::Hit;
+use crate::geometry::Ray;
+use crate::integrator::path::{PathIntegrator, PathState};
+use crate::math::Spectrum;
+use crate::sampling::SampleStream;
+use glam::Vec2;
+use std::ops::Range;
+
+/// The lanes packets are traced with: the widest the build has.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+type Lanes = crate::simd::F32x16;
+#[cfg(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma",
+    not(target_feature = "avx512f")
+))]
+type Lanes = crate::simd::F32x8;
+#[cfg(not(all(target_arch = "x86_64", any(target_feature = "avx512f", all(target_feature = "avx2", target_feature = "fma")))))]
+type Lanes = f32;
+
+/// Rays per packet.
+pub const PACKET: usize = <Lanes as crate::simd::Float>::WIDTH;
+/// Paths in flight per tile (per thread): a few hundred keep packets full
+/// while their state stays in the L2 cache.
+pub const POOL: usize = 256;
+
+/// A path in flight: which sample it is, its state and its random stream.
+struct Slot {
+    sample: usize,
+    state: PathState,
+    rng: SampleStream,
+}
+
+/// A sample's camera ray and, once its path has ended, its radiance.
+struct Sample {
+    u: Vec2,
+    ray: Ray,
+    l: Spectrum,
+}
+
+/// Renders `samples` of each of `pixels` with `path` into `tile`.
+pub(super) fn render(
+    job: &RenderJob,
+    path: &PathIntegrator,
+    pixels: &[TilePixel],
+    samples: Range<u32>,
+    tile: &mut Tile,
+) {
+    let spp = samples.len();
+    let total = pixels.len() * spp;
+    let scene = &job.scene;
+    let mut results: Vec<Sample> = Vec::with_capacity(total);
+    let mut slots: Vec<Slot> = Vec::with_capacity(POOL);
+    let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
+    let mut hits: Vec<Option<Hit>> = vec![None; POOL];
+    let mut shadows: Vec<(usize, Ray)> = Vec::with_capacity(POOL);
+    let mut shadow_rays: Vec<Ray> = Vec::with_capacity(POOL);
+    let mut ended: Vec<bool> = Vec::with_capacity(POOL);
+    let mut next = 0;
+    loop {
+        // Refill: the next samples in canonical order take the free slots.
+        while slots.len() < POOL && next < total {
+            let (p, s) = (&pixels[next / spp], samples.start + (next % spp) as u32);
+            let mut rng = job.sampler.stream(p.global, s);
+            let (u, ray) = job.camera_sample(p.global, &mut rng);
+            results.push(Sample { u, ray, l: Spectrum::ZERO });
+            if let Some(state) = path.start(&ray) {
+                slots.push(Slot { sample: next, state, rng });
+            }
+            next += 1;
+        }
+        if slots.is_empty() {
+            break;
+        }
+        // Closest hits, a packet of consecutive slots at a time.
+        rays.clear();
+        rays.extend(slots.iter().map(|s| s.state.ray));
+        for (r, h) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+            scene.accel.intersect_packet::<Lanes>(r, &scene.shapes, &scene.instances, h);
+        }
+        tile.stats.rays.rays += slots.len() as u64;
+        // One vertex per path.
+        shadows.clear();
+        ended.clear();
+        for (i, slot) in slots.iter_mut().enumerate() {
+            let ray = slot.state.ray;
+            let si = hits[i].map(|h| scene.interaction(&ray, &h));
+            tile.scratch.reset();
+            let v = path.vertex(scene, &mut slot.state, si, &mut slot.rng, &tile.scratch);
+            if let Some(r) = v.shadow {
+                shadows.push((i, r));
+            }
+            ended.push(!v.go_on);
+        }
+        // Shadow rays, then each verdict before the path's next vertex.
+        shadow_rays.clear();
+        shadow_rays.extend(shadows.iter().map(|&(_, r)| r));
+        tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
+        for (k, chunk) in shadow_rays.chunks(PACKET).enumerate() {
+            let blocked = scene.accel.occluded_packet::<Lanes>(chunk, &scene.shapes, &scene.instances);
+            for j in 0..chunk.len() {
+                let slot = shadows[k * PACKET + j].0;
+                slots[slot].state.shadow_done(blocked >> j & 1 != 0);
+            }
+        }
+        // Retire ended paths; the others keep their order.
+        let mut i = 0;
+        slots.retain(|s| {
+            let keep = !ended[i];
+            if !keep {
+                results[s.sample].l = s.state.radiance();
+            }
+            i += 1;
+            keep
+        });
+    }
+    // Splat in canonical order.
+    for (k, r) in results.iter().enumerate() {
+        let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
+        job.add_sample(tile, p, s, r.u, &r.ray, r.l);
+    }
+}
