@@ -7,10 +7,10 @@ mod stream;
 
 use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
+use crate::geometry::Ray;
 use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
 use crate::material::Scratch;
-use crate::geometry::Ray;
 use crate::math::Spectrum;
 use crate::sampling::{SampleStream, Sampler};
 use crate::scene::Scene;
@@ -312,4 +312,3 @@ pub(crate) struct Tile {
     pub stats: RenderStats,
     margin: u32,
 }
-

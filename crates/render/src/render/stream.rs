@@ -34,14 +34,12 @@ use std::ops::Range;
 /// The lanes packets are traced with: the widest the build has.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
 type Lanes = crate::simd::F32x16;
-#[cfg(all(
-    target_arch = "x86_64",
-    target_feature = "avx2",
-    target_feature = "fma",
-    not(target_feature = "avx512f")
-))]
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma", not(target_feature = "avx512f")))]
 type Lanes = crate::simd::F32x8;
-#[cfg(not(all(target_arch = "x86_64", any(target_feature = "avx512f", all(target_feature = "avx2", target_feature = "fma")))))]
+#[cfg(not(all(
+    target_arch = "x86_64",
+    any(target_feature = "avx512f", all(target_feature = "avx2", target_feature = "fma"))
+)))]
 type Lanes = f32;
 
 /// Rays per packet.
