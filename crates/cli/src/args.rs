@@ -205,6 +205,9 @@ pub struct BenchArgs {
     /// Render seconds per renderer and scene in the `efficiency` suite.
     #[arg(long, default_value_t = 4.0)]
     pub budget: f64,
+    /// Alternating rounds per scene in the scenes table (medians reported).
+    #[arg(long, default_value_t = 3)]
+    pub rounds: u32,
     /// Triangles of the procedural mesh (default: 1 million for `rays`, 10 million for `scale`).
     #[arg(long)]
     pub triangles: Option<usize>,

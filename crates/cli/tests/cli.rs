@@ -184,6 +184,8 @@ fn bench_prints_its_table() {
             "scenes",
             "--spp",
             "1",
+            "--rounds",
+            "1",
             "--mitsuba",
             "/nonexistent/python",
             "scenes/cornell-box.xml",
@@ -195,8 +197,12 @@ fn bench_prints_its_table() {
     assert!(stdout.contains("Msamples/s") && stdout.contains("cornell-box.xml"), "{stdout}");
     // The trace-only column: the render's own rays replayed through the BVH.
     let row = stdout.lines().find(|l| l.starts_with("cornell-box.xml")).unwrap();
-    let trace: f64 = row.split_whitespace().nth(8).and_then(|v| v.parse().ok()).unwrap_or(-1.0);
+    let trace: f64 = row.split_whitespace().nth(9).and_then(|v| v.parse().ok()).unwrap_or(-1.0);
     assert!(trace > 0.0, "no trace-only time in: {row}");
+    // The whole process timed with the stream integrator and with --no-stream.
+    let secs = |i: usize| row.split_whitespace().nth(i).and_then(|v| v.trim_end_matches('x').parse::<f64>().ok());
+    assert!(secs(3).is_some_and(|t| t > 0.0) && secs(5).is_some_and(|t| t > 0.0), "{row}");
+    assert!(secs(6).is_some_and(|g| g > 0.0), "no stream gain in: {row}");
     // Mitsuba could not be run: its column is empty and a note says why.
     assert!(String::from_utf8_lossy(&o.stderr).contains("Mitsuba timing skipped"));
 }

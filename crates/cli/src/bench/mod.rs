@@ -113,29 +113,49 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
     let threads = pool.current_num_threads();
     let mitsuba = mitsuba_python(a);
     println!(
-        "{:<20} {:>9} {:>6} {:>9} {:>11} {:>10} {:>11} {:>8} {:>8} {:>8}",
-        "scene", "size", "spp", "time s", "Msamples/s", "Mrays/s", "mitsuba s", "speedup", "trace s", "embree s"
+        "{:<20} {:>9} {:>5} {:>9} {:>10} {:>9} {:>10} {:>9} {:>8} {:>8} {:>8}",
+        "scene",
+        "size",
+        "spp",
+        "process s",
+        "Msamples/s",
+        "one-path s",
+        "stream gain",
+        "mitsuba s",
+        "speedup",
+        "trace s",
+        "embree s"
     );
     let mut embree_skipped = None;
     for (scene, defines) in &scenes {
         let ov = Overrides { spp: a.spp, ..Default::default() };
         let job = penumbra_scene::load_scene(scene, defines, &ov).map_err(|e| anyhow!(e))?;
-        // One untimed warm-up pass at 1 spp (page faults, thread start-up).
-        let mut warm = job.clone();
-        warm.sampler.spp = 1;
-        crate::render_job(&warm, pool, true);
-        let (_, stats, elapsed) = crate::render_job(&job, pool, true);
-        let secs = elapsed.as_secs_f64();
-        let rays = (stats.rays.rays + stats.rays.shadow_rays) as f64;
-        let (mi, ratio) = match &mitsuba {
-            Some(py) => match time_mitsuba(py, &a.mitsuba_variant, scene, defines, job.sampler.spp, threads) {
-                Ok(t) => (format!("{t:.2}"), format!("{:.2}x", t / secs)),
-                Err(e) => {
-                    eprintln!("note: Mitsuba timing skipped: {e}");
-                    ("-".into(), "-".into())
+        let spp = job.sampler.spp;
+        // Alternating rounds: the stream integrator's whole process, the
+        // one-path loop's whole process, Mitsuba's warm render.
+        let (mut ours, mut one_path, mut mi, mut ratio, mut gain) = (vec![], vec![], vec![], vec![], vec![]);
+        for _ in 0..a.rounds.max(1) {
+            let t = time_process(scene, defines, spp, threads, false)?;
+            let t1 = time_process(scene, defines, spp, threads, true)?;
+            ours.push(t);
+            one_path.push(t1);
+            gain.push(t1 / t);
+            if let Some(py) = &mitsuba {
+                match time_mitsuba(py, &a.mitsuba_variant, scene, defines, spp, threads) {
+                    Ok(m) => {
+                        mi.push(m);
+                        ratio.push(m / t);
+                    }
+                    Err(e) => eprintln!("note: Mitsuba timing skipped: {e}"),
                 }
-            },
-            None => ("-".into(), "-".into()),
+            }
+        }
+        let fmt = |v: &mut Vec<f64>, unit: &str| {
+            if v.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{:.2}{unit}", median(v))
+            }
         };
         // Fewer recorded samples on large films: the log holds 32 bytes a ray.
         let pixels = job.width as u64 * job.height as u64;
@@ -147,21 +167,23 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
                 "note: {}: {:.1} M rays at {} spp; of those recorded, closest hits / blocked shadow rays {:?} (penumbra) vs {:?} (embree)",
                 scene.display(),
                 trace.rays / 1e6,
-                job.sampler.spp,
+                spp,
                 trace.counts[0],
                 trace.counts[1]
             ),
         }
+        let t = median(&mut ours);
         println!(
-            "{:<20} {:>9} {:>6} {:>9.2} {:>11.3} {:>10.2} {:>11} {:>8} {:>8.2} {:>8}",
+            "{:<20} {:>9} {:>5} {:>9.2} {:>10.3} {:>9} {:>10} {:>9} {:>8} {:>8.2} {:>8}",
             scene.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
             format!("{}x{}", job.width, job.height),
-            job.sampler.spp,
-            secs,
-            stats.samples as f64 / secs / 1e6,
-            rays / secs / 1e6,
-            mi,
-            ratio,
+            spp,
+            t,
+            (pixels * spp as u64) as f64 / t / 1e6,
+            fmt(&mut one_path, ""),
+            fmt(&mut gain, "x"),
+            fmt(&mut mi, ""),
+            fmt(&mut ratio, "x"),
             trace.penumbra_s,
             trace.embree_s.map(|s| format!("{s:.2}")).unwrap_or_else(|_| "-".into())
         );
@@ -169,7 +191,13 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
     if mitsuba.is_none() {
         println!("(Mitsuba 3 not found: pass --mitsuba PYTHON or set PENUMBRA_MITSUBA_PYTHON to compare)");
     }
-    println!("threads: {threads}; speedup = Mitsuba seconds / Penumbra seconds at equal spp ({})", a.mitsuba_variant);
+    println!(
+        "threads: {threads}; medians of {} alternating rounds; process s: `penumbra render` start to exit (stream \
+         integrator), one-path s: the same with --no-stream; stream gain and speedup (Mitsuba's warm render / \
+         process s, {}) are medians of per-round ratios",
+        a.rounds.max(1),
+        a.mitsuba_variant
+    );
     if let Some(e) = embree_skipped {
         println!("(embree trace-only column: {e})");
     }
@@ -180,6 +208,41 @@ fn scenes(a: &BenchArgs, pool: &rayon::ThreadPool) -> Result<()> {
         light_selection_table(pool)?;
     }
     Ok(())
+}
+
+/// The median of `v` (sorted in place); the mean of the middle two for an even count.
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Wall seconds of a whole `penumbra render` process (this executable) on
+/// `scene`, start to exit; `one_path` adds --no-stream.
+fn time_process(scene: &Path, defines: &[(String, String)], spp: u32, threads: usize, one_path: bool) -> Result<f64> {
+    let exe = std::env::current_exe()?;
+    let out = std::env::temp_dir().join(format!("penumbra-bench-{}.exr", std::process::id()));
+    let mut cmd = Command::new(exe);
+    cmd.arg("render").arg(scene).arg("-o").arg(&out).arg("--quiet");
+    cmd.args(["--spp", &spp.to_string(), "--threads", &threads.to_string()]);
+    for (k, v) in defines {
+        cmd.arg("-D").arg(format!("{k}={v}"));
+    }
+    if one_path {
+        cmd.arg("--no-stream");
+    }
+    let t0 = std::time::Instant::now();
+    let o = cmd.output()?;
+    let secs = t0.elapsed().as_secs_f64();
+    let _ = std::fs::remove_file(&out);
+    if !o.status.success() {
+        return Err(anyhow!("penumbra render {} failed: {}", scene.display(), String::from_utf8_lossy(&o.stderr)));
+    }
+    Ok(secs)
 }
 
 /// Each light-selection strategy on the many-lights scene: time and error
