@@ -145,7 +145,7 @@ impl PathIntegrator {
     /// (MIS-weighted against light sampling at the previous vertex), a light
     /// sample (its shadow ray returned), a BSDF sample for the next segment
     /// and Russian roulette. With `hide_emitters`, a camera ray that hits an
-    /// emitter is continued behind it first (as [`super::camera_hit`]).
+    /// emitter is continued behind it first (as the other integrators' `camera_hit`).
     #[inline]
     pub fn vertex(
         &self,

@@ -45,7 +45,7 @@ pub struct RenderJob {
     pub crop_offset: (u32, u32),
     /// Full film width and height in pixels.
     pub full_size: (u32, u32),
-    /// Render `path` with the stream integrator ([`stream`] module), whose
+    /// Render `path` with the stream integrator (`render/stream.rs`), whose
     /// image is bitwise the one-path-at-a-time loop's.
     pub stream: bool,
 }
