@@ -25,6 +25,7 @@ fn job(scene: Scene, camera_at: Vec3, look: Vec3, fov: f32, spp: u32) -> RenderJ
         crop_offset: (0, 0),
         full_size: (16, 16),
         stream: true,
+        packet_lanes: 0,
     }
 }
 

@@ -42,6 +42,7 @@ fn the_log_holds_every_query_and_changes_nothing() {
         crop_offset: (0, 0),
         full_size: (12, 12),
         stream: false,
+        packet_lanes: 0,
     };
     let mut plain = Film::new(12, 12);
     let plain_stats = job.render_into(&mut plain, 0..4, &|_| {});

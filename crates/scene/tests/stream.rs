@@ -2,12 +2,14 @@
 //! against the one-path-at-a-time loop it replaces: on every scene of
 //! tests/scenes and the bundled scenes, the film (beauty, every AOV layer,
 //! variance moments) and the ray counts must be bitwise equal, for a first
-//! pass and for a later sample range.
+//! pass and for a later sample range, with packets of every lane width the
+//! build has (16 with AVX-512, 8 with AVX2, and 1, scalar, on any CPU).
 
 mod common;
 
 use common::root;
 use penumbra_render::film::{AovKind, Film, FilmLayers};
+use penumbra_render::render::LANE_WIDTHS;
 use penumbra_scene::{load_scene, Overrides};
 use std::path::Path;
 
@@ -24,33 +26,38 @@ fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> bool {
     let name = scene.file_name().unwrap().to_string_lossy();
     let is_path = matches!(job.integrator, penumbra_render::integrator::Integrator::Path(_));
     for range in [0..spp, 3..spp] {
-        let mut films = Vec::new();
-        for stream in [false, true] {
-            job.stream = stream;
+        let render = |job: &penumbra_render::render::RenderJob| {
             let mut film = Film::with_layers(job.width, job.height, &layers);
             let stats = job.render_into(&mut film, range.clone(), &|_| {});
-            films.push((film, stats));
-        }
-        let ((a, sa), (b, sb)) = (&films[0], &films[1]);
-        let what = format!("{name}, samples {range:?}");
-        assert_eq!(
-            (sa.samples, sa.rays.rays, sa.rays.shadow_rays, sa.non_finite),
-            (sb.samples, sb.rays.rays, sb.rays.shadow_rays, sb.non_finite),
-            "{what}: ray counts"
-        );
-        assert!(bits(a.develop().concat()) == bits(b.develop().concat()), "{what}: beauty differs");
-        for k in AovKind::ALL {
-            assert!(
-                bits(a.develop_aov(k).unwrap()) == bits(b.develop_aov(k).unwrap()),
-                "{what}: AOV {} differs",
-                k.name()
+            (film, stats)
+        };
+        job.stream = false;
+        let (a, sa) = render(&job);
+        for &lanes in LANE_WIDTHS {
+            job.stream = true;
+            job.packet_lanes = lanes;
+            let (b, sb) = render(&job);
+            let (a, sa, b, sb) = (&a, &sa, &b, &sb);
+            let what = format!("{name}, samples {range:?}, packets of {lanes}");
+            assert_eq!(
+                (sa.samples, sa.rays.rays, sa.rays.shadow_rays, sa.non_finite),
+                (sb.samples, sb.rays.rays, sb.rays.shadow_rays, sb.non_finite),
+                "{what}: ray counts"
             );
+            assert!(bits(a.develop().concat()) == bits(b.develop().concat()), "{what}: beauty differs");
+            for k in AovKind::ALL {
+                assert!(
+                    bits(a.develop_aov(k).unwrap()) == bits(b.develop_aov(k).unwrap()),
+                    "{what}: AOV {} differs",
+                    k.name()
+                );
+            }
+            assert!(
+                bits(a.develop_variance().unwrap().concat()) == bits(b.develop_variance().unwrap().concat()),
+                "{what}: variance differs"
+            );
+            assert!(a.develop().iter().flatten().any(|&c| c > 0.0), "{what}: a black image proves little");
         }
-        assert!(
-            bits(a.develop_variance().unwrap().concat()) == bits(b.develop_variance().unwrap().concat()),
-            "{what}: variance differs"
-        );
-        assert!(a.develop().iter().flatten().any(|&c| c > 0.0), "{what}: a black image proves little");
     }
     is_path
 }
@@ -72,6 +79,9 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
     for s in ["scenes/cornell-box.xml", "scenes/material-showcase.xml"] {
         path_scenes += check(&root().join(s), &res("48"), 8) as usize;
     }
-    eprintln!("{} scenes, {path_scenes} rendered by `path` both ways: bitwise equal", scenes.len() + 2);
+    eprintln!(
+        "{} scenes, {path_scenes} rendered by `path` both ways (packets of {LANE_WIDTHS:?}): bitwise equal",
+        scenes.len() + 2
+    );
     assert!(path_scenes >= 10);
 }

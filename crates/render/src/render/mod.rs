@@ -4,6 +4,7 @@
 //! so the film is bitwise identical for any thread count or scheduling.
 
 mod stream;
+pub use stream::LANE_WIDTHS;
 
 use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
@@ -48,6 +49,9 @@ pub struct RenderJob {
     /// Render `path` with the stream integrator (`render/stream.rs`), whose
     /// image is bitwise the one-path-at-a-time loop's.
     pub stream: bool,
+    /// Rays per packet in the stream integrator: 0 for the widest lanes the
+    /// build has, else one of [`LANE_WIDTHS`] (the image is the same).
+    pub packet_lanes: usize,
 }
 
 /// What a render pass did.

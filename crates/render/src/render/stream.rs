@@ -5,7 +5,7 @@
 //! canonical order (pixel by pixel, each pixel's samples by index), so the
 //! first rays of a packet are consecutive samples of one pixel and nearly
 //! identical. Each round traces the closest hit of every live path's ray
-//! in packets of [`PACKET`] ([`Accel::intersect_packet`]), runs each path's
+//! in packets of up to 16 ([`Accel::intersect_packet`]), runs each path's
 //! vertex ([`PathIntegrator::vertex`]: emission, light sample, BSDF sample,
 //! Russian roulette; scalar code, one path at a time, so every BSDF and
 //! light works), traces the light samples' shadow rays in packets
@@ -28,22 +28,20 @@ use crate::geometry::Ray;
 use crate::integrator::path::{PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
+use crate::simd::Float;
 use glam::Vec2;
 use std::ops::Range;
 
-/// The lanes packets are traced with: the widest the build has.
-#[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
-type Lanes = crate::simd::F32x16;
-#[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma", not(target_feature = "avx512f")))]
-type Lanes = crate::simd::F32x8;
-#[cfg(not(all(
-    target_arch = "x86_64",
-    any(target_feature = "avx512f", all(target_feature = "avx2", target_feature = "fma"))
-)))]
-type Lanes = f32;
+/// The lane widths this build can trace packets with, widest first: 16
+/// (AVX-512F), 8 (AVX2 + FMA), 1 (scalar, any CPU), as `target-cpu` allows.
+pub const LANE_WIDTHS: &[usize] = &[
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+    16,
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+    8,
+    1,
+];
 
-/// Rays per packet.
-pub const PACKET: usize = <Lanes as crate::simd::Float>::WIDTH;
 /// Paths in flight per tile (per thread): a few hundred keep packets full
 /// while their state stays in the L2 cache.
 pub const POOL: usize = 256;
@@ -62,7 +60,8 @@ struct Sample {
     l: Spectrum,
 }
 
-/// Renders `samples` of each of `pixels` with `path` into `tile`.
+/// Renders `samples` of each of `pixels` with `path` into `tile`, in
+/// packets of `job.packet_lanes` rays (0: the widest of [`LANE_WIDTHS`]).
 pub(super) fn render(
     job: &RenderJob,
     path: &PathIntegrator,
@@ -70,6 +69,18 @@ pub(super) fn render(
     samples: Range<u32>,
     tile: &mut Tile,
 ) {
+    let lanes = if job.packet_lanes == 0 { LANE_WIDTHS[0] } else { job.packet_lanes };
+    match lanes {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+        16 => run::<crate::simd::F32x16>(job, path, pixels, samples, tile),
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+        8 => run::<crate::simd::F32x8>(job, path, pixels, samples, tile),
+        1 => run::<f32>(job, path, pixels, samples, tile),
+        n => panic!("packets of {n} rays: this build has {LANE_WIDTHS:?}"),
+    }
+}
+
+fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], samples: Range<u32>, tile: &mut Tile) {
     let spp = samples.len();
     let total = pixels.len() * spp;
     let scene = &job.scene;
@@ -99,8 +110,8 @@ pub(super) fn render(
         // Closest hits, a packet of consecutive slots at a time.
         rays.clear();
         rays.extend(slots.iter().map(|s| s.state.ray));
-        for (r, h) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
-            scene.accel.intersect_packet::<Lanes>(r, &scene.shapes, &scene.instances, h);
+        for (r, h) in rays.chunks(F::WIDTH).zip(hits.chunks_mut(F::WIDTH)) {
+            scene.accel.intersect_packet::<F>(r, &scene.shapes, &scene.instances, h);
         }
         tile.stats.rays.rays += slots.len() as u64;
         // One vertex per path.
@@ -120,10 +131,10 @@ pub(super) fn render(
         shadow_rays.clear();
         shadow_rays.extend(shadows.iter().map(|&(_, r)| r));
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
-        for (k, chunk) in shadow_rays.chunks(PACKET).enumerate() {
-            let blocked = scene.accel.occluded_packet::<Lanes>(chunk, &scene.shapes, &scene.instances);
+        for (k, chunk) in shadow_rays.chunks(F::WIDTH).enumerate() {
+            let blocked = scene.accel.occluded_packet::<F>(chunk, &scene.shapes, &scene.instances);
             for j in 0..chunk.len() {
-                let slot = shadows[k * PACKET + j].0;
+                let slot = shadows[k * F::WIDTH + j].0;
                 slots[slot].state.shadow_done(blocked >> j & 1 != 0);
             }
         }

@@ -224,6 +224,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         crop_offset: film.crop_offset,
         full_size: film.size,
         stream: true,
+        packet_lanes: 0,
     })
 }
 
