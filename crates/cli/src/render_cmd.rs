@@ -382,7 +382,7 @@ fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
         Stop::Cancelled => format!("interrupted: wrote {} of {target} spp to", state.spp),
     };
     eprintln!(
-        "{what} {} ({}x{}, {} spp{}) in {:.2} s (this run {:.2} s): {:.3} M samples/s, {:.2} M rays/s{}",
+        "{what} {} ({}x{}, {} spp{}) in {:.2} s (this run {:.2} s): {:.3} M samples/s, {:.2} M rays/s{}{}",
         a.output.display(),
         plan.job.width,
         plan.job.height,
@@ -392,6 +392,14 @@ fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
         this_run,
         stats.samples as f64 / secs / 1e6,
         rays as f64 / secs / 1e6,
+        // The stream integrator's packets: the share of their lanes that held a ray.
+        (stats.rays.packets > 0)
+            .then(|| format!(
+                " ({:.0} % of {}-ray packet lanes used)",
+                100.0 * rays as f64 / stats.rays.packet_lanes as f64,
+                stats.rays.packet_lanes / stats.rays.packets
+            ))
+            .unwrap_or_default(),
         crate::peak_memory_mb().map(|m| format!(", peak memory {m:.0} MB")).unwrap_or_default()
     );
     if extras.checkpoints > 0 {

@@ -31,6 +31,12 @@ pub struct RayStats {
     pub rays: u64,
     /// Any-hit queries (shadow rays).
     pub shadow_rays: u64,
+    /// Packets the stream integrator traced (closest-hit and shadow); zero
+    /// for the one-path loop.
+    pub packets: u64,
+    /// The lanes those packets offered (packets × lane width): the rays
+    /// above over these lanes is the lane occupancy.
+    pub packet_lanes: u64,
 }
 
 impl RayStats {
@@ -38,6 +44,8 @@ impl RayStats {
     pub fn add(&mut self, o: &RayStats) {
         self.rays += o.rays;
         self.shadow_rays += o.shadow_rays;
+        self.packets += o.packets;
+        self.packet_lanes += o.packet_lanes;
     }
 }
 

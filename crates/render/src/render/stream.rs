@@ -114,6 +114,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             scene.accel.intersect_packet::<F>(r, &scene.shapes, &scene.instances, h);
         }
         tile.stats.rays.rays += slots.len() as u64;
+        let packets = slots.len().div_ceil(F::WIDTH) as u64;
+        tile.stats.rays.packets += packets;
+        tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
         // One vertex per path.
         shadows.clear();
         ended.clear();
@@ -131,6 +134,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         shadow_rays.clear();
         shadow_rays.extend(shadows.iter().map(|&(_, r)| r));
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
+        let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;
+        tile.stats.rays.packets += packets;
+        tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
         for (k, chunk) in shadow_rays.chunks(F::WIDTH).enumerate() {
             let blocked = scene.accel.occluded_packet::<F>(chunk, &scene.shapes, &scene.instances);
             for j in 0..chunk.len() {
@@ -153,5 +159,20 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     for (k, r) in results.iter().enumerate() {
         let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
         job.add_sample(tile, p, s, r.u, &r.ray, r.l);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pool (POOL slots) and a pass's finished samples stay small
+    /// enough for the L2 cache: print and bound their sizes.
+    #[test]
+    fn pool_sizes() {
+        let (slot, sample) = (std::mem::size_of::<Slot>(), std::mem::size_of::<Sample>());
+        eprintln!("slot {slot} B, pool {} KiB; finished sample {sample} B", slot * POOL / 1024);
+        assert!(slot * POOL <= 64 * 1024, "slot {slot} B");
+        assert!(sample <= 64, "sample {sample} B");
     }
 }
