@@ -150,6 +150,9 @@ pub fn beckmann_lambda(a: f64) -> f64 {
     0.5 * ((-a * a).exp() * INV_SQRT_PI / a - erfc(a))
 }
 
+/// The a = 1/(α tan θ) from which the Beckmann G1 is 1.0 in f32.
+const BECKMANN_G1_ONE: f64 = 4.0;
+
 /// Mitsuba's rational fit of the Beckmann G1 (kept for comparison only).
 pub fn beckmann_g1_fit(a: f32) -> f32 {
     if a >= 1.6 {
@@ -202,6 +205,12 @@ impl Microfacet {
         match self.kind {
             MicrofacetType::Beckmann => {
                 let a = 1.0 / (tan_theta_alpha_2 as f64).sqrt();
+                // From a = 4 on, Λ(a) < 3e-10 and 1/(1 + Λ) rounds to 1 in
+                // f32: skip erfc and exp (bitwise the same; see the test
+                // `beckmann_g1_is_exactly_one_from_a_4`).
+                if a >= BECKMANN_G1_ONE {
+                    return 1.0;
+                }
                 (1.0 / (1.0 + beckmann_lambda(a))) as f32
             }
             MicrofacetType::Ggx => 2.0 / (1.0 + (1.0 + tan_theta_alpha_2).sqrt()),
@@ -328,6 +337,20 @@ pub fn refract_m(v: Vec3, m: Vec3, cos_t: f32, eta_ti: f32) -> Vec3 {
 mod tests {
     use super::*;
     use crate::testing::chi2::{alpha, chi2_test};
+
+    /// The shortcut in `smith_g1`: the full formula gives exactly 1.0 in
+    /// f32 for every a from 4 on (dense near 4, then to where erfc underflows),
+    /// and not at 3 (so the bound is not vacuous).
+    #[test]
+    fn beckmann_g1_is_exactly_one_from_a_4() {
+        let g1 = |a: f64| (1.0 / (1.0 + beckmann_lambda(a))) as f32;
+        let mut a = BECKMANN_G1_ONE;
+        while a < 30.0 {
+            assert_eq!(g1(a), 1.0, "a = {a}");
+            a += if a < 6.0 { 1e-5 } else { 1e-3 };
+        }
+        assert!(g1(3.0) < 1.0);
+    }
 
     fn kinds() -> [MicrofacetType; 2] {
         [MicrofacetType::Beckmann, MicrofacetType::Ggx]
