@@ -393,13 +393,13 @@ fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
         stats.samples as f64 / secs / 1e6,
         rays as f64 / secs / 1e6,
         // The stream integrator's packets: the share of their lanes that held a ray.
-        (stats.rays.packets > 0)
-            .then(|| format!(
-                " ({:.0} % of {}-ray packet lanes used)",
-                100.0 * rays as f64 / stats.rays.packet_lanes as f64,
-                stats.rays.packet_lanes / stats.rays.packets
-            ))
-            .unwrap_or_default(),
+        match stats.rays.packet_lanes.checked_div(stats.rays.packets) {
+            Some(width) => format!(
+                " ({:.0} % of {width}-ray packet lanes used)",
+                100.0 * rays as f64 / stats.rays.packet_lanes as f64
+            ),
+            None => String::new(),
+        },
         crate::peak_memory_mb().map(|m| format!(", peak memory {m:.0} MB")).unwrap_or_default()
     );
     if extras.checkpoints > 0 {
