@@ -101,24 +101,30 @@ fn serve() -> (String, thread::JoinHandle<Vec<Packet>>) {
     (addr, thread::spawn(move || read_packets(l.accept().unwrap().0)))
 }
 
+/// `penumbra render` of the bundled Cornell box to `out`, streamed to
+/// `addr`, with `args`; it must succeed. Returns its stderr.
+fn render_to(addr: &str, out: &std::path::Path, args: &[&str]) -> String {
+    let o = common::ok(
+        common::bin()
+            .arg("render")
+            .arg(common::cornell())
+            .arg("-o")
+            .arg(out)
+            .args(args)
+            .args(["--quiet", "--display-server", addr])
+            .output()
+            .unwrap(),
+    );
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 #[test]
 fn streams_every_pass_and_the_last_equals_the_exr() {
     let d = common::tmpdir("tev", "stream");
     let exr = d.join("box.exr");
     let (addr, server) = serve();
     // 160 x 160: tiles of 128 leave partial tiles on both axes. 8 spp: passes of 1, 1, 2, 4.
-    let o = common::ok(
-        common::bin()
-            .arg("render")
-            .arg(common::cornell())
-            .arg("-o")
-            .arg(&exr)
-            .args(["-D", "res=160", "--spp", "8", "--seed", "5", "--quiet", "--aov", "albedo,depth"])
-            .args(["--display-server", &addr])
-            .output()
-            .unwrap(),
-    );
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = render_to(&addr, &exr, &["-D", "res=160", "--spp", "8", "--seed", "5", "--aov", "albedo,depth"]);
     assert!(!err.contains("--display-server"), "{err}");
     let packets = server.join().unwrap();
 
@@ -175,18 +181,8 @@ fn a_lost_connection_is_reported_once_and_the_render_goes_on() {
         drop(s);
     });
     // 64 spp at 256 x 256: 7 passes of ~1 MB each, so writes fail after the close.
-    let o = common::ok(
-        common::bin()
-            .arg("render")
-            .arg(common::cornell())
-            .arg("-o")
-            .arg(&png)
-            .args(["-D", "res=256", "--spp", "64", "--quiet", "--display-server", &addr])
-            .output()
-            .unwrap(),
-    );
+    let err = render_to(&addr, &png, &["-D", "res=256", "--spp", "64"]);
     server.join().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(err.matches("--display-server").count(), 1, "{err}");
     assert!(err.contains("lost the connection"), "{err}");
     assert!(png.is_file());
@@ -199,17 +195,7 @@ fn no_server_is_reported_once_and_the_render_goes_on() {
     let png = d.join("box.png");
     // A port nobody listens on: bound, then closed.
     let addr = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().to_string();
-    let o = common::ok(
-        common::bin()
-            .arg("render")
-            .arg(common::cornell())
-            .arg("-o")
-            .arg(&png)
-            .args(["-D", "res=32", "--spp", "4", "--quiet", "--display-server", &addr])
-            .output()
-            .unwrap(),
-    );
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = render_to(&addr, &png, &["-D", "res=32", "--spp", "4"]);
     assert_eq!(err.matches("--display-server").count(), 1, "{err}");
     assert!(err.contains("cannot connect"), "{err}");
     assert!(png.is_file());

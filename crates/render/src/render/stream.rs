@@ -88,7 +88,8 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     let mut slots: Vec<Slot> = Vec::with_capacity(POOL);
     let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
     let mut hits: Vec<Option<Hit>> = vec![None; POOL];
-    let mut shadows: Vec<(usize, Ray)> = Vec::with_capacity(POOL);
+    // Shadow rays and the slots they belong to, side by side.
+    let mut shadow_slots: Vec<usize> = Vec::with_capacity(POOL);
     let mut shadow_rays: Vec<Ray> = Vec::with_capacity(POOL);
     let mut ended: Vec<bool> = Vec::with_capacity(POOL);
     let mut next = 0;
@@ -118,7 +119,8 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         tile.stats.rays.packets += packets;
         tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
         // One vertex per path.
-        shadows.clear();
+        shadow_slots.clear();
+        shadow_rays.clear();
         ended.clear();
         for (i, slot) in slots.iter_mut().enumerate() {
             let ray = slot.state.ray;
@@ -126,13 +128,12 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             tile.scratch.reset();
             let v = path.vertex(scene, &mut slot.state, si, &mut slot.rng, &tile.scratch);
             if let Some(r) = v.shadow {
-                shadows.push((i, r));
+                shadow_slots.push(i);
+                shadow_rays.push(r);
             }
             ended.push(!v.go_on);
         }
         // Shadow rays, then each verdict before the path's next vertex.
-        shadow_rays.clear();
-        shadow_rays.extend(shadows.iter().map(|&(_, r)| r));
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
         let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;
         tile.stats.rays.packets += packets;
@@ -140,7 +141,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         for (k, chunk) in shadow_rays.chunks(F::WIDTH).enumerate() {
             let blocked = scene.accel.occluded_packet::<F>(chunk, &scene.shapes, &scene.instances);
             for j in 0..chunk.len() {
-                let slot = shadows[k * F::WIDTH + j].0;
+                let slot = shadow_slots[k * F::WIDTH + j];
                 slots[slot].state.shadow_done(blocked >> j & 1 != 0);
             }
         }
