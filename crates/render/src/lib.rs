@@ -2,7 +2,7 @@
 //! crate builds a [`render::RenderJob`] and this crate renders it.
 //!
 //! Layers, bottom up: `math` / `simd` → `sampling` → `geometry` → `accel` →
-//! `texture` → `bsdf` → `material` / `light` / `camera` / `film` → `scene` → `integrator` → `render`.
+//! `texture` → `bsdf` → `material` / `light` / `camera` / `film` / `medium` → `scene` → `integrator` → `render`.
 
 #![warn(missing_docs)]
 
@@ -15,6 +15,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod medium;
 pub mod render;
 pub mod sampling;
 pub mod scene;

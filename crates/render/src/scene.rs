@@ -7,6 +7,7 @@ use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::{Light, LightSample, LightSampler, LightSelection};
 use crate::material::{Material, Scratch};
 use crate::math::{Spectrum, SHADOW_EPSILON};
+use crate::medium::Medium;
 use glam::{Vec2, Vec3};
 use std::sync::{Arc, Mutex};
 
@@ -63,6 +64,45 @@ pub struct Scene {
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
     pub ray_log: Option<RayLog>,
+    /// Participating media (see [`Scene::set_media`]); the `path`,
+    /// `direct` and `bruteforce` integrators ignore them, as Mitsuba's do.
+    pub media: Vec<Medium>,
+    /// Per shape id, its interior and exterior medium; empty when no shape
+    /// bounds a medium.
+    pub shape_media: Vec<ShapeMedia>,
+    /// The medium the camera sits in.
+    pub camera_medium: Option<u32>,
+}
+
+/// The media on the two sides of a shape (Mitsuba's `interior` and
+/// `exterior`). A shape with either is a medium transition: a ray crossing
+/// it enters the medium on the side its direction points to.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ShapeMedia {
+    /// Inside: behind the geometric normal.
+    pub interior: Option<u32>,
+    /// Outside: in front of the geometric normal.
+    pub exterior: Option<u32>,
+}
+
+impl ShapeMedia {
+    /// Whether crossing the shape changes the medium (Mitsuba's
+    /// `is_medium_transition`: either side has one).
+    #[inline]
+    pub fn is_transition(&self) -> bool {
+        self.interior.is_some() || self.exterior.is_some()
+    }
+
+    /// The medium a ray leaving the surface along `d` enters, for the
+    /// geometric normal `n` (Mitsuba's `target_medium`).
+    #[inline]
+    pub fn target(&self, n: Vec3, d: Vec3) -> Option<u32> {
+        if d.dot(n) > 0.0 {
+            self.exterior
+        } else {
+            self.interior
+        }
+    }
 }
 
 #[cold]
@@ -109,7 +149,25 @@ impl Scene {
             light_sampler,
             reads_uv,
             ray_log: None,
+            media: Vec::new(),
+            shape_media: Vec::new(),
+            camera_medium: None,
         }
+    }
+
+    /// Adds participating media: `shape_media` per shape id (or empty when
+    /// no shape bounds one) and the camera's medium.
+    pub fn set_media(&mut self, media: Vec<Medium>, shape_media: Vec<ShapeMedia>, camera_medium: Option<u32>) {
+        assert!(shape_media.is_empty() || shape_media.len() == self.shapes.len());
+        self.media = media;
+        self.shape_media = shape_media;
+        self.camera_medium = camera_medium;
+    }
+
+    /// The media around shape `shape` (none for scenes without media).
+    #[inline]
+    pub fn shape_media(&self, shape: u32) -> ShapeMedia {
+        self.shape_media.get(shape as usize).copied().unwrap_or_default()
     }
 
     /// Chooses the light-selection strategy (precomputing what it needs).

@@ -94,6 +94,15 @@ impl Blend<'_> {
     }
 }
 
+impl Blend<'_> {
+    /// The mixture's straight-through part (see [`Bsdf::null_transmission`]).
+    pub fn null_transmission(&self, wo: Vec3) -> Spectrum {
+        let w = self.weight;
+        self.first.bsdf.null_transmission(self.first.in_nested(wo)) * (1.0 - w)
+            + self.second.bsdf.null_transmission(self.second.in_nested(wo)) * w
+    }
+}
+
 impl BsdfModel for Blend<'_> {
     /// Whether either nested BSDF has a non-delta lobe.
     fn has_smooth(&self) -> bool {
@@ -130,6 +139,6 @@ impl BsdfModel for Blend<'_> {
             return None;
         }
         let weight = (s.weight * (w_chosen * s.pdf) + f_other * w_other) / pdf;
-        Some(BsdfSample { wi, pdf, weight, delta: s.delta, eta: s.eta })
+        Some(BsdfSample { wi, pdf, weight, delta: s.delta, null: s.null, eta: s.eta })
     }
 }

@@ -65,6 +65,13 @@ impl BsdfModel for Conductor {
             return None;
         }
         let f = fresnel_conductor(wo.z, self.eta, self.k);
-        Some(BsdfSample { wi: reflect(wo), pdf: 1.0, weight: self.specular_reflectance * f, delta: true, eta: 1.0 })
+        Some(BsdfSample {
+            wi: reflect(wo),
+            pdf: 1.0,
+            weight: self.specular_reflectance * f,
+            delta: true,
+            null: false,
+            eta: 1.0,
+        })
     }
 }

@@ -67,7 +67,14 @@ impl BsdfModel for Dielectric {
     fn sample(&self, wo: Vec3, u: f32, _u2: Vec2) -> Option<BsdfSample> {
         let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, self.eta);
         if u <= r {
-            Some(BsdfSample { wi: reflect(wo), pdf: r, weight: self.specular_reflectance, delta: true, eta: 1.0 })
+            Some(BsdfSample {
+                wi: reflect(wo),
+                pdf: r,
+                weight: self.specular_reflectance,
+                delta: true,
+                null: false,
+                eta: 1.0,
+            })
         } else {
             let wi = refract(wo, cos_t, eta_ti);
             Some(BsdfSample {
@@ -75,6 +82,7 @@ impl BsdfModel for Dielectric {
                 pdf: 1.0 - r,
                 weight: self.specular_transmittance * (eta_ti * eta_ti),
                 delta: true,
+                null: false,
                 eta: eta_it,
             })
         }

@@ -74,6 +74,6 @@ impl BsdfModel for Diffuse {
         if pdf <= 0.0 {
             return None;
         }
-        Some(BsdfSample { wi, pdf, weight: self.reflectance, delta: false, eta: 1.0 })
+        Some(BsdfSample { wi, pdf, weight: self.reflectance, delta: false, null: false, eta: 1.0 })
     }
 }

@@ -145,6 +145,11 @@ pub struct BsdfSample {
     pub weight: Spectrum,
     /// Sampled from a Dirac delta lobe (MIS does not apply).
     pub delta: bool,
+    /// Passed straight through, unchanged (Mitsuba's `BSDFFlags::Null`:
+    /// `null`, a mask's cut-out, `thindielectric`'s transmission): not a
+    /// scattering event for the volumetric path tracer, which crosses such
+    /// surfaces without counting depth.
+    pub null: bool,
     /// Relative IOR crossed (1 for reflection), for Russian roulette.
     pub eta: f32,
 }
@@ -275,6 +280,22 @@ impl Bsdf<'_> {
         (f, p)
     }
 
+    /// What passes straight through along `-wo` without scattering
+    /// (Mitsuba's `eval_null_transmission`): 1 for `null`, 1 − R' times the
+    /// tint for `thindielectric`, a mask's cut-out 1 − opacity · (1 − inner),
+    /// 0 for every other model. Shadow rays of the volumetric path tracer
+    /// cross surfaces by this factor.
+    #[inline]
+    pub fn null_transmission(&self, wo: Vec3) -> Spectrum {
+        let inner = match &self.kind {
+            BsdfKind::Null => Spectrum::ONE,
+            BsdfKind::ThinDielectric(t) => t.specular_transmittance * (1.0 - t.reflectance(wo.z)),
+            BsdfKind::Blend(b) => b.null_transmission(wo),
+            _ => Spectrum::ZERO,
+        };
+        Spectrum::ONE - (Spectrum::ONE - inner) * self.opacity
+    }
+
     /// Samples `wi` given `wo`; `u` picks a lobe, `u2` the direction.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
@@ -288,13 +309,14 @@ impl Bsdf<'_> {
                     pdf: 1.0 - self.opacity,
                     weight: Spectrum::ONE,
                     delta: true,
+                    null: true,
                     eta: 1.0,
                 });
             }
             u /= self.opacity;
         }
         let mut s = with_model!(&self.kind, b => b.sample(wo, u, u2), null => {
-            Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, eta: 1.0 })
+            Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Spectrum::ONE, delta: true, null: true, eta: 1.0 })
         })?;
         s.pdf *= self.opacity;
         if let Some(p) = self.perturbation {

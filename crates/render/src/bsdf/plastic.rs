@@ -147,6 +147,7 @@ impl BsdfModel for Plastic {
                 pdf: p_spec,
                 weight: self.specular_reflectance * (f_i / p_spec),
                 delta: true,
+                null: false,
                 eta: 1.0,
             });
         }
@@ -157,7 +158,7 @@ impl BsdfModel for Plastic {
         }
         let f_o = fresnel_dielectric(wi.z, self.eta).0;
         let weight = self.diffuse() * ((1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta * (1.0 - p_spec)));
-        Some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 }
 

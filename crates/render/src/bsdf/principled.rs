@@ -486,7 +486,7 @@ impl BsdfModel for Principled {
             return None;
         }
         let weight = self.value(a, wi) / pdf;
-        Some(BsdfSample { wi, pdf, weight, delta: false, eta })
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta })
     }
 }
 

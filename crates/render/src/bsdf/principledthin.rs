@@ -363,7 +363,7 @@ impl BsdfModel for PrincipledThin {
             return None;
         }
         let weight = self.value(wo, wi) / pdf;
-        Some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 }
 

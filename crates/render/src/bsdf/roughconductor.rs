@@ -108,7 +108,7 @@ impl BsdfModel for RoughConductor {
         let pdf = pdf_m / (4.0 * wi.dot(m));
         // Visible-normal sampling: D G1(wo) cancels, leaving F G1(wi).
         let weight = fresnel_conductor(wo.dot(m), self.eta, self.k) * self.specular_reflectance * g1;
-        Some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 }
 

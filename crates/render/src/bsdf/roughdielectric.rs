@@ -163,7 +163,7 @@ impl BsdfModel for RoughDielectric {
         if !(pdf > 0.0) {
             return None;
         }
-        Some(BsdfSample { wi, pdf, weight, delta: false, eta })
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta })
     }
 }
 

@@ -295,7 +295,7 @@ impl BsdfModel for RoughPlastic<'_> {
             return None;
         }
         let weight = self.eval(wo, wi) * (wi.z / pdf);
-        Some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 }
 

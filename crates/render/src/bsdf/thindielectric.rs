@@ -77,9 +77,23 @@ impl BsdfModel for ThinDielectric {
     fn sample(&self, wo: Vec3, u: f32, _u2: Vec2) -> Option<BsdfSample> {
         let r = self.reflectance(wo.z);
         if u <= r {
-            Some(BsdfSample { wi: reflect(wo), pdf: r, weight: self.specular_reflectance, delta: true, eta: 1.0 })
+            Some(BsdfSample {
+                wi: reflect(wo),
+                pdf: r,
+                weight: self.specular_reflectance,
+                delta: true,
+                null: false,
+                eta: 1.0,
+            })
         } else {
-            Some(BsdfSample { wi: -wo, pdf: 1.0 - r, weight: self.specular_transmittance, delta: true, eta: 1.0 })
+            Some(BsdfSample {
+                wi: -wo,
+                pdf: 1.0 - r,
+                weight: self.specular_transmittance,
+                delta: true,
+                null: true,
+                eta: 1.0,
+            })
         }
     }
 }

@@ -38,6 +38,7 @@ fn hide_emitters(integrator: &Integrator) -> bool {
         Integrator::Path(p) => p.hide_emitters,
         Integrator::Direct(d) => d.hide_emitters,
         Integrator::BruteForce(b) => b.hide_emitters,
+        Integrator::VolPath(v) => v.hide_emitters,
     }
 }
 

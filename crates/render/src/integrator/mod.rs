@@ -8,15 +8,18 @@
 //! | `path`       | light sampling + BSDF sampling at every vertex, MIS (or the split without it) |
 //! | `direct`     | direct illumination only: N light samples + M BSDF samples, MIS (Mitsuba `direct`) |
 //! | `bruteforce` | hemisphere form only: one sampled direction per vertex, emission only when hit |
+//! | `volpath`    | `path` through participating media: free-flight sampling, transmittance on shadow rays (Mitsuba `volpath`, `volpathmis`) |
 
 pub mod aov;
 pub mod bruteforce;
 pub mod direct;
 pub mod path;
+pub mod volpath;
 
 pub use bruteforce::{BruteForceIntegrator, HemisphereSampling};
 pub use direct::DirectIntegrator;
 pub use path::PathIntegrator;
+pub use volpath::VolPathIntegrator;
 
 use crate::geometry::Ray;
 use crate::material::Scratch;
@@ -120,6 +123,8 @@ pub enum Integrator {
     Direct(DirectIntegrator),
     /// `bruteforce`: one sampled direction per vertex, no light sampling.
     BruteForce(BruteForceIntegrator),
+    /// `volpath` / `volpathmis`: path tracing through participating media.
+    VolPath(VolPathIntegrator),
 }
 
 impl Integrator {
@@ -138,6 +143,7 @@ impl Integrator {
             Integrator::Path(p) => p.li(scene, ray, rng, stats, scratch),
             Integrator::Direct(d) => d.li(scene, ray, rng, stats, scratch),
             Integrator::BruteForce(b) => b.li(scene, ray, rng, stats, scratch),
+            Integrator::VolPath(v) => v.li(scene, ray, rng, stats, scratch),
         }
     }
 }

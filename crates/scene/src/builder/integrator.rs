@@ -6,6 +6,7 @@ use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
     BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
+    VolPathIntegrator,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -15,7 +16,7 @@ use std::path::PathBuf;
 type BuildIntegrator = fn(&Node) -> Result<(Integrator, LightSelection)>;
 
 pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> =
-    &[("path", path), ("direct", direct), ("bruteforce", bruteforce)];
+    &[("path", path), ("direct", direct), ("bruteforce", bruteforce), ("volpath", volpath), ("volpathmis", volpath)];
 
 /// Termination parameters shared by `path` and `bruteforce`.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
@@ -72,6 +73,17 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
             term: termination(node)?,
             hide_emitters: node.bool("hide_emitters", false)?,
             mis: node.bool("mis", true)?,
+        }),
+        light_selection(node)?,
+    ))
+}
+
+/// `volpath` and `volpathmis` (one estimator; see `integrator::volpath`).
+fn volpath(node: &Node) -> Result<(Integrator, LightSelection)> {
+    Ok((
+        Integrator::VolPath(VolPathIntegrator {
+            term: termination(node)?,
+            hide_emitters: node.bool("hide_emitters", false)?,
         }),
         light_selection(node)?,
     ))

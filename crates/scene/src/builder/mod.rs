@@ -7,6 +7,7 @@
 mod bsdf;
 mod emitter;
 mod integrator;
+mod medium;
 mod sensor;
 mod shape;
 mod texture;
@@ -29,7 +30,7 @@ use penumbra_render::integrator::{Integrator, PathIntegrator};
 use penumbra_render::light::LightSelection;
 use penumbra_render::material::Material;
 use penumbra_render::render::RenderJob;
-use penumbra_render::scene::{Scene, ShapeInfo};
+use penumbra_render::scene::{Scene, ShapeInfo, ShapeMedia};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -88,8 +89,7 @@ fn unsupported<F>(node: &Node, table: &Plugins<F>) -> LoadError {
 }
 
 /// The plugins of `kind` that Penumbra builds, as its error messages list
-/// them (an entry may carry a note: `"area (inside a shape)"`); empty for
-/// kinds it builds none of (media, phase functions, volumes).
+/// them (an entry may carry a note: `"area (inside a shape)"`).
 pub fn supported_plugins(kind: Kind) -> Vec<&'static str> {
     match kind {
         Kind::Shape => listed(shape::SHAPES),
@@ -101,7 +101,10 @@ pub fn supported_plugins(kind: Kind) -> Vec<&'static str> {
         Kind::Rfilter => listed(sensor::RFILTERS),
         Kind::Sampler => listed(sensor::SAMPLERS),
         Kind::Integrator => listed(integrator::INTEGRATORS),
-        Kind::Scene | Kind::Medium | Kind::Phase | Kind::Volume => Vec::new(),
+        Kind::Medium => listed(medium::MEDIA),
+        Kind::Phase => listed(medium::PHASES),
+        Kind::Volume => listed(medium::VOLUMES),
+        Kind::Scene => Vec::new(),
     }
 }
 
@@ -165,6 +168,9 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             Kind::Texture => {
                 b.textures.build(node)?;
             }
+            Kind::Medium => {
+                b.media.get(node)?;
+            }
             _ => {
                 return Err(LoadError::at(
                     &child.loc,
@@ -186,9 +192,14 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         Kind::Sampler,
         Kind::Film,
         Kind::Rfilter,
+        Kind::Medium,
     ])?;
     let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
+    let camera_medium = match sensor.single_child(Kind::Medium)? {
+        Some(m) => Some(b.media.get(&m)?),
+        None => None,
+    };
     let (integrator, selection) = match (&ov.integrator, &integrator) {
         (Some(spec), scene_node) => build_integrator(&integrator_from_spec(spec, scene_node.as_deref())?)?,
         (None, Some(node)) => build_integrator(node)?,
@@ -213,6 +224,10 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     let lights = b.lights.into_iter().map(|light| light(radius)).collect();
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
     scene.set_light_selection(selection);
+    if !b.media.media.is_empty() {
+        let shape_media = if b.shape_media.iter().any(ShapeMedia::is_transition) { b.shape_media } else { Vec::new() };
+        scene.set_media(std::mem::take(&mut b.media.media), shape_media, camera_medium);
+    }
     Ok(RenderJob {
         scene,
         camera,
@@ -253,6 +268,10 @@ struct Builder {
     shape_keys: Vec<String>,
     /// Shapes whose geometry was built, not reused.
     shapes_built: u64,
+    /// Media, built where first used.
+    media: medium::Media,
+    /// Per shape id, the media it bounds.
+    shape_media: Vec<ShapeMedia>,
 }
 
 impl Builder {
@@ -308,6 +327,9 @@ mod tests {
             Kind::Rfilter,
             Kind::Sampler,
             Kind::Integrator,
+            Kind::Medium,
+            Kind::Phase,
+            Kind::Volume,
         ];
         for kind in kinds {
             let listed = supported_plugins(kind);

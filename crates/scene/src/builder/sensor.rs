@@ -266,7 +266,7 @@ pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if let Some(o) = ov.seed {
         seed = o;
     }
-    node.check_all_used(&[Kind::Film, Kind::Sampler])?;
+    node.check_all_used(&[Kind::Film, Kind::Sampler, Kind::Medium])?;
     let (m, (w, h)) = (to_world.as_mat4(), rect.size);
     let camera = match model {
         SensorModel::Perspective { fov, axis } => Camera::new(m, fov as f32, axis, w, h, near as f32, far as f32),

@@ -12,6 +12,7 @@ use penumbra_render::bsdf::DiffuseParams;
 use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
+use penumbra_render::scene::ShapeMedia;
 use penumbra_render::scene::ShapeInfo;
 use penumbra_render::texture::MeshAttributeData;
 use std::rc::Rc;
@@ -164,10 +165,41 @@ impl Builder {
             }
             None => None,
         };
-        node.check_all_used(&[Kind::Bsdf, Kind::Emitter])?;
+        let media = self.shape_media(node)?;
+        node.check_all_used(&[Kind::Bsdf, Kind::Emitter, Kind::Medium])?;
         self.shapes.push(shape);
         self.infos.push(ShapeInfo { material: bsdf, light });
+        self.shape_media.push(media);
         Ok(shape_id)
+    }
+
+    /// The media a shape bounds: nested or referenced `<medium>`s named
+    /// `interior` and `exterior` (Mitsuba's attachment).
+    fn shape_media(&mut self, node: &Node) -> Result<ShapeMedia> {
+        let mut m = ShapeMedia::default();
+        for c in node.children_of(Kind::Medium) {
+            let slot = match c.name.as_deref() {
+                Some("interior") => &mut m.interior,
+                Some("exterior") => &mut m.exterior,
+                other => {
+                    return Err(LoadError::at(
+                        &c.loc,
+                        format!(
+                            "a medium inside a shape needs name=\"interior\" or name=\"exterior\" (found {})",
+                            other.map_or("no name".to_string(), |n| format!("'{n}'"))
+                        ),
+                    ))
+                }
+            };
+            if slot.is_some() {
+                return Err(LoadError::at(
+                    &c.loc,
+                    format!("only one {} medium can be given per shape", c.name.as_deref().unwrap_or_default()),
+                ));
+            }
+            *slot = Some(self.media.get(&c.node)?);
+        }
+        Ok(m)
     }
 
     /// `node`'s geometry from the [`super::GeometryCache`], or built and

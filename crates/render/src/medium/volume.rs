@@ -1,0 +1,232 @@
+//! Volume data: Mitsuba 3's `constvolume` and `gridvolume`. A volume maps
+//! world points to RGB values through its `to_world` transform, which
+//! places the unit cube [0, 1]³ of the data in the scene.
+
+use crate::geometry::Aabb;
+use crate::math::Spectrum;
+use glam::{Mat4, Vec3};
+use std::sync::Arc;
+
+/// Lookup between voxels (Mitsuba's `filter_type`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VolumeFilter {
+    /// The voxel that contains the point.
+    Nearest,
+    /// Trilinear interpolation between voxel centres.
+    Trilinear,
+}
+
+/// Outside [0, 1]³ (Mitsuba's `wrap_mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VolumeWrap {
+    /// The border voxels extend outwards.
+    Clamp,
+    /// The grid tiles space.
+    Repeat,
+    /// The grid tiles space, every other copy mirrored.
+    Mirror,
+}
+
+/// A voxel grid with 1 or 3 channels, x fastest (Mitsuba's `.vol` order).
+#[derive(Debug, Clone)]
+pub struct Grid {
+    /// Voxels along x, y and z.
+    pub res: [u32; 3],
+    /// Values per voxel: 1 (broadcast to RGB) or 3.
+    pub channels: u32,
+    /// `res[0] · res[1] · res[2] · channels` values.
+    pub data: Vec<f32>,
+}
+
+impl Grid {
+    /// The largest value over all voxels and channels (0 for none).
+    pub fn max(&self) -> f32 {
+        self.data.iter().copied().fold(0.0, f32::max)
+    }
+
+    #[inline]
+    fn voxel(&self, x: u32, y: u32, z: u32) -> Spectrum {
+        let i = ((z as usize * self.res[1] as usize + y as usize) * self.res[0] as usize + x as usize)
+            * self.channels as usize;
+        if self.channels == 1 {
+            Spectrum::splat(self.data[i])
+        } else {
+            Spectrum::new(self.data[i], self.data[i + 1], self.data[i + 2])
+        }
+    }
+}
+
+/// A placed grid: Mitsuba's `gridvolume`.
+#[derive(Debug, Clone)]
+pub struct GridVolume {
+    /// The voxels.
+    pub grid: Arc<Grid>,
+    /// World → [0, 1]³ of the grid.
+    pub to_local: Mat4,
+    /// How values are looked up.
+    pub filter: VolumeFilter,
+    /// How points outside the unit cube are mapped into it.
+    pub wrap: VolumeWrap,
+    /// The largest value the volume takes (Mitsuba's `max_value`, or the grid's maximum).
+    pub max: f32,
+}
+
+/// Index `i` on an axis of `n` voxels under `wrap`.
+#[inline]
+fn wrap_index(i: i64, n: u32, wrap: VolumeWrap) -> u32 {
+    let n = n as i64;
+    (match wrap {
+        VolumeWrap::Clamp => i.clamp(0, n - 1),
+        VolumeWrap::Repeat => i.rem_euclid(n),
+        VolumeWrap::Mirror => {
+            let m = i.rem_euclid(2 * n);
+            if m < n {
+                m
+            } else {
+                2 * n - 1 - m
+            }
+        }
+    }) as u32
+}
+
+impl GridVolume {
+    /// The value at world point `p`, looked up as Dr.Jit's textures do:
+    /// voxel centres at (i + ½) / res.
+    pub fn eval(&self, p: Vec3) -> Spectrum {
+        let q = self.to_local.transform_point3(p);
+        let g = &*self.grid;
+        let res = Vec3::new(g.res[0] as f32, g.res[1] as f32, g.res[2] as f32);
+        match self.filter {
+            VolumeFilter::Nearest => {
+                let v = (q * res).floor();
+                g.voxel(
+                    wrap_index(v.x as i64, g.res[0], self.wrap),
+                    wrap_index(v.y as i64, g.res[1], self.wrap),
+                    wrap_index(v.z as i64, g.res[2], self.wrap),
+                )
+            }
+            VolumeFilter::Trilinear => {
+                let pos = q * res - Vec3::splat(0.5);
+                let base = pos.floor();
+                let f = pos - base;
+                let (bx, by, bz) = (base.x as i64, base.y as i64, base.z as i64);
+                let xs = [wrap_index(bx, g.res[0], self.wrap), wrap_index(bx + 1, g.res[0], self.wrap)];
+                let ys = [wrap_index(by, g.res[1], self.wrap), wrap_index(by + 1, g.res[1], self.wrap)];
+                let zs = [wrap_index(bz, g.res[2], self.wrap), wrap_index(bz + 1, g.res[2], self.wrap)];
+                let wx = [1.0 - f.x, f.x];
+                let wy = [1.0 - f.y, f.y];
+                let wz = [1.0 - f.z, f.z];
+                let mut acc = Spectrum::ZERO;
+                for (k, &z) in zs.iter().enumerate() {
+                    for (j, &y) in ys.iter().enumerate() {
+                        for (i, &x) in xs.iter().enumerate() {
+                            acc += g.voxel(x, y, z) * (wx[i] * wy[j] * wz[k]);
+                        }
+                    }
+                }
+                acc
+            }
+        }
+    }
+}
+
+/// A volume: a constant or a grid, each placed by its `to_world`.
+#[derive(Debug, Clone)]
+pub enum Volume {
+    /// Mitsuba `constvolume` (and a plain float or colour given for a volume).
+    Constant {
+        /// The value everywhere.
+        value: Spectrum,
+        /// The placed unit cube's bounds (what a heterogeneous medium with
+        /// this volume as `sigma_t` fills).
+        bounds: Aabb,
+    },
+    /// Mitsuba `gridvolume`.
+    Grid {
+        /// The placed grid.
+        grid: GridVolume,
+        /// The placed unit cube's bounds.
+        bounds: Aabb,
+    },
+}
+
+/// The world bounds of the unit cube placed by `to_world`.
+pub fn unit_cube_bounds(to_world: Mat4) -> Aabb {
+    let corners: Vec<Vec3> = (0..8)
+        .map(|i| to_world.transform_point3(Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32)))
+        .collect();
+    Aabb::from_points(&corners)
+}
+
+impl Volume {
+    /// A constant volume over the unit cube placed by the identity.
+    pub fn constant(value: Spectrum) -> Volume {
+        Volume::Constant { value, bounds: unit_cube_bounds(Mat4::IDENTITY) }
+    }
+
+    /// The value at world point `p`.
+    #[inline]
+    pub fn eval(&self, p: Vec3) -> Spectrum {
+        match self {
+            Volume::Constant { value, .. } => *value,
+            Volume::Grid { grid, .. } => grid.eval(p),
+        }
+    }
+
+    /// The largest value over the volume (all channels).
+    pub fn max(&self) -> f32 {
+        match self {
+            Volume::Constant { value, .. } => value.max_element(),
+            Volume::Grid { grid, .. } => grid.max,
+        }
+    }
+
+    /// The world bounds of the placed unit cube.
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Volume::Constant { bounds, .. } | Volume::Grid { bounds, .. } => *bounds,
+        }
+    }
+
+    /// The constant value, when the volume is one.
+    pub fn as_constant(&self) -> Option<Spectrum> {
+        match self {
+            Volume::Constant { value, .. } => Some(*value),
+            Volume::Grid { .. } => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(filter: VolumeFilter, wrap: VolumeWrap) -> GridVolume {
+        // 2 × 1 × 1 voxels: 1 and 3.
+        let grid = Arc::new(Grid { res: [2, 1, 1], channels: 1, data: vec![1.0, 3.0] });
+        GridVolume { grid, to_local: Mat4::IDENTITY, filter, wrap, max: 3.0 }
+    }
+
+    /// Voxel centres hold the voxel values; between them values are
+    /// linear; outside, the wrap mode decides.
+    #[test]
+    fn lookups_follow_voxel_centres_and_wrap_modes() {
+        let v = grid(VolumeFilter::Trilinear, VolumeWrap::Clamp);
+        let at = |x: f32| v.eval(Vec3::new(x, 0.5, 0.5)).x;
+        assert_eq!(at(0.25), 1.0);
+        assert_eq!(at(0.75), 3.0);
+        assert_eq!(at(0.5), 2.0);
+        assert_eq!(at(0.0), 1.0, "clamped below the first centre");
+        assert_eq!(at(1.2), 3.0);
+        let n = grid(VolumeFilter::Nearest, VolumeWrap::Clamp);
+        assert_eq!(n.eval(Vec3::new(0.49, 0.5, 0.5)).x, 1.0);
+        assert_eq!(n.eval(Vec3::new(0.51, 0.5, 0.5)).x, 3.0);
+        let r = grid(VolumeFilter::Nearest, VolumeWrap::Repeat);
+        assert_eq!(r.eval(Vec3::new(1.25, 0.5, 0.5)).x, 1.0);
+        let m = grid(VolumeFilter::Nearest, VolumeWrap::Mirror);
+        assert_eq!(m.eval(Vec3::new(1.25, 0.5, 0.5)).x, 3.0);
+        // Trilinear with repeat blends the last and first voxels across the seam.
+        let t = grid(VolumeFilter::Trilinear, VolumeWrap::Repeat);
+        assert_eq!(t.eval(Vec3::new(1.0, 0.5, 0.5)).x, 2.0);
+    }
+}
