@@ -70,6 +70,10 @@ SPP = {
     "principled": 65536,
     "vertex_colors": 65536,
     "principledthin": 65536,
+    "fog_spot": 65536,
+    "smoke_grid": 32768,
+    "glass_medium": 65536,
+    "emitter_in_medium": 65536,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

@@ -115,6 +115,18 @@ fn volume_param(node: &Node, name: &str, default: f32) -> Result<Volume> {
     let v = node.get_rgb(name)?.map(|v| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32));
     let v = v.unwrap_or(Spectrum::splat(default));
     check_coefficient(node, name, v)?;
+    // Mitsuba's RGB variants read an <rgb> volume parameter as a
+    // reflectance and refuse components above 1.
+    let is_rgb = node.props.iter().any(|p| p.name == name && matches!(p.value, crate::desc::Value::Rgb(_)));
+    if is_rgb && v.max_element() > 1.0 {
+        return Err(LoadError::at(
+            node.loc_of(name),
+            format!(
+                "{name} = {v}: an <rgb> volume value must lie in [0, 1] per channel (Mitsuba 3 reads it as a \
+                 reflectance); give the colour in [0, 1] and the magnitude with 'scale', or a <float>"
+            ),
+        ));
+    }
     Ok(Volume::constant(v))
 }
 
