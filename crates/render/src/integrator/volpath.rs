@@ -16,14 +16,17 @@
 //! | rr_depth      | integer | 5 (depth at which Russian roulette starts) |
 //! | hide_emitters | boolean | false (camera rays pass through emitters; environment black) |
 //!
-//! `volpathmis` takes the same parameters; Mitsuba adds spectral MIS there,
-//! which Penumbra's homogeneous free-flight sampling always does.
+//! Chromatic media: each path draws its free-flight distances with one
+//! hero channel (chosen uniformly, as Mitsuba's `volpath`) and is weighted
+//! by the balance heuristic over the three channels' path densities
+//! (Mitsuba's `volpathmis`); so `volpath` and `volpathmis`, which take the
+//! same parameters, are one estimator here, with `volpathmis`'s variance.
 
 use super::{RayStats, Termination};
 use crate::geometry::{offset_origin, Ray};
 use crate::material::Scratch;
 use crate::math::{Spectrum, SHADOW_EPSILON};
-use crate::medium::Flight;
+use crate::medium::{mean, Flight};
 use crate::sampling::mis::power_heuristic;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
@@ -54,7 +57,13 @@ impl VolPathIntegrator {
     ) -> Spectrum {
         let mut ray = *camera_ray;
         let mut medium = scene.camera_medium;
-        let (mut l, mut beta, mut eta) = (Spectrum::ZERO, Spectrum::ONE, 1.0f32);
+        let (mut l, mut eta) = (Spectrum::ZERO, 1.0f32);
+        // Spectral MIS: the throughput is beta_h / mean(ratio), where
+        // beta_h is the value over the hero channel's path density and
+        // ratio each channel's path density over the hero's.
+        let hero = ((rng.next_1d() * 3.0) as usize).min(2);
+        let (mut beta_h, mut ratio) = (Spectrum::ONE, Spectrum::ONE);
+        let throughput = |beta_h: Spectrum, ratio: Spectrum| beta_h / mean(ratio);
         let mut depth = 0u32;
         // Emission found by phase or BSDF sampling counts in full after
         // the camera and delta bounces (Mitsuba's `specular_chain`).
@@ -74,14 +83,19 @@ impl VolPathIntegrator {
             if let Some(m) = medium {
                 let med = &scene.media[m as usize];
                 let t_end = hit.as_ref().map_or(f32::INFINITY, |si| si.t);
-                match med.sample_flight(&ray, t_end, rng) {
-                    Flight::Pass { weight } => beta *= weight,
-                    Flight::Scatter { t, weight } => {
-                        beta *= weight;
+                match med.sample_flight(&ray, t_end, hero, rng) {
+                    Flight::Pass { weight, ratio: r } => {
+                        beta_h *= weight;
+                        ratio *= r;
+                    }
+                    Flight::Scatter { t, weight, ratio: r } => {
+                        beta_h *= weight;
+                        ratio *= r;
                         depth += 1;
-                        if depth >= self.term.max_depth || beta == Spectrum::ZERO {
+                        if depth >= self.term.max_depth || beta_h == Spectrum::ZERO {
                             break;
                         }
+                        let beta = throughput(beta_h, ratio);
                         let p = ray.at(t);
                         let wi = -ray.d;
                         specular_chain = !med.sample_emitters;
@@ -103,7 +117,7 @@ impl VolPathIntegrator {
                         }
                         (last_p, last_n, last_pdf) = (p, Vec3::ZERO, pdf);
                         ray = Ray::new(p, wo, f32::INFINITY);
-                        if !self.survive(&mut beta, eta, depth, rng) {
+                        if !self.survive(&mut beta_h, ratio, eta, depth, rng) {
                             break;
                         }
                         continue;
@@ -112,6 +126,7 @@ impl VolPathIntegrator {
             }
 
             // At the surface (or escaped).
+            let beta = throughput(beta_h, ratio);
             let Some(mut si) = hit else {
                 if !(depth == 0 && self.hide_emitters) {
                     if specular_chain || depth == 0 {
@@ -164,14 +179,15 @@ impl VolPathIntegrator {
                         } else {
                             (ls.wi, f32::INFINITY)
                         };
-                        let tr = self.transmittance(scene, Ray::new(o, dir, f32::INFINITY), dist, m, rng, stats, scratch);
+                        let tr =
+                            self.transmittance(scene, Ray::new(o, dir, f32::INFINITY), dist, m, rng, stats, scratch);
                         l += beta * f * ls.li * tr * (w / ls.pdf);
                     }
                 }
             }
 
             let Some(bs) = bsdf.sample(wo, rng.next_1d(), rng.next_2d()) else { break };
-            beta *= bs.weight;
+            beta_h *= bs.weight;
             eta *= bs.eta;
             let wi = si.to_world(bs.wi);
             ray = scene.spawn_ray(&si, wi);
@@ -190,7 +206,7 @@ impl VolPathIntegrator {
             depth += 1;
             (last_p, last_n, last_pdf) = (si.p, si.n, bs.pdf);
             specular_chain = bs.delta;
-            if !self.survive(&mut beta, eta, depth, rng) {
+            if !self.survive(&mut beta_h, ratio, eta, depth, rng) {
                 break;
             }
         }
@@ -198,12 +214,13 @@ impl VolPathIntegrator {
     }
 
     /// Russian roulette after a scattering event (Mitsuba's rule, see
-    /// [`Termination::survive`]); false ends the path.
+    /// [`Termination::survive`]) on the MIS-weighted throughput, which does
+    /// not depend on the hero channel; false ends the path.
     #[inline]
-    fn survive(&self, beta: &mut Spectrum, eta: f32, depth: u32, rng: &mut SampleStream) -> bool {
-        match self.term.survive(*beta, eta, depth, rng) {
+    fn survive(&self, beta_h: &mut Spectrum, ratio: Spectrum, eta: f32, depth: u32, rng: &mut SampleStream) -> bool {
+        match self.term.survive(*beta_h / mean(ratio), eta, depth, rng) {
             Some(q) => {
-                *beta /= q;
+                *beta_h /= q;
                 true
             }
             None => false,

@@ -6,11 +6,12 @@
 //!
 //! Both estimators are unbiased and agree in expectation with Mitsuba's
 //! `volpath` (src/integrators/volpath.cpp, src/render/medium.cpp):
-//! - homogeneous: distances from exp(−σ_c t) of one channel c chosen
-//!   uniformly per flight, weighted by the mean density over the three
-//!   channels (one-sample MIS, balance heuristic), which keeps chromatic
-//!   media from the fireflies of a single hero channel; transmittance in
-//!   closed form, exp(−σ_t d);
+//! - homogeneous: distances from exp(−σ_h t) of the path's hero channel h;
+//!   each flight also reports every channel's density relative to the
+//!   hero's, so that the integrator weights the whole path by the balance
+//!   heuristic over the three channels (spectral MIS, as Mitsuba's
+//!   `volpathmis`), which keeps chromatic media free of the fireflies of a
+//!   single hero channel; transmittance in closed form, exp(−σ_t d);
 //! - heterogeneous: delta tracking against the majorant σ̄ = scale ·
 //!   max(sigma_t) inside the volume's bounds, with Mitsuba's null-collision
 //!   probability mean(σ_n) / σ̄ and weights for chromatic σ_t; transmittance
@@ -63,21 +64,27 @@ pub struct Medium {
     pub sample_emitters: bool,
 }
 
-/// Outcome of free-flight sampling along a ray segment.
+/// Outcome of free-flight sampling along a ray segment. `weight` is the
+/// value over the hero channel's density; `ratio` is each channel's
+/// density over the hero's (all ones where the densities agree). A path's
+/// spectral-MIS throughput is Π weight / mean(Π ratio).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Flight {
-    /// Light scatters at distance `t`; multiply the throughput by `weight`
-    /// (σ_s · transmittance / density, Mitsuba's weights).
+    /// Light scatters at distance `t`.
     Scatter {
         /// Distance along the ray.
         t: f32,
-        /// Throughput factor.
+        /// σ_s · transmittance / the hero's density.
         weight: Spectrum,
+        /// Densities relative to the hero's.
+        ratio: Spectrum,
     },
-    /// The segment is crossed; multiply the throughput by `weight`.
+    /// The segment is crossed.
     Pass {
-        /// Throughput factor.
+        /// Transmittance (or the null-collision weights) over the hero's probability.
         weight: Spectrum,
+        /// Probabilities relative to the hero's.
+        ratio: Spectrum,
     },
 }
 
@@ -102,8 +109,9 @@ fn tr(sigma: Spectrum, t: f32) -> Spectrum {
     Spectrum::new(f(sigma.x), f(sigma.y), f(sigma.z))
 }
 
+/// The channel mean.
 #[inline]
-fn mean(s: Spectrum) -> f32 {
+pub fn mean(s: Spectrum) -> f32 {
     (s.x + s.y + s.z) / 3.0
 }
 
@@ -136,38 +144,45 @@ impl Medium {
     }
 
     /// Samples where along `ray` (unit direction), before `t_end` (the
-    /// closest surface, possibly ∞), light first scatters.
-    pub fn sample_flight(&self, ray: &Ray, t_end: f32, rng: &mut SampleStream) -> Flight {
+    /// closest surface, possibly ∞), light first scatters, drawing
+    /// distances with the extinction of channel `hero`.
+    pub fn sample_flight(&self, ray: &Ray, t_end: f32, hero: usize, rng: &mut SampleStream) -> Flight {
         match &self.kind {
             MediumKind::Homogeneous { sigma_t, .. } => {
-                // One channel, chosen with the first third of u; the rest of
-                // u, rescaled, draws the distance.
-                let u = rng.next_1d() * 3.0;
-                let c = (u as usize).min(2);
-                let t = exp_step(sigma_t[c], (u - c as f32).min(crate::math::ONE_MINUS_EPS));
+                let t = exp_step(sigma_t[hero], rng.next_1d());
                 if t < t_end {
                     let transmittance = tr(*sigma_t, t);
-                    let pdf = mean(*sigma_t * transmittance);
+                    let pdf = *sigma_t * transmittance;
                     let (sigma_s, _) = self.coefficients(ray.o);
-                    Flight::Scatter { t, weight: sigma_s * transmittance / pdf }
+                    let ph = pdf[hero];
+                    Flight::Scatter { t, weight: sigma_s * transmittance / ph, ratio: pdf / ph }
                 } else {
                     let transmittance = tr(*sigma_t, t_end);
-                    let pdf = mean(transmittance);
-                    let weight = if pdf > 0.0 { transmittance / pdf } else { Spectrum::ZERO };
-                    Flight::Pass { weight }
+                    let ph = transmittance[hero];
+                    if ph > 0.0 {
+                        Flight::Pass { weight: transmittance / ph, ratio: transmittance / ph }
+                    } else {
+                        // Unreachable for the hero (an infinite segment in
+                        // a medium it sees); no estimate.
+                        Flight::Pass { weight: Spectrum::ZERO, ratio: Spectrum::ONE }
+                    }
                 }
             }
             MediumKind::Heterogeneous { sigma_t, majorant, .. } => {
+                // One majorant for all channels, and null-collision
+                // probabilities from the channel mean: the same densities
+                // for every hero.
+                let ratio = Spectrum::ONE;
                 let m = *majorant;
                 let Some((t0, t1)) = clip(&sigma_t.bounds(), ray.o, ray.d, t_end).filter(|_| m > 0.0) else {
-                    return Flight::Pass { weight: Spectrum::ONE };
+                    return Flight::Pass { weight: Spectrum::ONE, ratio };
                 };
                 let mut weight = Spectrum::ONE;
                 let mut t = t0;
                 loop {
                     t += exp_step(m, rng.next_1d());
                     if t >= t1 {
-                        return Flight::Pass { weight };
+                        return Flight::Pass { weight, ratio };
                     }
                     let (sigma_s, st) = self.coefficients(ray.at(t));
                     let sigma_n = Spectrum::splat(m) - st;
@@ -175,7 +190,7 @@ impl Medium {
                     if rng.next_1d() < p_null {
                         weight *= sigma_n / (m * p_null);
                     } else {
-                        return Flight::Scatter { t, weight: weight * sigma_s / mean(st) };
+                        return Flight::Scatter { t, weight: weight * sigma_s / mean(st), ratio };
                     }
                 }
             }
@@ -237,13 +252,8 @@ mod tests {
         }
         let grid = Arc::new(Grid { res: [4, 4, 4], channels: 1, data });
         let max = grid.max();
-        let gv = GridVolume {
-            grid,
-            to_local: Mat4::IDENTITY,
-            filter: VolumeFilter::Nearest,
-            wrap: VolumeWrap::Clamp,
-            max,
-        };
+        let gv =
+            GridVolume { grid, to_local: Mat4::IDENTITY, filter: VolumeFilter::Nearest, wrap: VolumeWrap::Clamp, max };
         let bounds = volume::unit_cube_bounds(Mat4::IDENTITY);
         Medium {
             kind: MediumKind::Heterogeneous {
@@ -292,21 +302,27 @@ mod tests {
         let m = homogeneous(sigma_t, albedo);
         let ray = Ray::new(Vec3::ZERO, Vec3::X, f32::INFINITY);
         let d = 1.3;
-        let pass = estimate(100_000, |rng| match m.sample_flight(&ray, d, rng) {
-            Flight::Pass { weight } => weight,
+        // One flight with a uniformly drawn hero, weighted by the balance
+        // heuristic (weight / mean(ratio)).
+        let flight = |rng: &mut SampleStream| {
+            let hero = ((rng.next_1d() * 3.0) as usize).min(2);
+            m.sample_flight(&ray, d, hero, rng)
+        };
+        let pass = estimate(100_000, |rng| match flight(rng) {
+            Flight::Pass { weight, ratio } => weight / mean(ratio),
             Flight::Scatter { .. } => Spectrum::ZERO,
         });
         let want = tr(sigma_t, d);
         assert_close("pass", pass, want);
-        let scatter = estimate(100_000, |rng| match m.sample_flight(&ray, d, rng) {
-            Flight::Scatter { weight, .. } => weight,
+        let scatter = estimate(100_000, |rng| match flight(rng) {
+            Flight::Scatter { weight, ratio, .. } => weight / mean(ratio),
             Flight::Pass { .. } => Spectrum::ZERO,
         });
         assert_close("scatter", scatter, albedo * (Spectrum::ONE - want));
         assert_eq!(m.transmittance(&ray, d, &mut streams(1).next().unwrap()), want);
         // A scattering distance's density: E[t · weight / σ_s] = ∫ t e^{−σt} dt.
-        let first_moment = estimate(100_000, |rng| match m.sample_flight(&ray, d, rng) {
-            Flight::Scatter { t, weight } => weight / (sigma_t * albedo) * t,
+        let first_moment = estimate(100_000, |rng| match flight(rng) {
+            Flight::Scatter { t, weight, ratio } => weight / mean(ratio) / (sigma_t * albedo) * t,
             Flight::Pass { .. } => Spectrum::ZERO,
         });
         let want = (Spectrum::ONE - tr(sigma_t, d) * (Spectrum::ONE + sigma_t * d)) / (sigma_t * sigma_t);
@@ -324,13 +340,13 @@ mod tests {
         let tau: f32 = (0..4).map(|x| 0.7 * (1.0 + x as f32 + 4.0) * 0.25).sum();
         let want = Spectrum::splat((-tau).exp());
         assert_close("ratio tracking", estimate(100_000, |rng| m.transmittance(&ray, 10.0, rng)), want);
-        let pass = estimate(100_000, |rng| match m.sample_flight(&ray, 10.0, rng) {
-            Flight::Pass { weight } => weight,
+        let pass = estimate(100_000, |rng| match m.sample_flight(&ray, 10.0, 1, rng) {
+            Flight::Pass { weight, .. } => weight,
             Flight::Scatter { .. } => Spectrum::ZERO,
         });
         assert_close("delta tracking", pass, want);
         // Scattered weight: albedo · (1 − T).
-        let scatter = estimate(100_000, |rng| match m.sample_flight(&ray, 10.0, rng) {
+        let scatter = estimate(100_000, |rng| match m.sample_flight(&ray, 10.0, 2, rng) {
             Flight::Scatter { weight, .. } => weight,
             Flight::Pass { .. } => Spectrum::ZERO,
         });

@@ -206,11 +206,17 @@ fn gridvolume(node: &Node) -> Result<Volume> {
         return Err(node.error("gridvolume needs a 'filename' (a Mitsuba .vol file)"));
     };
     let path = resolve(&loc, &name, "volume file")?;
-    let file = crate::vol::read(&path).map_err(|e| LoadError::at(&loc, format!("volume file '{}': {e}", path.display())))?;
+    let file =
+        crate::vol::read(&path).map_err(|e| LoadError::at(&loc, format!("volume file '{}': {e}", path.display())))?;
     if let Some(i) = file.grid.data.iter().position(|&v| v < 0.0) {
         return Err(LoadError::at(
             &loc,
-            format!("volume file '{}': value {} of voxel {} is negative", path.display(), file.grid.data[i], i / file.grid.channels as usize),
+            format!(
+                "volume file '{}': value {} of voxel {} is negative",
+                path.display(),
+                file.grid.data[i],
+                i / file.grid.channels as usize
+            ),
         ));
     }
     if node.bool("use_grid_bbox", false)? {
@@ -223,7 +229,12 @@ fn gridvolume(node: &Node) -> Result<Volume> {
     }
     let max = match node.get_float("max_value")? {
         Some(m) if m.is_finite() && m >= 0.0 => m as f32,
-        Some(m) => return Err(LoadError::at(node.loc_of("max_value"), format!("max_value = {m} must be finite and not negative"))),
+        Some(m) => {
+            return Err(LoadError::at(
+                node.loc_of("max_value"),
+                format!("max_value = {m} must be finite and not negative"),
+            ))
+        }
         None => file.grid.max(),
     };
     let grid = GridVolume { grid: Arc::new(file.grid), to_local: to_world.inverse(), filter, wrap, max };
