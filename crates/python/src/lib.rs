@@ -61,6 +61,9 @@ fn plugins() -> Vec<(&'static str, Vec<&'static str>)> {
         Kind::Rfilter,
         Kind::Sampler,
         Kind::Integrator,
+        Kind::Medium,
+        Kind::Phase,
+        Kind::Volume,
     ];
     kinds
         .iter()

@@ -20,6 +20,9 @@ const KINDS: &[(Kind, &str)] = &[
     (Kind::Film, r#"<sensor type="perspective"><film type="{}"/></sensor>"#),
     (Kind::Rfilter, r#"<sensor type="perspective"><film type="hdrfilm"><rfilter type="{}"/></film></sensor>"#),
     (Kind::Sampler, r#"<sensor type="perspective"><film type="hdrfilm"/><sampler type="{}"/></sensor>"#),
+    (Kind::Medium, r#"<medium type="{}" id="m"/>"#),
+    (Kind::Phase, r#"<medium type="homogeneous" id="m"><phase type="{}"/></medium>"#),
+    (Kind::Volume, r#"<medium type="heterogeneous" id="m"><volume type="{}" name="sigma_t"/></medium>"#),
 ];
 
 const SENSOR: &str = r#"<sensor type="perspective"><film type="hdrfilm"/></sensor>"#;
@@ -89,6 +92,7 @@ const README_ROWS: &[(&str, &[Kind])] = &[
     ("samplers", &[Kind::Sampler]),
     ("films, rfilters", &[Kind::Film, Kind::Rfilter]),
     ("integrators", &[Kind::Integrator]),
+    ("media, phase, volumes", &[Kind::Medium, Kind::Phase, Kind::Volume]),
 ];
 
 /// Entries of the code's lists that the README names differently.
