@@ -63,7 +63,11 @@ fn media_attach_to_shapes_and_the_sensor_as_in_mitsuba() {
 fn grid_volumes_load_and_place_their_unit_cube() {
     let dir = std::env::temp_dir().join(format!("penumbra-media-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let grid = penumbra_render::medium::Grid { res: [2, 2, 2], channels: 1, data: vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0] };
+    let grid = penumbra_render::medium::Grid {
+        res: [2, 2, 2],
+        channels: 1,
+        data: vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0],
+    };
     let bbox = penumbra_render::geometry::Aabb { min: glam::Vec3::ZERO, max: glam::Vec3::ONE };
     std::fs::write(dir.join("g.vol"), penumbra_scene::vol::encode(&grid, &bbox)).unwrap();
     let body = r#"<shape type="cube"><bsdf type="null"/><medium type="heterogeneous" name="interior">
@@ -102,7 +106,10 @@ fn malformed_media_are_errors_naming_the_position() {
             r#"<shape type="sphere"><medium type="homogeneous" name="interior"/><medium type="homogeneous" name="interior"/></shape>"#,
             "\"interior\" is specified more than once",
         ),
-        (r#"<medium type="homogeneous" id="m"><phase type="hg"><float name="g" value="1"/></phase></medium>"#, "(-1, 1)"),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="hg"><float name="g" value="1"/></phase></medium>"#,
+            "(-1, 1)",
+        ),
         (r#"<medium type="homogeneous" id="m"><rgb name="sigma_t" value="2, 1, 1"/></medium>"#, "'scale'"),
         (r#"<medium type="homogeneous" id="m"><float name="sigma_t" value="-1"/></medium>"#, "not negative"),
         (r#"<medium type="homogeneous" id="m"><float name="density" value="1"/></medium>"#, "parameter 'density'"),
@@ -116,7 +123,10 @@ fn malformed_media_are_errors_naming_the_position() {
             r#"<medium type="heterogeneous" id="m"><volume type="constvolume" name="sigma_t"><string name="filter_type" value="cubic"/></volume></medium>"#,
             "parameter 'filter_type'",
         ),
-        (r#"<medium type="homogeneous" id="m"><phase type="blendphase"><phase type="isotropic"/></phase></medium>"#, "exactly two"),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="blendphase"><phase type="isotropic"/></phase></medium>"#,
+            "exactly two",
+        ),
     ];
     for (body, want) in cases {
         let e = load(body, "").unwrap_err();

@@ -169,7 +169,7 @@ fn sobol_sampler_matches_mitsuba() {
 #[test]
 fn fog_with_a_spot_light_matches_mitsuba() {
     // Chromatic homogeneous fog around the camera (sensor medium), hg phase.
-    compare("fog_spot", 1024);
+    compare("fog_spot", 2048);
 }
 
 #[test]

@@ -25,6 +25,9 @@ const DEFAULT_SCENES: &[(&str, &[(&str, &str)])] = &[
     ("tests/scenes/many_lights.xml", &[("res", "256"), ("spp", "64")]),
     // Glossy and textured: rough metals and glass, plastics, a normal map.
     ("scenes/material-showcase.xml", &[("width", "384"), ("height", "160"), ("spp", "64")]),
+    // Participating media (volpath): chromatic fog with a spot light, a smoke grid under the sky.
+    ("tests/scenes/fog_spot.xml", &[("res", "256"), ("spp", "64")]),
+    ("tests/scenes/smoke_grid.xml", &[("res", "256"), ("spp", "64")]),
 ];
 
 /// Samples per pixel whose rays the trace-only columns record, at most...

@@ -14,7 +14,7 @@
 //! |---------------|---------|---------|
 //! | max_depth     | integer | -1 (unbounded); counts surface and medium scattering, not null crossings |
 //! | rr_depth      | integer | 5 (depth at which Russian roulette starts) |
-//! | hide_emitters | boolean | false (camera rays pass through emitters; environment black) |
+//! | hide_emitters | boolean | false (camera rays pass through emitters, seen from vacuum; environment black) |
 //!
 //! Chromatic media: each path draws its free-flight distances with one
 //! hero channel (chosen uniformly, as Mitsuba's `volpath`) and is weighted
@@ -80,6 +80,7 @@ impl VolPathIntegrator {
             let hit = scene.intersect(&ray);
 
             // In a medium: scatter before the surface, or cross to it.
+            let in_medium = medium.is_some();
             if let Some(m) = medium {
                 let med = &scene.media[m as usize];
                 let t_end = hit.as_ref().map_or(f32::INFINITY, |si| si.t);
@@ -141,9 +142,11 @@ impl VolPathIntegrator {
                 break;
             };
             let media = scene.shape_media(si.shape);
-            if depth == 0 && self.hide_emitters && scene.shape_info[si.shape as usize].light.is_some() {
+            if depth == 0 && self.hide_emitters && !in_medium && scene.shape_info[si.shape as usize].light.is_some() {
                 // Camera rays see through emitters (the medium changes as
-                // for any crossing).
+                // for any crossing); as in Mitsuba's volpath, only rays in
+                // vacuum do: an emitter reached through a medium is not
+                // skipped, and shows as its (unlit) surface.
                 if media.is_transition() {
                     medium = media.target(si.n, ray.d);
                 }
