@@ -98,7 +98,20 @@ pub(super) const RFILTERS: &Plugins<fn(&Node) -> Result<FilterKind>> = &[
     ("box", |_| Ok(FilterKind::Box)),
     ("tent", |f| Ok(FilterKind::Tent { radius: f.float("radius", 1.0)? as f32 })),
     ("gaussian", |f| Ok(FilterKind::Gaussian { stddev: f.float("stddev", 0.5)? as f32 })),
+    ("mitchell", |f| {
+        Ok(FilterKind::Mitchell { b: f.float("B", 1.0 / 3.0)? as f32, c: f.float("C", 1.0 / 3.0)? as f32 })
+    }),
+    ("catmullrom", |_| Ok(FilterKind::CatmullRom)),
+    ("lanczos", lanczos),
 ];
+
+fn lanczos(f: &Node) -> Result<FilterKind> {
+    let lobes = f.int("lobes", 3)?;
+    if !(1..=MAX_MARGIN as i64).contains(&lobes) {
+        return Err(LoadError::at(f.loc_of("lobes"), format!("lobes = {lobes} must lie in 1..={MAX_MARGIN}")));
+    }
+    Ok(FilterKind::Lanczos { lobes: lobes as u32 })
+}
 
 pub(super) const SAMPLERS: &Plugins<fn(&Node) -> Result<SamplerKind>> = &[
     ("independent", |_| Ok(SamplerKind::Independent)),
