@@ -88,8 +88,8 @@ fn grid_medium() -> Medium {
     };
     Medium {
         kind: MediumKind::Heterogeneous {
-            sigma_t: Volume::Grid { grid: gv, bounds: unit_cube_bounds(to_world) },
-            albedo: Volume::constant(Spectrum::ONE),
+            sigma_t: Box::new(Volume::Grid { grid: gv, bounds: unit_cube_bounds(to_world) }),
+            albedo: Box::new(Volume::constant(Spectrum::ONE)),
             scale: 1.5,
             majorant: 1.5 * grid.max(),
         },
@@ -181,8 +181,8 @@ fn absorbing_media_attenuate_camera_and_shadow_rays_exactly() {
             let to_world = Mat4::from_translation(Vec3::new(-20.0, -1.0, -20.0)) * Mat4::from_scale(Vec3::splat(40.0));
             Medium {
                 kind: MediumKind::Heterogeneous {
-                    sigma_t: Volume::Constant { value: sigma / 2.0, bounds: unit_cube_bounds(to_world) },
-                    albedo: Volume::constant(Spectrum::ZERO),
+                    sigma_t: Box::new(Volume::Constant { value: sigma / 2.0, bounds: unit_cube_bounds(to_world) }),
+                    albedo: Box::new(Volume::constant(Spectrum::ZERO)),
                     scale: 2.0,
                     majorant: 2.0 * (sigma / 2.0).max_element(),
                 },

@@ -145,6 +145,121 @@ pub fn check_sampled(pairs: &[(f64, f64)]) -> Result<(), String> {
     Ok(())
 }
 
+/// Mitsuba's spectrum plugins (`<spectrum type="..." name="...">`), which
+/// the XML reader turns into a plain property of the enclosing object, with
+/// the meaning Mitsuba's RGB variants give them, or, where those refuse
+/// (`blackbody`, `regular`, `irregular`), the meaning its spectral variants
+/// give them, converted to RGB as every sampled spectrum is here:
+///
+/// | plugin      | parameters | becomes |
+/// |-------------|------------|---------|
+/// | `uniform`   | `value`, `wavelength_min`, `wavelength_max` | the constant `value` in every channel |
+/// | `d65`       | `scale` (1), `color` | `color` · `scale` (white without `color`) |
+/// | `srgb`      | `color`, `unbounded` (false: `color` must lie in [0, 1]) | `color` |
+/// | `blackbody` | `temperature` (K), `wavelength_min` (360), `wavelength_max` (830) | Planck's law in W m⁻² sr⁻¹ nm⁻¹, sampled every nm |
+/// | `regular`   | `wavelength_min`, `wavelength_max`, `values` | evenly spaced samples |
+/// | `irregular` | `wavelengths`, `values` | samples at the given wavelengths |
+pub const SPECTRUM_PLUGINS: &[&str] = &["uniform", "d65", "srgb", "blackbody", "regular", "irregular"];
+
+/// The property value a spectrum plugin node stands for (see [`SPECTRUM_PLUGINS`]).
+pub fn plugin_value(node: &crate::desc::Node) -> crate::error::Result<crate::desc::Value> {
+    use crate::desc::Value;
+    use crate::error::LoadError;
+    let numbers = |name: &str| -> crate::error::Result<Vec<f64>> {
+        let (text, loc) =
+            node.get_string(name)?.ok_or_else(|| node.error(format!("spectrum '{}' needs '{name}'", node.plugin)))?;
+        text.split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .map(|s| {
+                s.parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| LoadError::at(&loc, format!("'{s}' in {name} is not a finite number")))
+            })
+            .collect()
+    };
+    let rgb = |name: &str| -> crate::error::Result<Option<[f64; 3]>> {
+        let v = node.get_rgb(name)?;
+        if let Some(c) = v {
+            if !c.iter().all(|x| x.is_finite()) {
+                return Err(LoadError::at(node.loc_of(name), format!("{name} must be finite")));
+            }
+        }
+        Ok(v)
+    };
+    let range = |lo: f64, hi: f64| -> crate::error::Result<(f64, f64)> {
+        let (a, b) = (node.float("wavelength_min", lo)?, node.float("wavelength_max", hi)?);
+        if !(a.is_finite() && b.is_finite() && a < b) {
+            return Err(node.error(format!("wavelength_min {a} must be smaller than wavelength_max {b}")));
+        }
+        Ok((a, b))
+    };
+    let sampled = |pairs: Vec<(f64, f64)>| -> crate::error::Result<Value> {
+        check_sampled(&pairs).map_err(|m| node.error(format!("spectrum '{}': {m}", node.plugin)))?;
+        Ok(Value::SpectrumSampled(pairs))
+    };
+    let value = match node.plugin.as_str() {
+        "uniform" => {
+            let v = node.get_float("value")?.ok_or_else(|| node.error("spectrum 'uniform' needs 'value'"))?;
+            range(360.0, 830.0)?;
+            Value::Rgb([v; 3])
+        }
+        "d65" => {
+            let scale = node.float("scale", 1.0)?;
+            let c = rgb("color")?.unwrap_or([1.0; 3]);
+            Value::Rgb(c.map(|x| x * scale))
+        }
+        "srgb" => {
+            let c = rgb("color")?.ok_or_else(|| node.error("spectrum 'srgb' needs 'color'"))?;
+            if !node.bool("unbounded", false)? && c.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
+                return Err(LoadError::at(
+                    node.loc_of("color"),
+                    "color must lie in [0, 1] (as Mitsuba requires), or set 'unbounded' to true",
+                ));
+            }
+            Value::Rgb(c)
+        }
+        "blackbody" => {
+            let t =
+                node.get_float("temperature")?.ok_or_else(|| node.error("spectrum 'blackbody' needs 'temperature'"))?;
+            if !(t.is_finite() && t > 0.0) {
+                return Err(LoadError::at(node.loc_of("temperature"), format!("temperature {t} K must be positive")));
+            }
+            let (lo, hi) = range(360.0, 830.0)?;
+            // Planck's law in W m⁻² sr⁻¹ nm⁻¹ (Mitsuba's blackbody.cpp constants).
+            let (c, h, k) = (2.99792458e8f64, 6.62607004e-34f64, 1.38064852e-23f64);
+            let planck = |nm: f64| {
+                let l = nm * 1e-9;
+                1e-9 * 2.0 * h * c * c / (l.powi(5) * ((h * c / (k * l * t)).exp() - 1.0))
+            };
+            let n = ((hi - lo).ceil() as usize).max(1);
+            sampled((0..=n).map(|i| lo + (hi - lo) * i as f64 / n as f64).map(|l| (l, planck(l))).collect())?
+        }
+        "regular" => {
+            if !(node.has("wavelength_min") && node.has("wavelength_max")) {
+                return Err(node.error("spectrum 'regular' needs 'wavelength_min' and 'wavelength_max'"));
+            }
+            let (lo, hi) = range(f64::NAN, f64::NAN)?;
+            let values = numbers("values")?;
+            if values.len() < 2 {
+                return Err(node.error("spectrum 'regular' needs at least two values"));
+            }
+            let n = values.len() - 1;
+            sampled(values.iter().enumerate().map(|(i, &v)| (lo + (hi - lo) * i as f64 / n as f64, v)).collect())?
+        }
+        "irregular" => {
+            let (w, v) = (numbers("wavelengths")?, numbers("values")?);
+            if w.len() != v.len() {
+                return Err(node.error(format!("{} wavelengths but {} values", w.len(), v.len())));
+            }
+            sampled(w.into_iter().zip(v).collect())?
+        }
+        other => return Err(node.error(format!("'{other}' is not a spectrum plugin"))),
+    };
+    node.check_all_used(&[])?;
+    Ok(value)
+}
+
 const CIE_MIN: f64 = 360.0;
 const CIE_MAX: f64 = 830.0;
 const CIE_SAMPLES: usize = 95;

@@ -137,7 +137,10 @@ mod tests {
             ([&good[..8], &(-1i32).to_le_bytes(), &good[12..]].concat(), "byte 8: size along x"),
             ([&good[..20], &2i32.to_le_bytes(), &good[24..]].concat(), "byte 20: 2 channels"),
             ([&good[..24], &f32::NAN.to_le_bytes(), &good[28..]].concat(), "byte 24"),
-            ([&good[..52], &f32::INFINITY.to_le_bytes(), &good[56..]].concat(), "byte 52: value inf of voxel 1"),
+            (
+                [&good[..52], &f32::INFINITY.to_le_bytes(), &good[56..]].concat(),
+                "byte 52: value inf of voxel 0 (channel 1)",
+            ),
             // Billions of voxels claimed: refused before allocating.
             ([&good[..8], &i32::MAX.to_le_bytes(), &good[12..]].concat(), "truncated"),
         ];

@@ -113,7 +113,7 @@ impl VolPathIntegrator {
                             }
                         }
                         let (wo, pdf) = med.phase.sample(wi, rng.next_1d(), rng.next_2d());
-                        if !(pdf > 0.0) {
+                        if pdf <= 0.0 || pdf.is_nan() {
                             break;
                         }
                         (last_p, last_n, last_pdf) = (p, Vec3::ZERO, pdf);

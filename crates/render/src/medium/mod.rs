@@ -42,9 +42,9 @@ pub enum MediumKind {
     /// bounds of `sigma_t`'s volume; vacuum outside.
     Heterogeneous {
         /// Extinction (before `scale`).
-        sigma_t: Volume,
+        sigma_t: Box<Volume>,
         /// Single-scattering albedo.
-        albedo: Volume,
+        albedo: Box<Volume>,
         /// Multiplier of `sigma_t`.
         scale: f32,
         /// σ̄ = scale · max(sigma_t), an upper bound of σ_t in every channel.
@@ -257,8 +257,8 @@ mod tests {
         let bounds = volume::unit_cube_bounds(Mat4::IDENTITY);
         Medium {
             kind: MediumKind::Heterogeneous {
-                sigma_t: Volume::Grid { grid: gv, bounds },
-                albedo: Volume::constant(Spectrum::splat(0.8)),
+                sigma_t: Box::new(Volume::Grid { grid: gv, bounds }),
+                albedo: Box::new(Volume::constant(Spectrum::splat(0.8))),
                 scale,
                 majorant: scale * max,
             },

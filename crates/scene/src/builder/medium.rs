@@ -157,7 +157,7 @@ fn heterogeneous(node: &Node) -> Result<MediumKind> {
     let albedo = volume_param(node, "albedo", 0.75)?;
     let scale = scale(node)?;
     let majorant = scale * sigma_t.max();
-    Ok(MediumKind::Heterogeneous { sigma_t, albedo, scale, majorant })
+    Ok(MediumKind::Heterogeneous { sigma_t: Box::new(sigma_t), albedo: Box::new(albedo), scale, majorant })
 }
 
 fn to_world(node: &Node) -> Result<Mat4> {

@@ -616,6 +616,7 @@ impl Parser {
         in_progress[idx] = true;
         let raw_children = std::mem::take(&mut self.nodes[idx].children);
         let mut children = Vec::with_capacity(raw_children.len());
+        let mut spectra = Vec::new();
         for c in raw_children {
             let target = match &c.target {
                 Target::Node(i) => *i,
@@ -642,9 +643,20 @@ impl Parser {
                 }
             };
             let node = self.build(target, built, in_progress)?;
+            // A spectrum plugin (`<spectrum type="blackbody" name="radiance">`)
+            // is a value of its parent, not an object of its own.
+            if node.kind == Kind::Texture && crate::spectrum::SPECTRUM_PLUGINS.contains(&node.plugin.as_str()) {
+                let Some(name) = c.name else {
+                    return Err(LoadError::at(&c.loc, format!("a <spectrum type=\"{}\"> needs a name", node.plugin)));
+                };
+                let value = crate::spectrum::plugin_value(&node)?;
+                spectra.push(Property { name, value, loc: c.loc, used: Cell::new(false) });
+                continue;
+            }
             children.push(Child { name: c.name, node, loc: c.loc });
         }
         let raw = &mut self.nodes[idx];
+        raw.props.extend(spectra);
         let node = Rc::new(Node {
             kind: raw.kind,
             plugin: std::mem::take(&mut raw.plugin),
