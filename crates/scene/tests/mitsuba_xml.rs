@@ -154,10 +154,16 @@ fn all_object_kinds() {
     let desc = parse(&scene(&body)).unwrap();
     let kinds: Vec<&str> = desc.root.children.iter().map(|c| c.node.kind.tag()).collect();
     assert_eq!(kinds, tags);
-    // A spectrum with a type is a spectrum plugin, which is a texture.
+    // A spectrum with a type is a spectrum plugin: a value of its parent
+    // (d65 is white in Mitsuba's RGB variants).
     let desc = parse(&scene("<bsdf type=\"diffuse\"><spectrum type=\"d65\" name=\"reflectance\"/></bsdf>")).unwrap();
+    let bsdf = first(&desc);
+    assert!(bsdf.children.is_empty());
+    assert_eq!((bsdf.props[0].name.as_str(), &bsdf.props[0].value), ("reflectance", &Value::Rgb([1.0; 3])));
+    // Any other typed spectrum is a texture (and an error where built).
+    let desc = parse(&scene("<bsdf type=\"diffuse\"><spectrum type=\"bitmap\" name=\"reflectance\"/></bsdf>")).unwrap();
     let tex = &first(&desc).children[0].node;
-    assert_eq!((tex.kind, tex.plugin.as_str()), (Kind::Texture, "d65"));
+    assert_eq!((tex.kind, tex.plugin.as_str()), (Kind::Texture, "bitmap"));
 }
 
 #[test]

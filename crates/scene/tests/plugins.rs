@@ -192,15 +192,15 @@ fn readme_plugin_table_matches_the_code() {
 fn readme_check_names_each_difference() {
     let readme = readme();
     let changed = readme.replacen("disk, cylinder, shapegroup", "disk, shapegroup", 1).replacen(
-        "hdrfilm; box, tent, gaussian",
-        "hdrfilm; box, tent, gaussian, mitchell",
+        "catmullrom, lanczos",
+        "catmullrom, lanczos, bessel",
         1,
     );
     assert_ne!(changed, readme, "the README's table changed; update this test's edits");
     let diffs = readme_differences(&changed);
     assert_eq!(diffs.len(), 2, "{diffs:?}");
     assert!(diffs.iter().any(|d| d.starts_with("shape:") && d.contains("\"cylinder\"")), "{diffs:?}");
-    assert!(diffs.iter().any(|d| d.starts_with("rfilter:") && d.contains("\"mitchell\"")), "{diffs:?}");
+    assert!(diffs.iter().any(|d| d.starts_with("rfilter:") && d.contains("\"bessel\"")), "{diffs:?}");
     let without_row = readme.replacen("| integrators |", "| integrator |", 1);
     assert!(readme_differences(&without_row).iter().any(|d| d.contains("no row 'integrators'")));
     assert_eq!(readme_differences("# no table"), [format!("README has no heading '{README_HEADING}'")]);
