@@ -1,4 +1,5 @@
-//! Cameras: Mitsuba's `perspective`, `thinlens` and `orthographic` sensors.
+//! Cameras: Mitsuba's `perspective`, `thinlens`, `orthographic` and
+//! `radiancemeter` sensors.
 //! All look down their local +z, with +y up and image x growing towards
 //! local -x (Mitsuba's convention, which makes `lookat` images come out
 //! unmirrored).
@@ -59,6 +60,9 @@ pub enum Projection {
         /// Reciprocal of the film's aspect ratio.
         inv_aspect: f32,
     },
+    /// Mitsuba `radiancemeter`: every sample is the one ray along the
+    /// sensor's local +z from its origin (nudged forward by the ray epsilon).
+    RadianceMeter,
 }
 
 /// A camera: placement, field of view, clip range and projection.
@@ -158,6 +162,18 @@ impl Camera {
         }
     }
 
+    /// Mitsuba's `radiancemeter`: the radiance along one ray, from
+    /// `world_from_camera`'s origin along its +z.
+    pub fn radiance_meter(world_from_camera: Mat4) -> Self {
+        Camera {
+            world_from_camera,
+            tan_half: Vec2::ZERO,
+            near_clip: 0.0,
+            far_clip: f32::INFINITY,
+            projection: Projection::RadianceMeter,
+        }
+    }
+
     /// Whether rays need an aperture sample (two more dimensions).
     #[inline]
     pub fn needs_aperture_sample(&self) -> bool {
@@ -210,6 +226,11 @@ impl Camera {
                 let o = self.world_from_camera.transform_point3(near_p);
                 let d = self.world_from_camera.transform_vector3(Vec3::Z).normalize();
                 Ray::new(o, d, self.far_clip - self.near_clip)
+            }
+            Projection::RadianceMeter => {
+                let d = self.world_from_camera.transform_vector3(Vec3::Z).normalize();
+                let o = self.world_from_camera.transform_point3(Vec3::ZERO) + d * crate::math::RAY_EPSILON;
+                Ray::new(o, d, f32::INFINITY)
             }
         }
     }

@@ -245,3 +245,78 @@ fn a_top_level_sampler_can_be_referenced_by_the_sensor() {
     let j = job_of(xml).unwrap();
     assert_eq!((j.sampler.kind, j.sampler.spp), (SamplerKind::LowDiscrepancy, 16));
 }
+
+/// `radiancemeter` measures the radiance along its one ray: a grey diffuse
+/// sphere (ρ = 0.8) in a uniform environment reflects ρ·L (the furnace's
+/// closed form), the environment itself L; placed by `origin`/`direction`
+/// or by `to_world`; films larger than 1x1 in both directions are refused.
+#[test]
+fn radiancemeter_measures_one_ray() {
+    let meter = |sensor: &str, film: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+<integrator type="path"/>
+<sensor type="radiancemeter">{sensor}<sampler type="independent"><integer name="sample_count" value="4096"/></sampler>
+  <film type="hdrfilm">{film}<rfilter type="box"/></film></sensor>
+<emitter type="constant"><rgb name="radiance" value="0.3, 0.5, 0.7"/></emitter>
+<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></shape>
+</scene>"#
+        )
+    };
+    let one = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+    let at_sphere = r#"<point name="origin" x="0" y="0" z="5"/><vector name="direction" x="0" y="0" z="-1"/>"#;
+    let job = job_of(&meter(at_sphere, one)).unwrap();
+    assert_eq!(job.camera.projection, Projection::RadianceMeter);
+    // 8 batches of 512 samples: the mean and its standard error.
+    let batches: Vec<[f32; 3]> = (0..8)
+        .map(|b| {
+            let mut film = Film::new(1, 1);
+            job.render_into(&mut film, b * 512..(b + 1) * 512, &|_| {});
+            film.develop()[0]
+        })
+        .collect();
+    for (c, want) in [0.3f64, 0.5, 0.7].iter().enumerate() {
+        let v: Vec<f64> = batches.iter().map(|p| p[c] as f64).collect();
+        let mean = v.iter().sum::<f64>() / 8.0;
+        let se = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 7.0 / 8.0).sqrt();
+        assert!((mean - 0.8 * want).abs() < 4.5 * se + 1e-6, "channel {c}: {mean} ± {se}, want {}", 0.8 * want);
+        assert!(se < 0.005 * want, "channel {c}: too noisy ({se})");
+    }
+    let away = r#"<transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 9" up="0, 1, 0"/></transform>"#;
+    assert_eq!(render(&job_of(&meter(away, one)).unwrap(), 16)[0], [0.3, 0.5, 0.7]);
+    let e = job_of(&meter(at_sphere, r#"<integer name="width" value="2"/><integer name="height" value="2"/>"#))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sensors.xml:") && e.contains("1x1"), "{e}");
+    let e = job_of(&meter(r#"<point name="origin" x="0" y="0" z="5"/>"#, one)).unwrap_err().to_string();
+    assert!(e.contains("both 'origin' and 'direction'"), "{e}");
+}
+
+/// `depth`: the distance from where the camera ray starts (the near clip
+/// plane) to the first surface, 0 for escaping rays; checked with an
+/// orthographic camera on a plane, where it is the same in every pixel.
+#[test]
+fn depth_integrator_gives_the_distance() {
+    let xml = r#"<scene version="3.0.0">
+<integrator type="depth"/>
+<sensor type="orthographic"><float name="near_clip" value="0.5"/>
+  <transform name="to_world"><scale x="2" y="2"/><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+  <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film></sensor>
+<shape type="rectangle"/>
+</scene>"#;
+    let img = render(&job_of(xml).unwrap(), 4);
+    // The rectangle [-1, 1]² covers the central 8x8 pixels of the [-2, 2]² view.
+    for (i, p) in img.iter().enumerate() {
+        let (x, y) = (i % 16, i / 16);
+        let inside = (4..12).contains(&x) && (4..12).contains(&y);
+        let want = if inside { 3.5 } else { 0.0 };
+        assert!((p[0] - want).abs() < 1e-5 && p[0] == p[1] && p[1] == p[2], "pixel ({x}, {y}): {p:?}");
+    }
+    // --integrator depth takes none of the scene integrator's parameters.
+    let ov = Overrides { integrator: Some("depth".into()), ..Default::default() };
+    let path = xml.replace(
+        r#"<integrator type="depth"/>"#,
+        r#"<integrator type="path"><integer name="max_depth" value="3"/></integrator>"#,
+    );
+    assert!(build(&parse_str(&path, Path::new("sensors.xml"), &[]).unwrap(), &ov).is_ok());
+}

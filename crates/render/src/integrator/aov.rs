@@ -39,6 +39,7 @@ fn hide_emitters(integrator: &Integrator) -> bool {
         Integrator::Direct(d) => d.hide_emitters,
         Integrator::BruteForce(b) => b.hide_emitters,
         Integrator::VolPath(v) => v.hide_emitters,
+        Integrator::Depth(_) => false,
     }
 }
 

@@ -8,15 +8,18 @@
 //! | `path`       | light sampling + BSDF sampling at every vertex, MIS (or the split without it) |
 //! | `direct`     | direct illumination only: N light samples + M BSDF samples, MIS (Mitsuba `direct`) |
 //! | `bruteforce` | hemisphere form only: one sampled direction per vertex, emission only when hit |
+//! | `depth`      | the distance to the first surface (Mitsuba `depth`) |
 //! | `volpath`    | `path` through participating media: free-flight sampling, transmittance on shadow rays (Mitsuba `volpath`, `volpathmis`) |
 
 pub mod aov;
 pub mod bruteforce;
+pub mod depth;
 pub mod direct;
 pub mod path;
 pub mod volpath;
 
 pub use bruteforce::{BruteForceIntegrator, HemisphereSampling};
+pub use depth::DepthIntegrator;
 pub use direct::DirectIntegrator;
 pub use path::PathIntegrator;
 pub use volpath::VolPathIntegrator;
@@ -125,6 +128,8 @@ pub enum Integrator {
     BruteForce(BruteForceIntegrator),
     /// `volpath` / `volpathmis`: path tracing through participating media.
     VolPath(VolPathIntegrator),
+    /// `depth`: the distance to the first surface.
+    Depth(DepthIntegrator),
 }
 
 impl Integrator {
@@ -144,6 +149,7 @@ impl Integrator {
             Integrator::Direct(d) => d.li(scene, ray, rng, stats, scratch),
             Integrator::BruteForce(b) => b.li(scene, ray, rng, stats, scratch),
             Integrator::VolPath(v) => v.li(scene, ray, rng, stats, scratch),
+            Integrator::Depth(d) => d.li(scene, ray, stats),
         }
     }
 }

@@ -180,7 +180,10 @@ impl RenderJob {
     /// (z = 0 in camera space; rays start on the near clip plane), or its
     /// origin for orthographic cameras.
     fn eye(&self, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
-        if matches!(self.camera.projection, crate::camera::Projection::Orthographic { .. }) {
+        if matches!(
+            self.camera.projection,
+            crate::camera::Projection::Orthographic { .. } | crate::camera::Projection::RadianceMeter
+        ) {
             return ray.o;
         }
         let (o, d) = (camera_from_world.transform_point3(ray.o), camera_from_world.transform_vector3(ray.d));

@@ -5,8 +5,8 @@ use super::{plugin, Plugins};
 use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
-    BruteForceIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator, Termination,
-    VolPathIntegrator,
+    BruteForceIntegrator, DepthIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator,
+    Termination, VolPathIntegrator,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -15,8 +15,14 @@ use std::path::PathBuf;
 /// A builder of an integrator and the light-selection strategy it asks for.
 type BuildIntegrator = fn(&Node) -> Result<(Integrator, LightSelection)>;
 
-pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> =
-    &[("path", path), ("direct", direct), ("bruteforce", bruteforce), ("volpath", volpath), ("volpathmis", volpath)];
+pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> = &[
+    ("path", path),
+    ("direct", direct),
+    ("bruteforce", bruteforce),
+    ("volpath", volpath),
+    ("volpathmis", volpath),
+    ("depth", |_| Ok((Integrator::Depth(DepthIntegrator), LightSelection::Uniform))),
+];
 
 /// Termination parameters shared by `path` and `bruteforce`.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
@@ -153,6 +159,7 @@ pub fn integrator_from_spec(spec: &str, scene_integrator: Option<&Node>) -> Resu
     }
     let accepts = |param: &str| match name {
         "direct" => param == "hide_emitters",
+        "depth" => false,
         _ => true,
     };
     if let Some(scene) = scene_integrator {

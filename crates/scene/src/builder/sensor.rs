@@ -55,6 +55,7 @@ pub(super) enum SensorModel {
     Perspective { fov: f64, axis: FovAxis },
     ThinLens { fov: f64, axis: FovAxis, aperture_radius: f64, focus_distance: f64 },
     Orthographic,
+    RadianceMeter { to_world: glam::DMat4 },
 }
 
 fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
@@ -86,8 +87,12 @@ fn has_scale(m: &glam::DMat4) -> bool {
 /// transform and far clip distance.
 type BuildSensor = fn(&Node, &glam::DMat4, f64) -> Result<SensorModel>;
 
-pub(super) const SENSORS: &Plugins<BuildSensor> =
-    &[("perspective", perspective), ("thinlens", thinlens), ("orthographic", orthographic)];
+pub(super) const SENSORS: &Plugins<BuildSensor> = &[
+    ("perspective", perspective),
+    ("thinlens", thinlens),
+    ("orthographic", orthographic),
+    ("radiancemeter", radiancemeter),
+];
 
 /// A builder of a film's geometry and reconstruction filter.
 type BuildFilm = fn(&Node) -> Result<(FilmRect, Filter)>;
@@ -150,6 +155,32 @@ fn thinlens(node: &Node, to_world: &glam::DMat4, far: f64) -> Result<SensorModel
 
 fn orthographic(_: &Node, _: &glam::DMat4, _: f64) -> Result<SensorModel> {
     Ok(SensorModel::Orthographic)
+}
+
+/// Mitsuba's `radiancemeter`: `to_world`, or `origin` and `direction`
+/// (both), placing one ray along local +z.
+fn radiancemeter(node: &Node, to_world: &glam::DMat4, _: f64) -> Result<SensorModel> {
+    let origin = node.get_point("origin")?;
+    let direction = node.get_point("direction")?;
+    if node.has("to_world") {
+        return Ok(SensorModel::RadianceMeter { to_world: *to_world });
+    }
+    match (origin, direction) {
+        (None, None) => Ok(SensorModel::RadianceMeter { to_world: *to_world }),
+        (Some(o), Some(d)) => {
+            if !(d.is_finite() && d.length() > 0.0) {
+                return Err(LoadError::at(node.loc_of("direction"), "direction must be a non-zero vector"));
+            }
+            let d = d.normalize();
+            // Any up vector perpendicular to d (Mitsuba's coordinate_system).
+            let up = if d.z.abs() < 0.9 { glam::DVec3::Z } else { glam::DVec3::X };
+            let up = (up - d * d.dot(up)).normalize();
+            let x = up.cross(d);
+            let m = glam::DMat4::from_cols(x.extend(0.0), up.extend(0.0), d.extend(0.0), o.extend(1.0));
+            Ok(SensorModel::RadianceMeter { to_world: m })
+        }
+        _ => Err(node.error("radiancemeter: give both 'origin' and 'direction', or a 'to_world'")),
+    }
 }
 
 /// Mitsuba's `hdrfilm`: its size, crop window and `<rfilter>`.
@@ -223,7 +254,9 @@ pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
         return Err(node.error("near_clip must be positive and smaller than far_clip"));
     }
     let model = sensor_model(node, &to_world, far)?;
-    if !matches!(model, SensorModel::Orthographic) {
+    if let SensorModel::RadianceMeter { .. } = model {
+        node.accept(&["near_clip", "far_clip"]);
+    } else if !matches!(model, SensorModel::Orthographic) {
         for p in ["principal_point_offset_x", "principal_point_offset_y"] {
             if node.float(p, 0.0)? != 0.0 {
                 return Err(LoadError::at(node.loc_of(p), format!("{p} is not supported yet")));
@@ -295,6 +328,13 @@ pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
             focus_distance as f32,
         ),
         SensorModel::Orthographic => Camera::orthographic(m, w, h, near as f32, far as f32),
+        SensorModel::RadianceMeter { to_world } => {
+            // Mitsuba refuses films whose width and height both differ from 1.
+            if w != 1 && h != 1 {
+                return Err(node.error(format!("radiancemeter needs a film of 1x1 pixels, not {w}x{h}")));
+            }
+            Camera::radiance_meter(to_world.as_mat4())
+        }
     };
     Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))
 }
