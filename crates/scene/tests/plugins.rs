@@ -73,7 +73,7 @@ fn unsupported_plugin_message_format() {
     assert!(
         e.ends_with(
             "shape plugin 'ellipsoids' is not supported by Penumbra; supported shape plugins: \
-             rectangle, cube, sphere, disk, cylinder, obj, ply, serialized, shapegroup, instance"
+             rectangle, cube, sphere, disk, cylinder, obj, ply, serialized, shapegroup, instance, merge"
         ),
         "{e}"
     );

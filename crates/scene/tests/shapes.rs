@@ -242,3 +242,33 @@ fn instancing_errors_name_the_problem() {
         assert!(e.contains(want) && e.contains("scene.xml:"), "{e}");
     }
 }
+
+/// `merge` places its shapes as they are: the image is bitwise the one of
+/// the same shapes listed directly (Mitsuba joins meshes that share a BSDF
+/// into one, which changes memory, not the image).
+#[test]
+fn merge_renders_its_shapes_as_they_are() {
+    let dir = temp_dir();
+    let shapes = r#"<emitter type="constant"/>
+<shape type="sphere"><float name="radius" value="0.7"/><bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.2, 0.2"/></bsdf></shape>
+<shape type="cube"><transform name="to_world"><scale value="0.5"/><translate x="1.2"/></transform></shape>
+<shape type="rectangle"><transform name="to_world"><scale value="3"/><translate z="-1"/></transform></shape>"#;
+    let render = |job: &penumbra_render::render::RenderJob| {
+        let mut film = penumbra_render::film::Film::new(job.width, job.height);
+        job.render_into(&mut film, 0..16, &|_| {});
+        film.develop()
+    };
+    let plain = load(shapes, &dir).unwrap();
+    let merged_xml =
+        format!("<shape type=\"merge\">{}</shape>", shapes.replacen("<emitter type=\"constant\"/>", "", 1));
+    let merged = load(&format!("<emitter type=\"constant\"/>{merged_xml}"), &dir).unwrap();
+    assert_eq!(merged.scene.shapes.len(), 3);
+    let (a, b) = (render(&plain), render(&merged));
+    assert_eq!(a, b);
+    assert!(a.iter().any(|p| p[0] > 2.0 * p[1]), "the red sphere is not in the image");
+    // merge takes shapes only, and no parameters.
+    let e = load("<shape type=\"merge\"><float name=\"scale\" value=\"2\"/></shape>", &dir).unwrap_err().to_string();
+    assert!(e.contains("parameter 'scale'"), "{e}");
+    let e = load("<shape type=\"merge\"><bsdf type=\"diffuse\"/></shape>", &dir).unwrap_err().to_string();
+    assert!(e.contains("a nested bsdf is not supported"), "{e}");
+}

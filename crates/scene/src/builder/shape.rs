@@ -28,6 +28,10 @@ pub(super) enum ShapeBuilder {
     Group,
     /// Mitsuba's `instance` ([`Builder::instance`]).
     Instance,
+    /// Mitsuba's `merge`: its shapes, placed as they are. Mitsuba joins
+    /// meshes that share a BSDF, media and emitter into one to save memory;
+    /// the image is the same.
+    Merge,
 }
 
 /// A shape's geometry with its mesh attributes (PLY vertex colours and
@@ -45,6 +49,7 @@ pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("serialized", ShapeBuilder::Geometry(serialized)),
     ("shapegroup", ShapeBuilder::Group),
     ("instance", ShapeBuilder::Instance),
+    ("merge", ShapeBuilder::Merge),
 ];
 
 impl Builder {
@@ -59,6 +64,12 @@ impl Builder {
                 let instance = self.instance(node)?;
                 self.placed.push(Primitive::Instance(self.instances.len() as u32));
                 self.instances.push(instance);
+            }
+            Some(ShapeBuilder::Merge) => {
+                for child in node.children_of(Kind::Shape) {
+                    self.shape(&child.node)?;
+                }
+                node.check_all_used(&[Kind::Shape])?;
             }
             _ => {
                 let id = self.plain_shape(node)?;
