@@ -115,6 +115,12 @@ pub fn mean(s: Spectrum) -> f32 {
     (s.x + s.y + s.z) / 3.0
 }
 
+/// Most tentative collisions one tracking walk takes. A majorant far above
+/// the scene's scale (a hostile `scale` or `max_value`) takes steps too
+/// small to move `t` in f32, which would otherwise never end; past this
+/// many the walk stops as if absorbed.
+pub const MAX_TRACKING_STEPS: u32 = 1 << 20;
+
 /// A distance from density σ e^{−σ t} for `u` in [0, 1) (∞ for σ = 0).
 #[inline]
 fn exp_step(sigma: f32, u: f32) -> f32 {
@@ -179,11 +185,12 @@ impl Medium {
                 };
                 let mut weight = Spectrum::ONE;
                 let mut t = t0;
-                loop {
-                    t += exp_step(m, rng.next_1d());
-                    if t >= t1 {
+                for _ in 0..MAX_TRACKING_STEPS {
+                    let next = t + exp_step(m, rng.next_1d());
+                    if next >= t1 {
                         return Flight::Pass { weight, ratio };
                     }
+                    t = next;
                     let (sigma_s, st) = self.coefficients(ray.at(t));
                     let sigma_n = Spectrum::splat(m) - st;
                     let p_null = mean(sigma_n) / m;
@@ -193,6 +200,7 @@ impl Medium {
                         return Flight::Scatter { t, weight: weight * sigma_s / mean(st), ratio };
                     }
                 }
+                Flight::Pass { weight: Spectrum::ZERO, ratio }
             }
         }
     }
@@ -209,17 +217,19 @@ impl Medium {
                 };
                 let mut transmittance = Spectrum::ONE;
                 let mut t = t0;
-                loop {
-                    t += exp_step(m, rng.next_1d());
-                    if t >= t1 {
+                for _ in 0..MAX_TRACKING_STEPS {
+                    let next = t + exp_step(m, rng.next_1d());
+                    if next >= t1 {
                         return transmittance;
                     }
+                    t = next;
                     let (_, st) = self.coefficients(ray.at(t));
                     transmittance *= (Spectrum::splat(m) - st) / m;
                     if transmittance == Spectrum::ZERO {
                         return transmittance;
                     }
                 }
+                Spectrum::ZERO
             }
         }
     }
@@ -290,6 +300,24 @@ mod tests {
             let tol = 5.0 * se[c] + 1e-6;
             assert!((m[c] - want[c]).abs() <= tol, "{what}: channel {c}: {} vs {} (5 se = {tol})", m[c], want[c]);
         }
+    }
+
+    /// A majorant far beyond f32's resolution of the ray's length (a hostile
+    /// scale) ends the walk as absorbed instead of never ending.
+    #[test]
+    fn hostile_majorants_end_the_walk() {
+        let m = grid_medium(|_, _, _| 1.0, 1e30);
+        let ray = Ray::new(Vec3::new(-0.5, 0.5, 0.5), Vec3::X, f32::INFINITY);
+        let mut rng = streams(1).next().unwrap();
+        assert_eq!(m.transmittance(&ray, 10.0, &mut rng), Spectrum::ZERO);
+        // Every tentative collision is real (σ_n = 0): the flight scatters at once.
+        assert!(matches!(m.sample_flight(&ray, 10.0, 0, &mut rng), Flight::Scatter { .. }));
+        let m = grid_medium(|x, _, _| if x == 0 { 1.0 } else { 1e-30 }, 1e30);
+        let ray = Ray::new(Vec3::new(0.3, 0.5, 0.5), Vec3::X, f32::INFINITY);
+        let t = std::time::Instant::now();
+        let _ = m.transmittance(&ray, 10.0, &mut rng);
+        let _ = m.sample_flight(&ray, 10.0, 0, &mut rng);
+        assert!(t.elapsed().as_secs() < 5, "the walk took {:?}", t.elapsed());
     }
 
     /// Through a homogeneous slab of thickness d: P(pass) weighted equals
