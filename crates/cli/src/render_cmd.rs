@@ -100,6 +100,12 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         apply_crop(&mut job, c)?;
     }
     job.stream = !a.no_stream;
+    if !job.scene.media.is_empty() && !matches!(job.integrator, penumbra_render::integrator::Integrator::VolPath(_)) {
+        eprintln!(
+            "note: the scene's participating media are ignored by its integrator (as in Mitsuba); \
+             render them with --integrator volpath"
+        );
+    }
     if a.denoise {
         // A wide filter's splats make neighbouring pixels' noise correlated,
         // which the denoiser keeps as detail (measured: a 16 spp Cornell box
