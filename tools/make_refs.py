@@ -74,6 +74,7 @@ SPP = {
     "smoke_grid": 32768,
     "glass_medium": 65536,
     "emitter_in_medium": 65536,
+    "spot_texture": 32768,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

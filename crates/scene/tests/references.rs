@@ -191,3 +191,9 @@ fn emitters_inside_a_medium_match_mitsuba() {
     // An area emitter and a point light in a medium seen from vacuum; hide_emitters.
     compare("emitter_in_medium", 256);
 }
+
+#[test]
+fn textured_spot_light_matches_mitsuba() {
+    // spot_light.xml with a bitmap projected through the cone (`texture`).
+    compare("spot_texture", 256);
+}

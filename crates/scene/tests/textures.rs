@@ -239,3 +239,25 @@ fn mesh_attributes_interpolate_per_vertex_and_hold_per_face() {
     assert!(e.contains("3 components") && e.contains("scalar"), "{e}");
     std::fs::remove_dir_all(scene.parent().unwrap()).ok();
 }
+
+/// A spot light's `texture` must be a bitmap named `texture` (Mitsuba needs
+/// a spatially varying one); anything else is an error at its line.
+#[test]
+fn spot_texture_errors_name_the_line() {
+    let spot = |inner: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<emitter type=\"spot\">\n{inner}\n</emitter></scene>"
+        );
+        let dir = penumbra_scene::mitsuba::parse_str(&xml, std::path::Path::new("spot.xml"), &[]).unwrap();
+        penumbra_scene::builder::build(&dir, &penumbra_scene::Overrides::default())
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    let e = spot(r#"<texture type="checkerboard" name="texture"/>"#).unwrap_err();
+    assert!(e.contains("spot.xml:3") && e.contains("give a bitmap"), "{e}");
+    let e = spot(r#"<texture type="checkerboard" name="pattern"/>"#).unwrap_err();
+    assert!(e.contains("spot.xml:3") && e.contains("named 'texture'"), "{e}");
+    let e = spot(r#"<texture type="bitmap" name="texture"><string name="filename" value="nowhere.png"/></texture>"#)
+        .unwrap_err();
+    assert!(e.contains("not found"), "{e}");
+}

@@ -15,7 +15,9 @@ use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
 use crate::geometry::Aabb;
 use crate::math::{luminance, safe_acos, Mat3, Mat4, Spectrum, PI};
+use crate::texture::Bitmap;
 use glam::Vec3;
+use std::sync::Arc;
 
 /// Mitsuba's `spot` emitter.
 #[derive(Debug, Clone)]
@@ -27,6 +29,9 @@ pub struct SpotLight {
     /// Radiant intensity I (W/sr) inside `beam_width`, before the falloff.
     pub intensity: Spectrum,
     cutoff: f32,
+    /// Mitsuba's `texture`: an image projected through the cone, looked up
+    /// at uv = ½ + ½ (x, y) / (z tan(cutoff)) of the local direction.
+    pub texture: Option<Arc<Bitmap>>,
     cos_cutoff: f32,
     cos_beam: f32,
     inv_transition: f32,
@@ -41,6 +46,7 @@ impl SpotLight {
             light_from_world: world_from_light.inverse(),
             intensity,
             cutoff,
+            texture: None,
             cos_cutoff: cutoff.cos(),
             cos_beam: beam.cos(),
             inv_transition: 1.0 / (cutoff - beam),
@@ -69,7 +75,13 @@ impl SpotLight {
         if f <= 0.0 {
             return None;
         }
-        Some(LightSample { wi, dist, pdf: 1.0, li: self.intensity * (f / dist2), delta: true })
+        let mut li = self.intensity * (f / dist2);
+        if let Some(t) = &self.texture {
+            // Mitsuba's direction_to_uv, with uv_factor = tan(cutoff).
+            let k = 0.5 / (local.z * self.cutoff.tan());
+            li *= t.eval(glam::Vec2::new(0.5 + local.x * k, 0.5 + local.y * k));
+        }
+        Some(LightSample { wi, dist, pdf: 1.0, li, delta: true })
     }
 
     /// Flux: ∫ I f(θ) dω = 2π I ∫ f(θ) sin θ dθ, integrated numerically

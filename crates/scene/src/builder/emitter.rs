@@ -2,13 +2,14 @@
 //! emitters declared at the top level.
 
 use super::{plugin, resolve, Plugins};
-use crate::desc::Node;
+use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
 use glam::{DVec3, Vec3};
 use penumbra_render::geometry::Shape;
 use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
 use penumbra_render::math::Spectrum;
+use penumbra_render::texture::Texture;
 
 /// A builder of a top-level emitter.
 type BuildEmitter = fn(&Node) -> Result<PendingLight>;
@@ -53,7 +54,8 @@ pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -
 /// An emitter declared at the top level (not attached to a shape).
 pub(super) fn top_level(node: &Node) -> Result<PendingLight> {
     let light = plugin(EMITTERS, node)?(node)?;
-    node.check_all_used(&[])?;
+    // Only a spot light takes a nested texture (its `texture`, checked there).
+    node.check_all_used(if node.plugin == "spot" { &[Kind::Texture] } else { &[] })?;
     Ok(light)
 }
 
@@ -91,7 +93,19 @@ fn spot(node: &Node) -> Result<PendingLight> {
     if !(cutoff > 0.0 && cutoff <= 180.0 && beam >= 0.0 && beam < cutoff) {
         return Err(node.error("spot light: need 0 <= beam_width < cutoff_angle <= 180 (degrees)"));
     }
-    Ok(ready(Light::Spot(SpotLight::new(to_world.as_mat4(), intensity, cutoff as f32, beam as f32))))
+    let mut light = SpotLight::new(to_world.as_mat4(), intensity, cutoff as f32, beam as f32);
+    if let Some(c) = node.children_of(Kind::Texture).find(|c| c.name.as_deref() != Some("texture")) {
+        return Err(LoadError::at(&c.loc, "a spot light takes one nested texture, named 'texture'"));
+    }
+    if let Some(child) = node.children_of(Kind::Texture).find(|c| c.name.as_deref() == Some("texture")) {
+        // Mitsuba requires a spatially varying texture here.
+        match super::texture::build_bitmap_texture(&child.node)? {
+            Texture::Bitmap(b) if child.node.plugin == "bitmap" => light.texture = Some(b),
+            _ => return Err(LoadError::at(&child.loc, "the spot light's 'texture' must be a bitmap")),
+        }
+        child.node.check_all_used(&[])?;
+    }
+    Ok(ready(Light::Spot(light)))
 }
 
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose

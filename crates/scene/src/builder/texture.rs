@@ -192,6 +192,14 @@ fn to_uv(node: &Node) -> Result<Affine2> {
     Ok(a)
 }
 
+/// A `bitmap` node's texture, or an error naming the plugin for any other.
+pub(super) fn build_bitmap_texture(node: &Node) -> Result<Texture> {
+    if node.plugin != "bitmap" {
+        return Err(node.error(format!("a {} texture cannot be used here; give a bitmap", node.plugin)));
+    }
+    build_bitmap(node)
+}
+
 fn build_bitmap(node: &Node) -> Result<Texture> {
     let (file, loc) = node
         .get_string("filename")?
