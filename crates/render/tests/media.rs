@@ -15,7 +15,7 @@ use penumbra_render::light::{ConstantLight, Light, PointLight};
 use penumbra_render::material::Material;
 use penumbra_render::math::{look_at, Spectrum, Vec3, PI};
 use penumbra_render::medium::volume::unit_cube_bounds;
-use penumbra_render::medium::{Grid, GridVolume, Medium, MediumKind, PhaseFunction, Volume, VolumeFilter, VolumeWrap};
+use penumbra_render::medium::{Grid, GridVolume, Medium, MediumKind, PhaseFunction, Volume, VolumeFilter, WrapMode};
 use penumbra_render::render::RenderJob;
 use penumbra_render::sampling::{Sampler, SamplerKind};
 use penumbra_render::scene::{Scene, ShapeInfo, ShapeMedia};
@@ -83,7 +83,7 @@ fn grid_medium() -> Medium {
         grid: grid.clone(),
         to_local: to_world.inverse(),
         filter: VolumeFilter::Trilinear,
-        wrap: VolumeWrap::Clamp,
+        wrap: WrapMode::Clamp,
         max: grid.max(),
     };
     Medium {

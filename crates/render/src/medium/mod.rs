@@ -21,7 +21,7 @@ pub mod phase;
 pub mod volume;
 
 pub use phase::PhaseFunction;
-pub use volume::{Grid, GridVolume, Volume, VolumeFilter, VolumeWrap};
+pub use volume::{Grid, GridVolume, Volume, VolumeFilter, WrapMode};
 
 use crate::geometry::{Aabb, Ray};
 use crate::math::Spectrum;
@@ -263,7 +263,7 @@ mod tests {
         let grid = Arc::new(Grid { res: [4, 4, 4], channels: 1, data });
         let max = grid.max();
         let gv =
-            GridVolume { grid, to_local: Mat4::IDENTITY, filter: VolumeFilter::Nearest, wrap: VolumeWrap::Clamp, max };
+            GridVolume { grid, to_local: Mat4::IDENTITY, filter: VolumeFilter::Nearest, wrap: WrapMode::Clamp, max };
         let bounds = volume::unit_cube_bounds(Mat4::IDENTITY);
         Medium {
             kind: MediumKind::Heterogeneous {

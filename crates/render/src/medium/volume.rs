@@ -4,6 +4,7 @@
 
 use crate::geometry::Aabb;
 use crate::math::Spectrum;
+pub use crate::texture::WrapMode;
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
 
@@ -14,17 +15,6 @@ pub enum VolumeFilter {
     Nearest,
     /// Trilinear interpolation between voxel centres.
     Trilinear,
-}
-
-/// Outside [0, 1]³ (Mitsuba's `wrap_mode`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum VolumeWrap {
-    /// The border voxels extend outwards.
-    Clamp,
-    /// The grid tiles space.
-    Repeat,
-    /// The grid tiles space, every other copy mirrored.
-    Mirror,
 }
 
 /// A voxel grid with 1 or 3 channels, x fastest (Mitsuba's `.vol` order).
@@ -45,9 +35,8 @@ impl Grid {
     }
 
     #[inline]
-    fn voxel(&self, x: u32, y: u32, z: u32) -> Spectrum {
-        let i = ((z as usize * self.res[1] as usize + y as usize) * self.res[0] as usize + x as usize)
-            * self.channels as usize;
+    fn voxel(&self, x: usize, y: usize, z: usize) -> Spectrum {
+        let i = ((z * self.res[1] as usize + y) * self.res[0] as usize + x) * self.channels as usize;
         if self.channels == 1 {
             Spectrum::splat(self.data[i])
         } else {
@@ -65,28 +54,11 @@ pub struct GridVolume {
     pub to_local: Mat4,
     /// How values are looked up.
     pub filter: VolumeFilter,
-    /// How points outside the unit cube are mapped into it.
-    pub wrap: VolumeWrap,
+    /// How points outside the unit cube are mapped into it (Mitsuba's
+    /// `wrap_mode`, as for bitmaps).
+    pub wrap: WrapMode,
     /// The largest value the volume takes (Mitsuba's `max_value`, or the grid's maximum).
     pub max: f32,
-}
-
-/// Index `i` on an axis of `n` voxels under `wrap`.
-#[inline]
-fn wrap_index(i: i64, n: u32, wrap: VolumeWrap) -> u32 {
-    let n = n as i64;
-    (match wrap {
-        VolumeWrap::Clamp => i.clamp(0, n - 1),
-        VolumeWrap::Repeat => i.rem_euclid(n),
-        VolumeWrap::Mirror => {
-            let m = i.rem_euclid(2 * n);
-            if m < n {
-                m
-            } else {
-                2 * n - 1 - m
-            }
-        }
-    }) as u32
 }
 
 impl GridVolume {
@@ -100,19 +72,22 @@ impl GridVolume {
             VolumeFilter::Nearest => {
                 let v = (q * res).floor();
                 g.voxel(
-                    wrap_index(v.x as i64, g.res[0], self.wrap),
-                    wrap_index(v.y as i64, g.res[1], self.wrap),
-                    wrap_index(v.z as i64, g.res[2], self.wrap),
+                    self.wrap.index(v.x as i32, g.res[0] as usize),
+                    self.wrap.index(v.y as i32, g.res[1] as usize),
+                    self.wrap.index(v.z as i32, g.res[2] as usize),
                 )
             }
             VolumeFilter::Trilinear => {
                 let pos = q * res - Vec3::splat(0.5);
                 let base = pos.floor();
                 let f = pos - base;
-                let (bx, by, bz) = (base.x as i64, base.y as i64, base.z as i64);
-                let xs = [wrap_index(bx, g.res[0], self.wrap), wrap_index(bx + 1, g.res[0], self.wrap)];
-                let ys = [wrap_index(by, g.res[1], self.wrap), wrap_index(by + 1, g.res[1], self.wrap)];
-                let zs = [wrap_index(bz, g.res[2], self.wrap), wrap_index(bz + 1, g.res[2], self.wrap)];
+                let (bx, by, bz) = (base.x as i32, base.y as i32, base.z as i32);
+                let xs =
+                    [self.wrap.index(bx, g.res[0] as usize), self.wrap.index(bx.saturating_add(1), g.res[0] as usize)];
+                let ys =
+                    [self.wrap.index(by, g.res[1] as usize), self.wrap.index(by.saturating_add(1), g.res[1] as usize)];
+                let zs =
+                    [self.wrap.index(bz, g.res[2] as usize), self.wrap.index(bz.saturating_add(1), g.res[2] as usize)];
                 let wx = [1.0 - f.x, f.x];
                 let wy = [1.0 - f.y, f.y];
                 let wz = [1.0 - f.z, f.z];
@@ -201,7 +176,7 @@ impl Volume {
 mod tests {
     use super::*;
 
-    fn grid(filter: VolumeFilter, wrap: VolumeWrap) -> GridVolume {
+    fn grid(filter: VolumeFilter, wrap: WrapMode) -> GridVolume {
         // 2 × 1 × 1 voxels: 1 and 3.
         let grid = Arc::new(Grid { res: [2, 1, 1], channels: 1, data: vec![1.0, 3.0] });
         GridVolume { grid, to_local: Mat4::IDENTITY, filter, wrap, max: 3.0 }
@@ -211,22 +186,22 @@ mod tests {
     /// linear; outside, the wrap mode decides.
     #[test]
     fn lookups_follow_voxel_centres_and_wrap_modes() {
-        let v = grid(VolumeFilter::Trilinear, VolumeWrap::Clamp);
+        let v = grid(VolumeFilter::Trilinear, WrapMode::Clamp);
         let at = |x: f32| v.eval(Vec3::new(x, 0.5, 0.5)).x;
         assert_eq!(at(0.25), 1.0);
         assert_eq!(at(0.75), 3.0);
         assert_eq!(at(0.5), 2.0);
         assert_eq!(at(0.0), 1.0, "clamped below the first centre");
         assert_eq!(at(1.2), 3.0);
-        let n = grid(VolumeFilter::Nearest, VolumeWrap::Clamp);
+        let n = grid(VolumeFilter::Nearest, WrapMode::Clamp);
         assert_eq!(n.eval(Vec3::new(0.49, 0.5, 0.5)).x, 1.0);
         assert_eq!(n.eval(Vec3::new(0.51, 0.5, 0.5)).x, 3.0);
-        let r = grid(VolumeFilter::Nearest, VolumeWrap::Repeat);
+        let r = grid(VolumeFilter::Nearest, WrapMode::Repeat);
         assert_eq!(r.eval(Vec3::new(1.25, 0.5, 0.5)).x, 1.0);
-        let m = grid(VolumeFilter::Nearest, VolumeWrap::Mirror);
+        let m = grid(VolumeFilter::Nearest, WrapMode::Mirror);
         assert_eq!(m.eval(Vec3::new(1.25, 0.5, 0.5)).x, 3.0);
         // Trilinear with repeat blends the last and first voxels across the seam.
-        let t = grid(VolumeFilter::Trilinear, VolumeWrap::Repeat);
+        let t = grid(VolumeFilter::Trilinear, WrapMode::Repeat);
         assert_eq!(t.eval(Vec3::new(1.0, 0.5, 0.5)).x, 2.0);
     }
 }

@@ -29,6 +29,26 @@ pub enum WrapMode {
     Clamp,
 }
 
+impl WrapMode {
+    /// Texel index `i` on an axis of `n` texels (or voxels) under this mode.
+    #[inline]
+    pub fn index(self, i: i32, n: usize) -> usize {
+        let r = n as i32;
+        (match self {
+            WrapMode::Clamp => i.clamp(0, r - 1),
+            WrapMode::Repeat => i.rem_euclid(r),
+            WrapMode::Mirror => {
+                let m = i.rem_euclid(2 * r);
+                if m >= r {
+                    2 * r - 1 - m
+                } else {
+                    m
+                }
+            }
+        }) as usize
+    }
+}
+
 /// An RGB image texture with its lookup settings.
 #[derive(Debug, Clone)]
 pub struct Bitmap {
@@ -82,27 +102,9 @@ impl Bitmap {
         self.mean
     }
 
-    /// Mitsuba's (Dr.Jit's) integer wrap of texel index `i` in `0..res`.
-    #[inline]
-    fn wrap_index(&self, i: i32, res: usize) -> usize {
-        let r = res as i32;
-        (match self.wrap {
-            WrapMode::Clamp => i.clamp(0, r - 1),
-            WrapMode::Repeat => i.rem_euclid(r),
-            WrapMode::Mirror => {
-                let m = i.rem_euclid(2 * r);
-                if m >= r {
-                    2 * r - 1 - m
-                } else {
-                    m
-                }
-            }
-        }) as usize
-    }
-
     #[inline]
     fn texel(&self, x: i32, y: i32) -> Spectrum {
-        self.data[self.wrap_index(y, self.height) * self.width + self.wrap_index(x, self.width)]
+        self.data[self.wrap.index(y, self.height) * self.width + self.wrap.index(x, self.width)]
     }
 
     /// Bilinear footprint: the lower texel, the weights of the upper ones,

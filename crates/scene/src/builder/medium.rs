@@ -19,7 +19,7 @@ use crate::error::{LoadError, Result};
 use glam::{Mat4, Vec3};
 use penumbra_render::math::Spectrum;
 use penumbra_render::medium::volume::unit_cube_bounds;
-use penumbra_render::medium::{GridVolume, Medium, MediumKind, PhaseFunction, Volume, VolumeFilter, VolumeWrap};
+use penumbra_render::medium::{GridVolume, Medium, MediumKind, PhaseFunction, Volume, VolumeFilter, WrapMode};
 use std::collections::HashMap;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -189,9 +189,9 @@ fn gridvolume(node: &Node) -> Result<Volume> {
         }
     };
     let wrap = match node.string("wrap_mode", "clamp")?.as_str() {
-        "clamp" => VolumeWrap::Clamp,
-        "repeat" => VolumeWrap::Repeat,
-        "mirror" => VolumeWrap::Mirror,
+        "clamp" => WrapMode::Clamp,
+        "repeat" => WrapMode::Repeat,
+        "mirror" => WrapMode::Mirror,
         other => {
             return Err(LoadError::at(
                 node.loc_of("wrap_mode"),
