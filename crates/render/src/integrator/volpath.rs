@@ -23,7 +23,7 @@
 //! same parameters, are one estimator here, with `volpathmis`'s variance.
 
 use super::{RayStats, Termination};
-use crate::geometry::{offset_origin, Ray};
+use crate::geometry::Ray;
 use crate::material::Scratch;
 use crate::math::{Spectrum, SHADOW_EPSILON};
 use crate::medium::{mean, Flight};
@@ -106,8 +106,10 @@ impl VolPathIntegrator {
                                 let f = med.phase.eval(wi, ls.wi);
                                 if f > 0.0 && ls.pdf > 0.0 {
                                     let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, f) };
-                                    let shadow = Ray::new(p, ls.wi, f32::INFINITY);
-                                    let tr = self.transmittance(scene, shadow, ls.dist, Some(m), rng, stats, scratch);
+                                    // Stop short of the light's own surface.
+                                    let shadow = Ray::new(p, ls.wi, ls.dist * (1.0 - SHADOW_EPSILON));
+                                    let target = p + ls.wi * ls.dist;
+                                    let tr = self.transmittance(scene, shadow, target, Some(m), rng, stats, scratch);
                                     l += beta * ls.li * tr * (f * w / ls.pdf);
                                 }
                             }
@@ -174,16 +176,9 @@ impl VolPathIntegrator {
                     if f != Spectrum::ZERO && ls.pdf > 0.0 {
                         let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, bsdf_pdf) };
                         let m = if media.is_transition() { media.target(si.n, ls.wi) } else { medium };
-                        let o = offset_origin(si.p, si.n, ls.wi);
-                        let (dir, dist) = if ls.dist.is_finite() {
-                            let d = si.p + ls.wi * ls.dist - o;
-                            let len = d.length();
-                            (d / len, len)
-                        } else {
-                            (ls.wi, f32::INFINITY)
-                        };
-                        let tr =
-                            self.transmittance(scene, Ray::new(o, dir, f32::INFINITY), dist, m, rng, stats, scratch);
+                        let shadow = scene.shadow_ray(&si, ls.wi, ls.dist);
+                        let target = si.p + ls.wi * ls.dist;
+                        let tr = self.transmittance(scene, shadow, target, m, rng, stats, scratch);
                         l += beta * f * ls.li * tr * (w / ls.pdf);
                     }
                 }
@@ -230,27 +225,26 @@ impl VolPathIntegrator {
         }
     }
 
-    /// Transmittance from `ray.o` along `ray.d` (unit) over `dist` (∞ for
-    /// lights at infinity), starting in `medium`: media by their estimators,
-    /// surfaces by their null transmission (zero for opaque ones), media
-    /// switched where shapes bound them (Mitsuba's `sample_emitter` loop).
+    /// Transmittance along the shadow ray `ray` (a [`Scene::shadow_ray`]:
+    /// unit direction, `t_max` short of the light at `target`, or ∞ for
+    /// lights at infinity), starting in `medium`: media by their
+    /// estimators, surfaces by their null transmission (zero for opaque
+    /// ones), media switched where shapes bound them, each crossed surface
+    /// continued by a new shadow ray to `target` (Mitsuba's
+    /// `sample_emitter` loop).
     #[allow(clippy::too_many_arguments)]
     fn transmittance(
         &self,
         scene: &Scene,
         mut ray: Ray,
-        dist: f32,
+        target: Vec3,
         mut medium: Option<u32>,
         rng: &mut SampleStream,
         stats: &mut RayStats,
         scratch: &Scratch,
     ) -> Spectrum {
-        let target = ray.at(dist);
-        let mut remaining = dist;
         let mut tr = Spectrum::ONE;
         for _ in 0..MAX_NULL_CROSSINGS {
-            // Stop short of the light's own surface.
-            ray.t_max = remaining * (1.0 - SHADOW_EPSILON);
             stats.shadow_rays += 1;
             let hit = scene.intersect(&ray);
             let t_seg = hit.as_ref().map_or(ray.t_max, |si| si.t);
@@ -270,14 +264,8 @@ impl VolPathIntegrator {
             if media.is_transition() {
                 medium = media.target(si.n, ray.d);
             }
-            let o = offset_origin(si.p, si.n, ray.d);
-            if dist.is_finite() {
-                let d = target - o;
-                remaining = d.length();
-                ray = Ray::new(o, d / remaining, f32::INFINITY);
-            } else {
-                ray = Ray::new(o, ray.d, f32::INFINITY);
-            }
+            let dist = if ray.t_max.is_finite() { (target - si.p).length() } else { f32::INFINITY };
+            ray = scene.shadow_ray(&si, ray.d, dist);
         }
         Spectrum::ZERO
     }
