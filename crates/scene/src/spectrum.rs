@@ -178,15 +178,8 @@ pub fn plugin_value(node: &crate::desc::Node) -> crate::error::Result<crate::des
             })
             .collect()
     };
-    let rgb = |name: &str| -> crate::error::Result<Option<[f64; 3]>> {
-        let v = node.get_rgb(name)?;
-        if let Some(c) = v {
-            if !c.iter().all(|x| x.is_finite()) {
-                return Err(LoadError::at(node.loc_of(name), format!("{name} must be finite")));
-            }
-        }
-        Ok(v)
-    };
+    // (The XML reader already refuses non-finite numbers in every colour.)
+    let rgb = |name: &str| node.get_rgb(name);
     let range = |lo: f64, hi: f64| -> crate::error::Result<(f64, f64)> {
         let (a, b) = (node.float("wavelength_min", lo)?, node.float("wavelength_max", hi)?);
         if !(a.is_finite() && b.is_finite() && a < b) {
