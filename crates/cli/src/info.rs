@@ -13,6 +13,9 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     let desc = penumbra_scene::mitsuba::parse_file(&a.scene, &a.define).map_err(|e| anyhow!(e))?;
     let mut out = String::new();
     writeln!(out, "scene: {} (format version {})", a.scene.display(), desc.version)?;
+    for n in desc.upgrade_notes() {
+        writeln!(out, "upgraded: {n}")?;
+    }
     describe_plugins(&desc, &mut out)?;
     if let Some(integrator) = desc.root.children_of(Kind::Integrator).next() {
         writeln!(out, "integrator: {}", with_params(&integrator.node))?;
@@ -20,7 +23,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         writeln!(out, "integrator: path (Mitsuba's default)")?;
     }
     let notes = approximations(&desc);
-    let built = penumbra_scene::builder::build(&desc, &Overrides::default());
+    let built = penumbra_scene::builder::build(&desc, &Overrides::default()).map_err(|e| desc.explain(e));
     if let Ok(job) = &built {
         let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
         for shape in &job.scene.shapes {

@@ -95,7 +95,10 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
     }
     let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
     let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone(), sampler: a.sampler.clone() };
-    let mut job = penumbra_scene::load_scene(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
+    let (mut job, notes) = penumbra_scene::load_scene_noted(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
+    for n in notes {
+        eprintln!("note: {n}");
+    }
     if let Some(c) = a.crop {
         apply_crop(&mut job, c)?;
     }

@@ -60,7 +60,7 @@ impl Scene {
     /// The render job for `ov`, with the values set so far.
     pub(crate) fn job(&mut self, ov: &Overrides) -> Result<RenderJob, LoadError> {
         let desc = self.parse()?;
-        builder::build_cached(&desc, ov, &mut self.cache)
+        builder::build_cached(&desc, ov, &mut self.cache).map_err(|e| desc.explain(e))
     }
 
     /// The bytes that identify the scene's text (checkpoint identity).

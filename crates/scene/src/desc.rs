@@ -2,10 +2,12 @@
 //! properties, each carrying its file position. The Mitsuba XML reader
 //! produces it; `builder/` turns it into a render scene.
 
-use crate::error::FileLoc;
+use crate::error::{FileLoc, LoadError};
 use glam::{DMat4, DVec3};
 use std::cell::Cell;
+use std::path::PathBuf;
 use std::rc::Rc;
+use std::sync::Arc;
 
 /// A typed property value, after `$name` substitution.
 #[derive(Debug, Clone, PartialEq)]
@@ -173,6 +175,34 @@ pub struct SceneDesc {
     pub root: Rc<Node>,
     /// The scene's `version` attribute.
     pub version: String,
+    /// The files older than version 2.0.0, upgraded in memory as Mitsuba 3
+    /// upgrades them, in the order read (empty for a current scene).
+    pub upgraded: Vec<UpgradedFile>,
+}
+
+/// A file older than version 2.0.0 (Mitsuba 0.x/1.x), read as Mitsuba 3's
+/// `upgrade_from_v1` reads it.
+#[derive(Debug, Clone)]
+pub struct UpgradedFile {
+    /// The file.
+    pub file: Arc<PathBuf>,
+    /// Its `version` attribute.
+    pub version: String,
+    /// The parameters renamed, in document order.
+    pub renames: Vec<Rename>,
+}
+
+/// One parameter renamed by the upgrade: `maxDepth` -> `max_depth`,
+/// diffuse's `diffuseReflectance` -> `reflectance`, or `uoffset`/`voffset`/
+/// `uscale`/`vscale` -> `to_uv`.
+#[derive(Debug, Clone)]
+pub struct Rename {
+    /// Where the old parameter is written.
+    pub loc: FileLoc,
+    /// The name written in the file.
+    pub from: String,
+    /// The name it now has.
+    pub to: String,
 }
 
 /// A new value for property `name` of the object with id `id`
@@ -189,6 +219,47 @@ pub struct Override {
 }
 
 impl SceneDesc {
+    /// One line per upgraded file, for a note on stderr: `old.xml has scene
+    /// version 0.5.0, upgraded in memory as Mitsuba 3 upgrades it: maxDepth
+    /// -> max_depth (line 3), ...`.
+    pub fn upgrade_notes(&self) -> Vec<String> {
+        self.upgraded
+            .iter()
+            .map(|u| {
+                let items: Vec<String> =
+                    u.renames.iter().map(|r| format!("{} -> {} (line {})", r.from, r.to, r.loc.line)).collect();
+                format!(
+                    "{} has scene version {}, upgraded in memory as Mitsuba 3 upgrades it: {}",
+                    u.file.display(),
+                    u.version,
+                    if items.is_empty() { "nothing renamed".to_string() } else { items.join(", ") }
+                )
+            })
+            .collect()
+    }
+
+    /// `e` with a hint when it is about an upgraded file: the name as
+    /// written there, or what the upgrade does and does not do.
+    pub fn explain(&self, mut e: LoadError) -> LoadError {
+        let Some(loc) = &e.loc else { return e };
+        let Some(u) = self.upgraded.iter().find(|u| u.file == loc.file) else { return e };
+        let hint = match u.renames.iter().find(|r| r.loc == *loc) {
+            Some(r) => format!(
+                "written \"{}\" in this scene version {} file, and renamed \"{}\" as Mitsuba 3 \
+                 renames the parameters of old files",
+                r.from, u.version, r.to
+            ),
+            None => format!(
+                "this file has scene version {}, read as Mitsuba 3 reads it: parameter names \
+                 upgraded to snake_case; plugins and parameters that Mitsuba 3 no longer has are \
+                 errors there too",
+                u.version
+            ),
+        };
+        e.message.push_str(&format!("\n  ({hint})"));
+        e
+    }
+
     /// A copy of the scene with `overrides` applied in order (later ones
     /// win). A property the object has is replaced by a value of a
     /// compatible type; one it lacks is added (and, as every property, is
@@ -208,7 +279,7 @@ impl SceneDesc {
                 ));
             }
         }
-        Ok(SceneDesc { root, version: self.version.clone() })
+        Ok(SceneDesc { root, version: self.version.clone(), upgraded: self.upgraded.clone() })
     }
 }
 

@@ -24,6 +24,13 @@ use std::path::Path;
 
 /// Loads a Mitsuba 3 XML scene with `-D name=value` definitions.
 pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<RenderJob> {
+    load_scene_noted(path, defines, ov).map(|(job, _)| job)
+}
+
+/// As [`load_scene`], with the notes a user should see: the files of an
+/// older version that were upgraded, and what was renamed in them.
+pub fn load_scene_noted(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
     let desc = mitsuba::parse_file(path, defines)?;
-    builder::build(&desc, ov)
+    let job = builder::build(&desc, ov).map_err(|e| desc.explain(e))?;
+    Ok((job, desc.upgrade_notes()))
 }

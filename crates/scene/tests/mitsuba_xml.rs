@@ -256,8 +256,7 @@ fn structural_errors() {
 fn root_and_version() {
     let e = err("<shape type=\"sphere\" version=\"3.0.0\"/>");
     assert_err(&e, FILE, 1, &["<shape>", "<scene"]);
-    let e = err("\n<scene version=\"0.6.0\"/>");
-    assert_err(&e, FILE, 2, &["0.6.0", "syntax differs", "Mitsuba 3"]);
+    assert!(parse("\n<scene version=\"0.6.0\"/>").unwrap().upgraded[0].renames.is_empty());
     let e = err("<scene/>");
     assert_err(&e, FILE, 1, &["version"]);
     let e = err("<scene version=\"3.0\"/>");
@@ -583,4 +582,126 @@ fn non_utf8_scene_names_the_first_bad_byte() {
     let e = parse_file(&path, &[]).unwrap_err().to_string();
     assert!(e.contains("scene.xml") && e.contains("line 2, column 9 (byte 32)"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+// ---------------------------------------------------------------- old versions
+
+/// Names and values of every object's parameters, depth first, for
+/// comparing two descriptions.
+fn flatten(node: &Node, out: &mut Vec<String>) {
+    out.push(format!("{} {}", node.kind.tag(), node.plugin));
+    let mut props: Vec<String> = node.props.iter().map(|p| format!("  {} = {:?}", p.name, p.value)).collect();
+    props.sort();
+    out.extend(props);
+    for c in &node.children {
+        out.push(format!("  child {:?}", c.name));
+        flatten(&c.node, out);
+    }
+}
+
+/// A version 0.5.0 file reads as its Mitsuba 3 spelling (Mitsuba's
+/// `upgrade_from_v1`): camelCase names to snake_case (runs of capitals
+/// stay one word), diffuse's diffuseReflectance to reflectance, and the
+/// texture offsets folded into to_uv = scale · translate.
+#[test]
+fn old_versions_are_upgraded_as_mitsuba_3_does() {
+    let old = r#"<scene version="0.5.0">
+<integrator type="path"><integer name="maxDepth" value="4"/><integer name="rrDepth" value="2"/></integrator>
+<bsdf type="dielectric" id="glass"><float name="intIOR" value="1.5"/><string name="extIOR" value="air"/></bsdf>
+<bsdf type="diffuse" id="d"><texture type="checkerboard" name="diffuseReflectance">
+  <float name="uoffset" value="0.25"/><float name="uscale" value="4"/><integer name="vscale" value="2"/>
+</texture></bsdf>
+<shape type="sphere"><transform name="toWorld"><translate x="1"/></transform><ref name="bsdf" id="d"/></shape>
+</scene>"#;
+    let new = r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="4"/><integer name="rr_depth" value="2"/></integrator>
+<bsdf type="dielectric" id="glass"><float name="int_ior" value="1.5"/><string name="ext_ior" value="air"/></bsdf>
+<bsdf type="diffuse" id="d"><texture type="checkerboard" name="reflectance">
+  <transform name="to_uv"><translate x="0.25"/><scale x="4" y="2"/></transform>
+</texture></bsdf>
+<shape type="sphere"><transform name="to_world"><translate x="1"/></transform><ref name="bsdf" id="d"/></shape>
+</scene>"#;
+    let (a, b) = (parse(old).unwrap(), parse(new).unwrap());
+    let (mut fa, mut fb) = (Vec::new(), Vec::new());
+    flatten(&a.root, &mut fa);
+    flatten(&b.root, &mut fb);
+    assert_eq!(fa, fb);
+    assert!(b.upgraded.is_empty() && b.upgrade_notes().is_empty());
+    let renames: Vec<(u32, &str, &str)> =
+        a.upgraded[0].renames.iter().map(|r| (r.loc.line, r.from.as_str(), r.to.as_str())).collect();
+    assert_eq!(
+        renames,
+        [
+            (2, "maxDepth", "max_depth"),
+            (2, "rrDepth", "rr_depth"),
+            (3, "intIOR", "int_ior"),
+            (3, "extIOR", "ext_ior"),
+            (4, "diffuseReflectance", "reflectance"),
+            (5, "uoffset", "to_uv"),
+            (5, "uscale", "to_uv"),
+            (5, "vscale", "to_uv"),
+            (7, "toWorld", "to_world"),
+        ]
+    );
+    let note = &a.upgrade_notes()[0];
+    assert!(note.contains("0.5.0") && note.contains("maxDepth -> max_depth (line 2)"), "{note}");
+    // diffuse_reflectance stays itself outside diffuse (e.g. plastic's).
+    let p = parse(
+        "<scene version=\"0.6.0\"><bsdf type=\"plastic\"><rgb name=\"diffuseReflectance\" value=\"0.5\"/></bsdf></scene>",
+    )
+    .unwrap();
+    value(first(&p), "diffuse_reflectance");
+}
+
+/// Only files older than 2.0.0 are upgraded, each by its own version: a
+/// 3.0.0 file included from a 0.5.0 one keeps its names (and camelCase
+/// there is the error it always was); two spellings of one name collide.
+#[test]
+fn upgrades_follow_each_files_version() {
+    let dir = temp_dir("upgrade_includes");
+    std::fs::write(
+        dir.join("new.xml"),
+        "<scene version=\"3.0.0\">\n<integrator type=\"path\"><integer name=\"maxDepth\" value=\"3\"/></integrator>\n</scene>",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("old.xml"),
+        "<scene version=\"0.5.0\">\n<include filename=\"new.xml\"/>\n\
+         <shape type=\"sphere\"><float name=\"radiusScale\" value=\"2\"/></shape>\n</scene>",
+    )
+    .unwrap();
+    let desc = parse_file(&dir.join("old.xml"), &[]).unwrap();
+    let integrator = desc.root.children_of(Kind::Integrator).next().unwrap();
+    value(&integrator.node, "maxDepth");
+    value(desc.root.children_of(Kind::Shape).next().unwrap().node.as_ref(), "radius_scale");
+    let e = err("<scene version=\"0.5.0\">\n<shape type=\"sphere\"><transform name=\"toWorld\"/>\n<transform name=\"to_world\"/></shape></scene>");
+    assert_err(&e, FILE, 3, &["to_world", "more than once"]);
+    let e = err(
+        "<scene version=\"0.5.0\">\n<texture type=\"bitmap\"><string name=\"uscale\" value=\"2\"/></texture></scene>",
+    );
+    assert_err(&e, FILE, 2, &["uscale", "number"]);
+}
+
+/// A parameter that Mitsuba 3 no longer has is an error at its line,
+/// naming the old spelling; another error in an old file says what the
+/// upgrade does.
+#[test]
+fn errors_in_upgraded_files_name_the_old_spelling() {
+    let dir = temp_dir("upgrade_errors");
+    let path = dir.join("old.xml");
+    std::fs::write(
+        &path,
+        "<scene version=\"0.5.0\">\n<integrator type=\"path\">\n<boolean name=\"strictNormals\" value=\"true\"/>\n</integrator>\n<sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n</scene>",
+    )
+    .unwrap();
+    let file = path.to_str().unwrap();
+    let e = penumbra_scene::load_scene(&path, &[], &Default::default()).map(|_| ()).unwrap_err();
+    assert_err(&e, file, 3, &["strict_normals", "written \"strictNormals\"", "0.5.0"]);
+    std::fs::write(
+        &path,
+        "<scene version=\"0.5.0\">\n<sensor type=\"perspective\"><film type=\"ldrfilm\"/></sensor>\n</scene>",
+    )
+    .unwrap();
+    let e = penumbra_scene::load_scene(&path, &[], &Default::default()).map(|_| ()).unwrap_err();
+    assert_err(&e, file, 2, &["ldrfilm", "scene version 0.5.0", "no longer has"]);
 }

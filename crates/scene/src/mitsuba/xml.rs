@@ -8,7 +8,7 @@
 //! `<ref>` name an object declared further down, as Mitsuba allows.
 
 use super::transform;
-use crate::desc::{Child, Kind, Node, Property, SceneDesc, Value};
+use crate::desc::{Child, Kind, Node, Property, Rename, SceneDesc, UpgradedFile, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use glam::{DMat4, DVec3};
 use std::cell::Cell;
@@ -43,8 +43,12 @@ pub fn parse_str(text: &str, path: &Path, defines: &[(String, String)]) -> Resul
     parser.resolver.push(cwd);
     let version = parser.parse_root(text, Arc::new(path.to_path_buf()))?;
     parser.attach_search_dirs(path);
+    let mut upgraded = std::mem::take(&mut parser.upgraded);
+    for u in &mut upgraded {
+        u.renames.sort_by_key(|r| (r.loc.line, r.loc.col));
+    }
     let root = parser.resolve()?;
-    Ok(SceneDesc { root, version })
+    Ok(SceneDesc { root, version, upgraded })
 }
 
 fn read_text(path: &Path) -> std::result::Result<String, String> {
@@ -96,6 +100,9 @@ struct RawNode {
     props: Vec<Property>,
     children: Vec<RawChild>,
     loc: FileLoc,
+    /// The node's file, when it is older than version 2.0.0: an index
+    /// into `Parser::upgraded`.
+    old: Option<usize>,
 }
 
 struct RawChild {
@@ -126,6 +133,10 @@ struct Parser {
     /// For each included file, the extra directories searched after the
     /// main file's (its resolver when it was read, and its own directory).
     include_dirs: HashMap<PathBuf, Vec<PathBuf>>,
+    /// Files older than version 2.0.0 read so far, and what was renamed.
+    upgraded: Vec<UpgradedFile>,
+    /// The file being read, when it is one of `upgraded`.
+    old: Option<usize>,
 }
 
 /// The document an element belongs to, for positions.
@@ -220,6 +231,34 @@ fn parse_version(text: &str) -> Option<[u32; 3]> {
     }
 }
 
+/// Mitsuba 3's `camel_to_underscore_case`: an upper-case letter after a
+/// lower-case one starts a new word, and the upper-case letters right after
+/// it stay in that word (`maxDepth` -> `max_depth`, `intIOR` -> `int_ior`,
+/// `toWorld` -> `to_world`); everything else is kept as written.
+fn camel_to_underscore(name: &str) -> String {
+    let b = name.as_bytes();
+    let mut out = String::with_capacity(name.len() + 4);
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if i > 0 && b[i - 1].is_ascii_lowercase() && c.is_ascii_uppercase() {
+            out.push('_');
+            out.push(c.to_ascii_lowercase() as char);
+            while i + 1 < b.len() && b[i + 1].is_ascii_uppercase() {
+                i += 1;
+                out.push(b[i].to_ascii_lowercase() as char);
+            }
+            i += 1;
+        } else {
+            // Not ASCII-only: copy the whole character.
+            let ch = name[i..].chars().next().unwrap_or_default();
+            out.push(ch);
+            i += ch.len_utf8();
+        }
+    }
+    out
+}
+
 fn xml_document<'input>(text: &'input str, file: &Path) -> Result<roxmltree::Document<'input>> {
     let options = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
     roxmltree::Document::parse_with_options(text, options).map_err(|e| {
@@ -250,6 +289,8 @@ impl Parser {
             include_stack: Vec::new(),
             resolver: Vec::new(),
             include_dirs: HashMap::new(),
+            upgraded: Vec::new(),
+            old: None,
         }
     }
 
@@ -319,6 +360,7 @@ impl Parser {
         }
         root.check(&["version"], &["type", "id", "name"])?;
         let version = check_version(&root)?;
+        self.old = self.old_file(&version, &src.file);
         let idx = self.push_node(RawNode {
             kind: Kind::Scene,
             plugin: root.get("type").unwrap_or_default().to_string(),
@@ -327,6 +369,7 @@ impl Parser {
             props: Vec::new(),
             children: Vec::new(),
             loc: root.loc.clone(),
+            old: None,
         })?;
         self.elements(&src, root.xml, idx, true)?;
         Ok(version)
@@ -423,12 +466,15 @@ impl Parser {
             props: Vec::new(),
             children: Vec::new(),
             loc: e.loc.clone(),
+            old: None,
         })?;
         self.elements(src, e.xml, idx, false)?;
+        self.upgrade(idx)?;
         Ok(idx)
     }
 
-    fn push_node(&mut self, node: RawNode) -> Result<usize> {
+    fn push_node(&mut self, mut node: RawNode) -> Result<usize> {
+        node.old = self.old;
         let idx = self.nodes.len();
         if let Some(id) = &node.id {
             if let Some(&prev) = self.ids.get(id) {
@@ -504,7 +550,9 @@ impl Parser {
         let text = read_text(&path).map_err(|m| LoadError::in_file(&path, m))?;
         self.include_stack.push(key);
         let outer = std::mem::replace(&mut self.resolver, resolver);
+        let outer_old = self.old;
         let result = self.parse_included(&text, Arc::new(path.clone()), parent, e);
+        self.old = outer_old;
         let mut extra = std::mem::replace(&mut self.resolver, outer);
         extra.push(path.parent().unwrap_or(Path::new("")).to_path_buf());
         self.include_dirs.entry(path).or_insert(extra);
@@ -521,7 +569,8 @@ impl Parser {
         let root = self.elem(&src, doc.root_element())?;
         if root.tag == "scene" {
             root.check(&["version"], &["type", "id", "name"])?;
-            check_version(&root)?;
+            let version = check_version(&root)?;
+            self.old = self.old_file(&version, &src.file);
             return self.elements(&src, root.xml, parent, true);
         }
         let kind = match root.tag {
@@ -535,7 +584,8 @@ impl Parser {
             )));
         };
         root.check(&["version", "type"], &["id", "name"])?;
-        check_version(&root)?;
+        let version = check_version(&root)?;
+        self.old = self.old_file(&version, &src.file);
         let idx = self.push_node(RawNode {
             kind,
             plugin: root.req("type").to_string(),
@@ -544,10 +594,93 @@ impl Parser {
             props: Vec::new(),
             children: Vec::new(),
             loc: root.loc.clone(),
+            old: None,
         })?;
         self.elements(&src, root.xml, idx, false)?;
+        self.upgrade(idx)?;
         let name = include.get("name").map(str::to_string);
         self.add_child(parent, RawChild { name, target: Target::Node(idx), loc: include.loc.clone() })
+    }
+
+    /// Registers `file` as an upgraded one when its `version` is older
+    /// than 2.0.0; returns its index in `upgraded`.
+    fn old_file(&mut self, version: &str, file: &Arc<PathBuf>) -> Option<usize> {
+        if parse_version(version)?[0] >= 2 {
+            return None;
+        }
+        self.upgraded.push(UpgradedFile { file: file.clone(), version: version.to_string(), renames: Vec::new() });
+        Some(self.upgraded.len() - 1)
+    }
+
+    /// Mitsuba 3's `upgrade_from_v1` on one object of a file older than
+    /// 2.0.0, after its contents are read: every parameter and nested
+    /// object name from camelCase to snake_case, diffuse's
+    /// `diffuse_reflectance` to `reflectance`, and `uoffset`/`voffset`/
+    /// `uscale`/`vscale` folded into `to_uv` = scale(uscale, vscale) ·
+    /// translate(uoffset, voffset).
+    fn upgrade(&mut self, idx: usize) -> Result<()> {
+        let Some(file) = self.node_old(idx) else { return Ok(()) };
+        let mut renames = Vec::new();
+        let node = &mut self.nodes[idx];
+        let names = node
+            .props
+            .iter_mut()
+            .map(|p| (&mut p.name, &p.loc))
+            .chain(node.children.iter_mut().filter_map(|c| Some((c.name.as_mut()?, &c.loc))));
+        for (name, loc) in names {
+            let mut new = camel_to_underscore(name);
+            if node.plugin == "diffuse" && new == "diffuse_reflectance" {
+                new = "reflectance".to_string();
+            }
+            if new != *name {
+                renames.push(Rename { loc: loc.clone(), from: std::mem::replace(name, new.clone()), to: new });
+            }
+        }
+        let offsets = ["uoffset", "voffset", "uscale", "vscale"];
+        let mut uv = [0.0, 0.0, 1.0, 1.0];
+        let mut first: Option<FileLoc> = None;
+        for (k, key) in offsets.iter().enumerate() {
+            let Some(at) = node.props.iter().position(|p| p.name == *key) else { continue };
+            let p = node.props.remove(at);
+            uv[k] = match p.value {
+                Value::Float(v) => v,
+                Value::Integer(v) => v as f64,
+                _ => return Err(LoadError::at(&p.loc, format!("\"{key}\" must be a number (<float>)"))),
+            };
+            renames.push(Rename { loc: p.loc.clone(), from: key.to_string(), to: "to_uv".to_string() });
+            first = first.or(Some(p.loc));
+        }
+        self.upgraded[file].renames.extend(renames);
+        let Some(loc) = first else { return self.check_unique(idx) };
+        let m =
+            DMat4::from_scale(DVec3::new(uv[2], uv[3], 1.0)) * DMat4::from_translation(DVec3::new(uv[0], uv[1], 0.0));
+        self.check_unique(idx)?;
+        self.add_prop(
+            idx,
+            Property { name: "to_uv".to_string(), value: Value::Transform(m), loc, used: Cell::new(false) },
+        )
+    }
+
+    fn node_old(&self, idx: usize) -> Option<usize> {
+        self.nodes[idx].old
+    }
+
+    /// After renaming, two parameters of one object may share a name
+    /// (`toWorld` and `to_world`): an error, as any repeated name.
+    fn check_unique(&self, idx: usize) -> Result<()> {
+        let node = &self.nodes[idx];
+        let names = node
+            .props
+            .iter()
+            .map(|p| (p.name.as_str(), &p.loc))
+            .chain(node.children.iter().filter_map(|c| Some((c.name.as_deref()?, &c.loc))));
+        let mut seen: HashMap<&str, &FileLoc> = HashMap::new();
+        for (name, loc) in names {
+            if let Some(first) = seen.insert(name, loc) {
+                return Err(self.duplicate(idx, name, loc, first));
+            }
+        }
+        Ok(())
     }
 
     /// `<path value="dir"/>`: a directory searched for relative file names
@@ -672,27 +805,14 @@ impl Parser {
     }
 }
 
-/// Checks a root element's `version`. Versions 2.x and 3.x share one
-/// syntax. Older files (Mitsuba 0.x/1.x) are not read: Mitsuba 3 upgrades
-/// them on load (`upgrade_from_v1` in `src/core/parser.cpp`) by renaming
-/// camelCase parameters to snake_case, diffuse's `diffuseReflectance` to
-/// `reflectance`, and folding `uoffset`/`voffset`/`uscale`/`vscale` into a
-/// `to_uv` transform, but their plugins differ beyond that; the error says
-/// what to change.
+/// Checks a root element's `version` (Mitsuba's `util::Version`:
+/// major.minor.patch). Versions 2.x and 3.x share one syntax; older files
+/// are read too, upgraded object by object as Mitsuba 3 upgrades them
+/// ([`Parser::upgrade`]).
 fn check_version(root: &Elem) -> Result<String> {
     let text = root.req("version");
-    let Some(v) = parse_version(text) else {
+    if parse_version(text).is_none() {
         return Err(root.err(format!("invalid version \"{text}\": expected major.minor.patch, e.g. \"3.0.0\"")));
-    };
-    if v[0] < 2 {
-        return Err(root.err(format!(
-            "scene version {text} uses the Mitsuba 0.x/1.x format, whose syntax differs from \
-             Mitsuba 3: parameter names were camelCase (now snake_case, e.g. maxDepth -> max_depth, \
-             sampleCount -> sample_count, toWorld -> to_world), diffuse's diffuseReflectance is now \
-             reflectance, texture uoffset/voffset/uscale/vscale became a to_uv transform, and several \
-             plugins and parameters changed; convert the scene to Mitsuba 3 syntax and set \
-             version=\"3.0.0\" (versions 2.x and 3.x are read)"
-        )));
     }
     Ok(text.to_string())
 }
