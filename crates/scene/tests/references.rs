@@ -197,3 +197,10 @@ fn textured_spot_light_matches_mitsuba() {
     // spot_light.xml with a bitmap projected through the cone (`texture`).
     compare("spot_texture", 256);
 }
+
+#[test]
+fn pplastic_matches_mitsuba() {
+    // Beckmann, anisotropic GGX with `eta`, textured roughness with a
+    // specular tint and a named IOR.
+    compare("pplastic", 256);
+}

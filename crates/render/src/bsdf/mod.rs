@@ -23,6 +23,7 @@ pub mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
 pub mod plastic;
+pub mod pplastic;
 pub mod presets;
 pub mod principled;
 pub mod principledthin;
@@ -37,6 +38,7 @@ pub use dielectric::{Dielectric, DielectricParams};
 pub use diffuse::{Diffuse, DiffuseParams};
 pub use microfacet::{Microfacet, MicrofacetType, Roughness};
 pub use plastic::{Plastic, PlasticParams};
+pub use pplastic::{PPlastic, PPlasticParams};
 pub use principled::{Principled, PrincipledParams};
 pub use principledthin::{PrincipledThin, PrincipledThinParams};
 pub use roughconductor::{RoughConductor, RoughConductorParams};
@@ -86,6 +88,7 @@ macro_rules! with_model {
             BsdfKind::RoughDielectric($b) => $e,
             BsdfKind::Plastic($b) => $e,
             BsdfKind::RoughPlastic($b) => $e,
+            BsdfKind::PPlastic($b) => $e,
             BsdfKind::Principled($b) => $e,
             BsdfKind::PrincipledThin($b) => $e,
             BsdfKind::Blend($b) => $e,
@@ -173,6 +176,8 @@ pub enum BsdfKind<'a> {
     Plastic(Plastic),
     /// Mitsuba `roughplastic`.
     RoughPlastic(RoughPlastic<'a>),
+    /// Mitsuba `pplastic` (as its RGB variants render it).
+    PPlastic(PPlastic),
     /// Mitsuba `principled`.
     Principled(Principled),
     /// Mitsuba `principledthin`.

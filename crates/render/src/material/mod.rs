@@ -12,8 +12,8 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, Nested, Perturbation,
-    PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
+    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, Nested, PPlasticParams,
+    Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
     RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
@@ -61,6 +61,8 @@ pub enum Material {
     Plastic(PlasticParams),
     /// Mitsuba `roughplastic`.
     RoughPlastic(RoughPlasticParams),
+    /// Mitsuba `pplastic` (as its RGB variants render it).
+    PPlastic(PPlasticParams),
     /// Mitsuba `principled` (the Disney BSDF).
     Principled(Box<PrincipledParams>),
     /// Mitsuba `principledthin` (the thin-sheet Disney BSDF).
@@ -166,6 +168,7 @@ impl Material {
                 Material::RoughDielectric(p) => BsdfKind::RoughDielectric(p.at(si)),
                 Material::Plastic(p) => BsdfKind::Plastic(p.at(si)),
                 Material::RoughPlastic(p) => BsdfKind::RoughPlastic(p.at(si)),
+                Material::PPlastic(p) => BsdfKind::PPlastic(p.at(si)),
                 Material::Principled(p) => BsdfKind::Principled(p.at(si)),
                 Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.at(si)),
                 Material::Null => BsdfKind::Null,
@@ -200,6 +203,7 @@ impl Material {
             Material::RoughDielectric(p) => p.reads_uv(),
             Material::Plastic(p) => p.reads_uv(),
             Material::RoughPlastic(p) => p.reads_uv(),
+            Material::PPlastic(p) => p.reads_uv(),
             Material::Principled(p) => p.reads_uv(),
             Material::PrincipledThin(p) => p.reads_uv(),
             Material::Null => false,

@@ -9,9 +9,9 @@ use crate::error::{LoadError, Result};
 use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
 use penumbra_render::bsdf::{
-    presets, ConductorParams, DielectricParams, DiffuseParams, Microfacet, MicrofacetType, PlasticParams,
-    PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams, RoughPlasticParams,
-    RoughPlasticTables, Roughness, ThinDielectricParams,
+    presets, ConductorParams, DielectricParams, DiffuseParams, Microfacet, MicrofacetType, PPlasticParams,
+    PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
+    RoughPlasticParams, RoughPlasticTables, Roughness, ThinDielectricParams,
 };
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
@@ -29,6 +29,7 @@ pub(crate) const BSDFS: &Plugins<BuildBsdf> = &[
     ("roughconductor", roughconductor),
     ("plastic", plastic),
     ("roughplastic", plastic),
+    ("pplastic", pplastic),
     ("twosided", twosided),
     ("mask", mask),
     ("normalmap", normalmap),
@@ -295,15 +296,7 @@ fn plastic(node: &Node, tex: &mut Textures) -> Result<Material> {
     let specular_reflectance = tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?;
     let nonlinear = node.bool("nonlinear", false)?;
     // Mitsuba steers lobe selection by the textures' mean values.
-    if !diffuse_reflectance.has_mean() || !specular_reflectance.has_mean() {
-        return Err(node.error(format!(
-            "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
-             for lobe selection and fails the same way)",
-            node.plugin
-        )));
-    }
-    let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
-    let specular_sampling_weight = s_mean / (d_mean + s_mean);
+    let specular_sampling_weight = specular_sampling_weight(node, &diffuse_reflectance, &specular_reflectance)?;
     if node.plugin == "plastic" {
         return Ok(Material::Plastic(PlasticParams {
             eta,
@@ -330,6 +323,52 @@ fn plastic(node: &Node, tex: &mut Textures) -> Result<Material> {
         nonlinear,
         specular_sampling_weight,
         tables: RoughPlasticTables::new(distr, eta),
+    }))
+}
+
+/// The textures' means that steer lobe selection (Mitsuba's
+/// `m_specular_sampling_weight` = s̄ / (ρ̄ + s̄)).
+fn specular_sampling_weight(node: &Node, diffuse: &Texture, specular: &Texture) -> Result<f32> {
+    if !diffuse.has_mean() || !specular.has_mean() {
+        return Err(node.error(format!(
+            "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
+             for lobe selection and fails the same way)",
+            node.plugin
+        )));
+    }
+    let (d_mean, s_mean) = (diffuse.mean(), specular.mean());
+    Ok(s_mean / (d_mean + s_mean))
+}
+
+/// Mitsuba's `pplastic` (its RGB variants' non-polarised form): `eta` (a
+/// float or texture) or `int_ior`/`ext_ior`, textured roughness as the rough
+/// conductor's.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn pplastic(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let has = |n: &str| node.has(n) || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some(n));
+    let eta = if has("eta") {
+        if has("int_ior") || has("ext_ior") {
+            return Err(node.error("pplastic: give either 'eta' or 'int_ior'/'ext_ior', not both (as in Mitsuba)"));
+        }
+        let eta = tex.float(node, "eta", 0.0)?;
+        if let Some(e) = eta.constant() {
+            if !(e.x > 0.0) {
+                return Err(LoadError::at(node.loc_of("eta"), format!("pplastic: eta must be positive (got {})", e.x)));
+            }
+        }
+        eta
+    } else {
+        Texture::Constant(Spectrum::splat(relative_ior(node, "polypropylene", true)?))
+    };
+    let diffuse_reflectance = tex.spectrum(node, "diffuse_reflectance", Spectrum::splat(0.5))?;
+    let specular_reflectance = tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?;
+    let specular_sampling_weight = specular_sampling_weight(node, &diffuse_reflectance, &specular_reflectance)?;
+    Ok(Material::PPlastic(PPlasticParams {
+        roughness: roughness(node, tex)?,
+        eta,
+        diffuse_reflectance,
+        specular_reflectance,
+        specular_sampling_weight,
     }))
 }
 
