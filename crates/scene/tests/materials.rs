@@ -180,6 +180,15 @@ fn errors_name_the_line_and_what_to_do() {
             r#"<bsdf type="pplastic"><float name="eta" value="1.5"/><float name="int_ior" value="1.6"/></bsdf>"#,
             &["mat.xml:4", "either 'eta' or 'int_ior'"],
         ),
+        (
+            r#"<bsdf type="hair"><float name="longitudinal_roughness" value="1.5"/></bsdf>"#,
+            &["mat.xml:4", "longitudinal_roughness must be in [0, 1]"],
+        ),
+        (
+            r#"<bsdf type="hair"><rgb name="sigma_a" value="0.2"/><float name="eumelanin" value="1"/></bsdf>"#,
+            &["mat.xml:4", "not both"],
+        ),
+        (r#"<bsdf type="hair"><float name="int_ior" value="1.000277"/></bsdf>"#, &["mat.xml:4", "differ"]),
         (r#"<bsdf type="pplastic"><float name="eta" value="-1"/></bsdf>"#, &["mat.xml:4", "eta must be positive"]),
         (r#"<bsdf type="pplastic"><float name="alpha_u" value="0.1"/></bsdf>"#, &["mat.xml:4", "alpha_v"]),
         (r#"<bsdf type="pplastic"><float name="nonlinear" value="1"/></bsdf>"#, &["mat.xml:4", "nonlinear"]),

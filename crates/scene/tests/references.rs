@@ -204,3 +204,10 @@ fn pplastic_matches_mitsuba() {
     // specular tint and a named IOR.
     compare("pplastic", 256);
 }
+
+#[test]
+fn hair_matches_mitsuba() {
+    // Pigments and sigma_a, on cylinders (fibres along the axis) and a
+    // sphere (along the meridians).
+    compare("hair", 256);
+}

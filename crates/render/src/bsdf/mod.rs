@@ -21,6 +21,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
+pub mod hair;
 pub mod microfacet;
 pub mod plastic;
 pub mod pplastic;
@@ -36,6 +37,7 @@ pub use blend::{Blend, Nested};
 pub use conductor::{Conductor, ConductorParams};
 pub use dielectric::{Dielectric, DielectricParams};
 pub use diffuse::{Diffuse, DiffuseParams};
+pub use hair::{Hair, HairAbsorption, HairLobes, HairParams};
 pub use microfacet::{Microfacet, MicrofacetType, Roughness};
 pub use plastic::{Plastic, PlasticParams};
 pub use pplastic::{PPlastic, PPlasticParams};
@@ -89,6 +91,7 @@ macro_rules! with_model {
             BsdfKind::Plastic($b) => $e,
             BsdfKind::RoughPlastic($b) => $e,
             BsdfKind::PPlastic($b) => $e,
+            BsdfKind::Hair($b) => $e,
             BsdfKind::Principled($b) => $e,
             BsdfKind::PrincipledThin($b) => $e,
             BsdfKind::Blend($b) => $e,
@@ -178,6 +181,8 @@ pub enum BsdfKind<'a> {
     RoughPlastic(RoughPlastic<'a>),
     /// Mitsuba `pplastic` (as its RGB variants render it).
     PPlastic(PPlastic),
+    /// Mitsuba `hair`.
+    Hair(Hair<'a>),
     /// Mitsuba `principled`.
     Principled(Principled),
     /// Mitsuba `principledthin`.
