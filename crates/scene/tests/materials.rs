@@ -81,6 +81,24 @@ fn defaults_follow_mitsuba() {
         }
         m => panic!("{m:?}"),
     }
+    match material(r#"<bsdf type="pplastic"/>"#).unwrap() {
+        Material::PPlastic(penumbra_render::bsdf::PPlasticParams {
+            roughness,
+            eta,
+            diffuse_reflectance,
+            specular_reflectance,
+            specular_sampling_weight,
+        }) => {
+            // Beckmann, α 0.1, polypropylene / air, ρ 0.5, s 1.
+            assert_eq!(roughness.kind, MicrofacetType::Beckmann);
+            assert_eq!(constant(&roughness.alpha_u), Spectrum::splat(0.1));
+            assert!((constant(&eta).x - 1.49 / 1.000277).abs() < 1e-5);
+            assert_eq!(constant(&diffuse_reflectance), Spectrum::splat(0.5));
+            assert_eq!(constant(&specular_reflectance), Spectrum::ONE);
+            assert!((specular_sampling_weight - 1.0 / 1.5).abs() < 1e-6);
+        }
+        m => panic!("{m:?}"),
+    }
     assert!(matches!(material(r#"<bsdf type="thindielectric"/>"#).unwrap(), Material::ThinDielectric(..)));
     assert!(matches!(material(r#"<bsdf type="null"/>"#).unwrap(), Material::Null));
 }
@@ -157,7 +175,23 @@ fn errors_name_the_line_and_what_to_do() {
             r#"<bsdf type="bumpmap"><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>"#,
             &["mat.xml:4", "no gradient"],
         ),
-        (r#"<bsdf type="hair"/>"#, &["mat.xml:4", "hair", "roughconductor", "mask"]),
+        (r#"<bsdf type="polarizer"/>"#, &["mat.xml:4", "polarizer", "roughconductor", "mask"]),
+        (
+            r#"<bsdf type="pplastic"><float name="eta" value="1.5"/><float name="int_ior" value="1.6"/></bsdf>"#,
+            &["mat.xml:4", "either 'eta' or 'int_ior'"],
+        ),
+        (
+            r#"<bsdf type="hair"><float name="longitudinal_roughness" value="1.5"/></bsdf>"#,
+            &["mat.xml:4", "longitudinal_roughness must be in [0, 1]"],
+        ),
+        (
+            r#"<bsdf type="hair"><rgb name="sigma_a" value="0.2"/><float name="eumelanin" value="1"/></bsdf>"#,
+            &["mat.xml:4", "not both"],
+        ),
+        (r#"<bsdf type="hair"><float name="int_ior" value="1.000277"/></bsdf>"#, &["mat.xml:4", "differ"]),
+        (r#"<bsdf type="pplastic"><float name="eta" value="-1"/></bsdf>"#, &["mat.xml:4", "eta must be positive"]),
+        (r#"<bsdf type="pplastic"><float name="alpha_u" value="0.1"/></bsdf>"#, &["mat.xml:4", "alpha_v"]),
+        (r#"<bsdf type="pplastic"><float name="nonlinear" value="1"/></bsdf>"#, &["mat.xml:4", "nonlinear"]),
         (
             r#"<bsdf type="twosided"><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>"#,
             &["mat.xml:4", "twosided"],

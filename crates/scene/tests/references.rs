@@ -197,3 +197,17 @@ fn textured_spot_light_matches_mitsuba() {
     // spot_light.xml with a bitmap projected through the cone (`texture`).
     compare("spot_texture", 256);
 }
+
+#[test]
+fn pplastic_matches_mitsuba() {
+    // Beckmann, anisotropic GGX with `eta`, textured roughness with a
+    // specular tint and a named IOR.
+    compare("pplastic", 256);
+}
+
+#[test]
+fn hair_matches_mitsuba() {
+    // Pigments and sigma_a, on cylinders (fibres along the axis) and a
+    // sphere (along the meridians).
+    compare("hair", 256);
+}

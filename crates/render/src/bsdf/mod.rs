@@ -21,8 +21,10 @@ pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
+pub mod hair;
 pub mod microfacet;
 pub mod plastic;
+pub mod pplastic;
 pub mod presets;
 pub mod principled;
 pub mod principledthin;
@@ -35,8 +37,10 @@ pub use blend::{Blend, Nested};
 pub use conductor::{Conductor, ConductorParams};
 pub use dielectric::{Dielectric, DielectricParams};
 pub use diffuse::{Diffuse, DiffuseParams};
+pub use hair::{Hair, HairAbsorption, HairLobes, HairParams};
 pub use microfacet::{Microfacet, MicrofacetType, Roughness};
 pub use plastic::{Plastic, PlasticParams};
+pub use pplastic::{PPlastic, PPlasticParams};
 pub use principled::{Principled, PrincipledParams};
 pub use principledthin::{PrincipledThin, PrincipledThinParams};
 pub use roughconductor::{RoughConductor, RoughConductorParams};
@@ -86,6 +90,8 @@ macro_rules! with_model {
             BsdfKind::RoughDielectric($b) => $e,
             BsdfKind::Plastic($b) => $e,
             BsdfKind::RoughPlastic($b) => $e,
+            BsdfKind::PPlastic($b) => $e,
+            BsdfKind::Hair($b) => $e,
             BsdfKind::Principled($b) => $e,
             BsdfKind::PrincipledThin($b) => $e,
             BsdfKind::Blend($b) => $e,
@@ -173,6 +179,10 @@ pub enum BsdfKind<'a> {
     Plastic(Plastic),
     /// Mitsuba `roughplastic`.
     RoughPlastic(RoughPlastic<'a>),
+    /// Mitsuba `pplastic` (as its RGB variants render it).
+    PPlastic(PPlastic),
+    /// Mitsuba `hair`.
+    Hair(Hair<'a>),
     /// Mitsuba `principled`.
     Principled(Principled),
     /// Mitsuba `principledthin`.

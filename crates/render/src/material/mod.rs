@@ -12,9 +12,9 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, Nested, Perturbation,
-    PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
-    RoughPlasticParams, ThinDielectricParams,
+    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, HairParams, Nested,
+    PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
+    RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
 use crate::math::Frame;
@@ -61,6 +61,10 @@ pub enum Material {
     Plastic(PlasticParams),
     /// Mitsuba `roughplastic`.
     RoughPlastic(RoughPlasticParams),
+    /// Mitsuba `pplastic` (as its RGB variants render it).
+    PPlastic(PPlasticParams),
+    /// Mitsuba `hair`.
+    Hair(Box<HairParams>),
     /// Mitsuba `principled` (the Disney BSDF).
     Principled(Box<PrincipledParams>),
     /// Mitsuba `principledthin` (the thin-sheet Disney BSDF).
@@ -166,6 +170,8 @@ impl Material {
                 Material::RoughDielectric(p) => BsdfKind::RoughDielectric(p.at(si)),
                 Material::Plastic(p) => BsdfKind::Plastic(p.at(si)),
                 Material::RoughPlastic(p) => BsdfKind::RoughPlastic(p.at(si)),
+                Material::PPlastic(p) => BsdfKind::PPlastic(p.at(si)),
+                Material::Hair(p) => BsdfKind::Hair(p.at(si)),
                 Material::Principled(p) => BsdfKind::Principled(p.at(si)),
                 Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.at(si)),
                 Material::Null => BsdfKind::Null,
@@ -200,6 +206,8 @@ impl Material {
             Material::RoughDielectric(p) => p.reads_uv(),
             Material::Plastic(p) => p.reads_uv(),
             Material::RoughPlastic(p) => p.reads_uv(),
+            Material::PPlastic(p) => p.reads_uv(),
+            Material::Hair(p) => p.reads_uv(),
             Material::Principled(p) => p.reads_uv(),
             Material::PrincipledThin(p) => p.reads_uv(),
             Material::Null => false,

@@ -9,9 +9,9 @@ use crate::error::{LoadError, Result};
 use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
 use penumbra_render::bsdf::{
-    presets, ConductorParams, DielectricParams, DiffuseParams, Microfacet, MicrofacetType, PlasticParams,
-    PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams, RoughPlasticParams,
-    RoughPlasticTables, Roughness, ThinDielectricParams,
+    presets, ConductorParams, DielectricParams, DiffuseParams, HairAbsorption, HairLobes, HairParams, Microfacet,
+    MicrofacetType, PPlasticParams, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
+    RoughDielectricParams, RoughPlasticParams, RoughPlasticTables, Roughness, ThinDielectricParams,
 };
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
@@ -29,6 +29,8 @@ pub(crate) const BSDFS: &Plugins<BuildBsdf> = &[
     ("roughconductor", roughconductor),
     ("plastic", plastic),
     ("roughplastic", plastic),
+    ("pplastic", pplastic),
+    ("hair", hair),
     ("twosided", twosided),
     ("mask", mask),
     ("normalmap", normalmap),
@@ -295,15 +297,7 @@ fn plastic(node: &Node, tex: &mut Textures) -> Result<Material> {
     let specular_reflectance = tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?;
     let nonlinear = node.bool("nonlinear", false)?;
     // Mitsuba steers lobe selection by the textures' mean values.
-    if !diffuse_reflectance.has_mean() || !specular_reflectance.has_mean() {
-        return Err(node.error(format!(
-            "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
-             for lobe selection and fails the same way)",
-            node.plugin
-        )));
-    }
-    let (d_mean, s_mean) = (diffuse_reflectance.mean(), specular_reflectance.mean());
-    let specular_sampling_weight = s_mean / (d_mean + s_mean);
+    let specular_sampling_weight = specular_sampling_weight(node, &diffuse_reflectance, &specular_reflectance)?;
     if node.plugin == "plastic" {
         return Ok(Material::Plastic(PlasticParams {
             eta,
@@ -331,6 +325,97 @@ fn plastic(node: &Node, tex: &mut Textures) -> Result<Material> {
         specular_sampling_weight,
         tables: RoughPlasticTables::new(distr, eta),
     }))
+}
+
+/// The textures' means that steer lobe selection (Mitsuba's
+/// `m_specular_sampling_weight` = s̄ / (ρ̄ + s̄)).
+fn specular_sampling_weight(node: &Node, diffuse: &Texture, specular: &Texture) -> Result<f32> {
+    if !diffuse.has_mean() || !specular.has_mean() {
+        return Err(node.error(format!(
+            "{}: a mesh_attribute reflectance is not supported (Mitsuba needs the texture's mean \
+             for lobe selection and fails the same way)",
+            node.plugin
+        )));
+    }
+    let (d_mean, s_mean) = (diffuse.mean(), specular.mean());
+    Ok(s_mean / (d_mean + s_mean))
+}
+
+/// Mitsuba's `pplastic` (its RGB variants' non-polarised form): `eta` (a
+/// float or texture) or `int_ior`/`ext_ior`, textured roughness as the rough
+/// conductor's.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn pplastic(node: &Node, tex: &mut Textures) -> Result<Material> {
+    let has = |n: &str| node.has(n) || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some(n));
+    let eta = if has("eta") {
+        if has("int_ior") || has("ext_ior") {
+            return Err(node.error("pplastic: give either 'eta' or 'int_ior'/'ext_ior', not both (as in Mitsuba)"));
+        }
+        let eta = tex.float(node, "eta", 0.0)?;
+        if let Some(e) = eta.constant() {
+            if !(e.x > 0.0) {
+                return Err(LoadError::at(node.loc_of("eta"), format!("pplastic: eta must be positive (got {})", e.x)));
+            }
+        }
+        eta
+    } else {
+        Texture::Constant(Spectrum::splat(relative_ior(node, "polypropylene", true)?))
+    };
+    let diffuse_reflectance = tex.spectrum(node, "diffuse_reflectance", Spectrum::splat(0.5))?;
+    let specular_reflectance = tex.spectrum(node, "specular_reflectance", Spectrum::ONE)?;
+    let specular_sampling_weight = specular_sampling_weight(node, &diffuse_reflectance, &specular_reflectance)?;
+    Ok(Material::PPlastic(PPlasticParams {
+        roughness: roughness(node, tex)?,
+        eta,
+        diffuse_reflectance,
+        specular_reflectance,
+        specular_sampling_weight,
+    }))
+}
+
+/// Mitsuba's `hair`: roughnesses in [0, 1], the scale tilt, the fibre's IOR,
+/// and its absorption from pigments or `sigma_a` (not both).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn hair(node: &Node, tex: &mut Textures) -> Result<Material> {
+    use penumbra_render::bsdf::hair::{EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A};
+    let rough = |name: &str| -> Result<f32> {
+        let r = node.float(name, 0.3)? as f32;
+        if !(0.0..=1.0).contains(&r) {
+            return Err(LoadError::at(node.loc_of(name), format!("hair: {name} must be in [0, 1] (got {r})")));
+        }
+        Ok(r)
+    };
+    let (longitudinal, azimuthal) = (rough("longitudinal_roughness")?, rough("azimuthal_roughness")?);
+    let tilt = node.float("scale_tilt", 2.0)? as f32;
+    let int = ior(node, "int_ior", "amber")?;
+    let ext = ior(node, "ext_ior", "air")?;
+    if !(int > 0.0 && ext > 0.0) || int == ext {
+        return Err(node.error("hair: int_ior and ext_ior must be positive and differ"));
+    }
+    let has_sigma =
+        node.has("sigma_a") || node.children_of(Kind::Texture).any(|c| c.name.as_deref() == Some("sigma_a"));
+    let absorption = if has_sigma {
+        for name in ["eumelanin", "pheomelanin"] {
+            if node.has(name) {
+                return Err(LoadError::at(
+                    node.loc_of(name),
+                    "hair: give either the pigments (eumelanin, pheomelanin) or sigma_a, not both (as in Mitsuba)",
+                ));
+            }
+        }
+        let sigma_a = tex.spectrum(node, "sigma_a", Spectrum::ZERO)?;
+        HairAbsorption::SigmaA { sigma_a, scale: node.float("scale", 1.0)? as f32 }
+    } else {
+        let eu = node.float("eumelanin", 1.3)? as f32;
+        let pheo = node.float("pheomelanin", 0.2)? as f32;
+        // Mitsuba reads `scale` always, and uses it with sigma_a only.
+        node.float("scale", 1.0)?;
+        HairAbsorption::Pigments(EUMELANIN_SIGMA_A * eu + PHEOMELANIN_SIGMA_A * pheo)
+    };
+    Ok(Material::Hair(Box::new(HairParams {
+        lobes: HairLobes::new(longitudinal, azimuthal, tilt, int / ext),
+        absorption,
+    })))
 }
 
 fn twosided(node: &Node, tex: &mut Textures) -> Result<Material> {
