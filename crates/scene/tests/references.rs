@@ -197,3 +197,9 @@ fn textured_spot_light_matches_mitsuba() {
     // spot_light.xml with a bitmap projected through the cone (`texture`).
     compare("spot_texture", 256);
 }
+
+#[test]
+fn textured_area_lights_match_mitsuba() {
+    // `area` emitters with a bitmap and a checkerboard `radiance`.
+    compare("area_texture", 256);
+}

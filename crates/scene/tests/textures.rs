@@ -261,3 +261,40 @@ fn spot_texture_errors_name_the_line() {
         .unwrap_err();
     assert!(e.contains("not found"), "{e}");
 }
+
+/// An area emitter's `radiance` may be a checkerboard or bitmap (named
+/// `radiance`); a mesh_attribute, a negative colour, a `to_world` or an
+/// unknown parameter is an error at its line; without `radiance` it is 1.
+#[test]
+fn area_radiance_textures_and_errors() {
+    let area = |inner: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<shape type=\"rectangle\"><emitter type=\"area\">\n{inner}\n</emitter></shape></scene>"
+        );
+        let desc = parse_str(&xml, Path::new("area.xml"), &[]).map_err(|e| e.to_string())?;
+        build(&desc, &Overrides::default()).map_err(|e| e.to_string())
+    };
+    let radiance = |j: &penumbra_render::render::RenderJob| match &j.scene.lights[0] {
+        penumbra_render::light::Light::Area(a) => a.radiance.clone(),
+        l => panic!("unexpected light {l:?}"),
+    };
+    let j = area(r#"<texture type="checkerboard" name="radiance"><rgb name="color0" value="0.9"/></texture>"#).unwrap();
+    let t = radiance(&j);
+    assert!(matches!(t, Texture::Checkerboard(_)));
+    assert_eq!(t.eval(&si(0.25, 0.25)), Vec3::splat(0.9));
+    assert_eq!(t.eval(&si(0.75, 0.25)), Vec3::splat(0.2));
+    assert!(j.scene.shape_info.iter().all(|i| i.light.is_some()));
+    assert_eq!(radiance(&area("").unwrap()).constant(), Some(Vec3::ONE));
+    let e =
+        area(r#"<texture type="mesh_attribute" name="radiance"><string name="name" value="vertex_color"/></texture>"#)
+            .unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("mesh_attribute"), "{e}");
+    let e = area(r#"<texture type="checkerboard" name="emission"/>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("named 'radiance'"), "{e}");
+    let e = area(r#"<rgb name="radiance" value="1, -1, 1"/>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("negative"), "{e}");
+    let e = area(r#"<float name="scale" value="2"/>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("scale"), "{e}");
+    let e = area(r#"<transform name="to_world"><translate x="1"/></transform>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("to_world"), "{e}");
+}

@@ -1,6 +1,7 @@
 //! `<emitter>` nodes → [`Light`]s: area emitters inside shapes and the
 //! emitters declared at the top level.
 
+use super::texture::Textures;
 use super::{plugin, resolve, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
@@ -38,17 +39,43 @@ fn ready(light: Light) -> PendingLight {
 }
 
 /// The area emitter `en` attached to the shape `shape_node`, built as
-/// `shape` with id `shape_id`.
-pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
+/// `shape` with id `shape_id`. Its `radiance` (Mitsuba's default 1) is a
+/// colour or a nested `bitmap` / `checkerboard` texture.
+pub(super) fn area(
+    en: &Node,
+    shape_node: &Node,
+    shape: &Shape,
+    shape_id: u32,
+    textures: &mut Textures,
+) -> Result<PendingLight> {
     if en.plugin != "area" {
         return Err(en.error(format!("emitter '{}' cannot be attached to a shape; only 'area' can", en.plugin)));
     }
-    let radiance = en.get_rgb("radiance")?.ok_or_else(|| en.error("area emitter needs a 'radiance' value"))?;
-    en.check_all_used(&[])?;
+    if let Some(c) = en.children_of(Kind::Texture).find(|c| c.name.as_deref() != Some("radiance")) {
+        return Err(LoadError::at(&c.loc, "an area emitter takes one nested texture, named 'radiance'"));
+    }
+    if en.has("to_world") {
+        return Err(LoadError::at(
+            en.loc_of("to_world"),
+            "an area emitter takes no 'to_world': it inherits its shape's transformation (as in Mitsuba)",
+        ));
+    }
+    let radiance = textures.spectrum(en, "radiance", Spectrum::ONE)?;
+    match &radiance {
+        Texture::MeshAttribute(_) => {
+            let loc = &en.children_of(Kind::Texture).next().map_or(en.loc.clone(), |c| c.loc.clone());
+            return Err(LoadError::at(loc, "an area emitter's radiance cannot be a mesh_attribute texture"));
+        }
+        Texture::Constant(c) if c.min_element() < 0.0 => {
+            return Err(LoadError::at(en.loc_of("radiance"), "an area emitter's radiance must not be negative"));
+        }
+        _ => {}
+    }
+    en.check_all_used(&[Kind::Texture])?;
     if shape.area() <= 0.0 {
         return Err(shape_node.error("an area emitter's shape has zero area"));
     }
-    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance: rgb(radiance) })))
+    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance })))
 }
 
 /// An emitter declared at the top level (not attached to a shape).

@@ -171,7 +171,7 @@ impl Builder {
         }
         let light = match emitter {
             Some(en) => {
-                self.lights.push(emitter::area(&en, node, &shape, shape_id)?);
+                self.lights.push(emitter::area(&en, node, &shape, shape_id, &mut self.textures)?);
                 Some((self.lights.len() - 1) as u32)
             }
             None => None,
