@@ -83,8 +83,9 @@ pub struct Camera {
 /// The name the pinhole camera had before the other projections existed.
 pub type PerspectiveCamera = Camera;
 
-/// tan of the half field of view along x for `fov_deg` along `axis`.
-fn tan_half_x(fov_deg: f32, axis: FovAxis, aspect: f32) -> f32 {
+/// tan of the half field of view along x for `fov_deg` along `axis`, on an
+/// image of width / height `aspect`.
+pub fn tan_half_x(fov_deg: f32, axis: FovAxis, aspect: f32) -> f32 {
     let t = (0.5 * fov_deg.to_radians()).tan();
     match axis {
         FovAxis::X => t,

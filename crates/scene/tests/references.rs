@@ -203,3 +203,9 @@ fn textured_area_lights_match_mitsuba() {
     // `area` emitters with a bitmap and a checkerboard `radiance`.
     compare("area_texture", 256);
 }
+
+#[test]
+fn projector_lights_match_mitsuba() {
+    // A bitmap and a constant image projected by `projector` emitters.
+    compare("projector", 256);
+}

@@ -298,3 +298,45 @@ fn area_radiance_textures_and_errors() {
     let e = area(r#"<transform name="to_world"><translate x="1"/></transform>"#).unwrap_err();
     assert!(e.contains("area.xml:3") && e.contains("to_world"), "{e}");
 }
+
+/// A projector's image is a colour or a bitmap named `irradiance`; other
+/// textures, negative values and unknown parameters are errors at their
+/// line. The image's aspect ratio sets the vertical field of view.
+#[test]
+fn projector_parameters_and_errors() {
+    let projector = |inner: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<emitter type=\"projector\">\n{inner}\n</emitter></scene>"
+        );
+        let desc = parse_str(&xml, Path::new("projector.xml"), &[]).map_err(|e| e.to_string())?;
+        build(&desc, &Overrides::default()).map_err(|e| e.to_string())
+    };
+    let j = projector(r#"<float name="fov" value="90"/><float name="scale" value="2"/>"#).unwrap();
+    let penumbra_render::light::Light::Projector(p) = &j.scene.lights[0] else { panic!("a projector") };
+    // On the axis at distance 2: L = π scale E / z².
+    let s = p.sample_li(Vec3::new(0.0, 0.0, 2.0)).unwrap();
+    assert!((s.li - Vec3::splat(std::f32::consts::PI * 2.0 / 4.0)).abs().max_element() < 1e-5, "{}", s.li);
+    // fov 90 along x: the image ends at |x| = z.
+    assert!(p.sample_li(Vec3::new(1.9, 0.0, 2.0)).is_some() && p.sample_li(Vec3::new(2.1, 0.0, 2.0)).is_none());
+    let dir = temp_scene("projector");
+    write_png(dir.parent().unwrap());
+    let bitmap = format!(
+        r#"<float name="fov" value="90"/><texture type="bitmap" name="irradiance"><string name="filename" value="{}"/></texture>"#,
+        dir.parent().unwrap().join("tex.png").display()
+    );
+    let j = projector(&bitmap).unwrap();
+    let penumbra_render::light::Light::Projector(p) = &j.scene.lights[0] else { panic!("a projector") };
+    // A 4x2 image: tan(fov_y / 2) = 1/2.
+    assert!(p.sample_li(Vec3::new(0.0, 0.9, 2.0)).is_some() && p.sample_li(Vec3::new(0.0, 1.1, 2.0)).is_none());
+    let e = projector(r#"<texture type="checkerboard" name="irradiance"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("give a bitmap"), "{e}");
+    let e = projector(r#"<texture type="bitmap" name="image"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("named 'irradiance'"), "{e}");
+    let e = projector(r#"<float name="scale" value="-1"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("negative"), "{e}");
+    let e = projector(r#"<float name="fov" value="180"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("fov"), "{e}");
+    let e = projector(r#"<float name="cutoff_angle" value="20"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("cutoff_angle"), "{e}");
+    std::fs::remove_dir_all(dir.parent().unwrap()).ok();
+}

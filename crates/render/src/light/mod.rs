@@ -26,6 +26,7 @@ pub mod constant;
 pub mod directional;
 pub mod envmap;
 pub mod point;
+pub mod projector;
 pub mod sampler;
 pub mod spot;
 
@@ -35,6 +36,7 @@ pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
 pub use envmap::EnvMapLight;
 pub use point::PointLight;
+pub use projector::ProjectorLight;
 pub use sampler::{LightSampler, LightSelection};
 pub use spot::SpotLight;
 
@@ -72,6 +74,8 @@ pub enum Light {
     Directional(DirectionalLight),
     /// `envmap`: radiance at infinity from a latitude-longitude image.
     EnvMap(EnvMapLight),
+    /// `projector`: an image projected from a point (delta in position).
+    Projector(ProjectorLight),
 }
 
 impl Light {
@@ -84,6 +88,7 @@ impl Light {
             Light::Spot(_) => "spot",
             Light::Directional(_) => "directional",
             Light::EnvMap(_) => "envmap",
+            Light::Projector(_) => "projector",
         }
     }
 
@@ -97,6 +102,7 @@ impl Light {
             Light::Spot(s) => s.sample_li(p_ref),
             Light::Directional(d) => d.sample_li(),
             Light::EnvMap(e) => e.sample_li(u2),
+            Light::Projector(p) => p.sample_li(p_ref),
         }
     }
 
@@ -110,7 +116,7 @@ impl Light {
             Light::Area(a) => hit.map_or(0.0, |hit| a.pdf_li(p_ref, hit, &shapes[a.shape as usize])),
             Light::Constant(c) => c.pdf(),
             Light::EnvMap(e) => e.pdf(wi),
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => 0.0,
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => 0.0,
         }
     }
 
@@ -120,7 +126,7 @@ impl Light {
     pub fn is_environment(&self) -> bool {
         match self {
             Light::Constant(_) | Light::EnvMap(_) => true,
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => false,
+            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => false,
         }
     }
 
@@ -132,7 +138,9 @@ impl Light {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => (Spectrum::ZERO, 0.0),
+            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => {
+                (Spectrum::ZERO, 0.0)
+            }
         }
     }
 
@@ -143,14 +151,16 @@ impl Light {
         match self {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => Spectrum::ZERO,
+            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => {
+                Spectrum::ZERO
+            }
         }
     }
 
     /// Dirac-delta lights (point, spot, directional): reachable only by light sampling.
     pub fn is_delta(&self) -> bool {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => true,
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => true,
             Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) => false,
         }
     }
@@ -166,6 +176,7 @@ impl Light {
             Light::Spot(s) => s.power(),
             Light::Directional(d) => d.power(),
             Light::EnvMap(e) => e.power(scene_radius),
+            Light::Projector(p) => p.power(),
         }
     }
 
@@ -178,6 +189,7 @@ impl Light {
             Light::Area(a) => Some(a.bounds(&shapes[a.shape as usize])),
             Light::Point(p) => Some(p.bounds()),
             Light::Spot(s) => Some(s.bounds()),
+            Light::Projector(p) => Some(p.bounds()),
             Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => None,
         }
     }
@@ -206,6 +218,12 @@ mod tests {
             Light::Point(PointLight { position: Vec3::new(0.0, 2.0, 1.0), intensity: Spectrum::ONE }),
             Light::Spot(SpotLight::new(Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)), Spectrum::ONE, 60.0, 30.0)),
             Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Spectrum::ONE, scene_radius: 3.0 }),
+            Light::Projector(ProjectorLight::new(
+                crate::math::look_at(Vec3::new(0.0, 2.0, 2.0), Vec3::ZERO, Vec3::Y),
+                Spectrum::new(1.0, 0.5, 0.2).into(),
+                2.0,
+                Vec2::new(0.6, 0.4),
+            )),
         ];
         Scene::new(
             shapes,
@@ -218,7 +236,7 @@ mod tests {
     #[test]
     fn names_are_mitsubas_plugins() {
         let names: Vec<&str> = every_light().lights.iter().map(Light::name).collect();
-        assert_eq!(names, ["area", "area", "constant", "envmap", "point", "spot", "directional"]);
+        assert_eq!(names, ["area", "area", "constant", "envmap", "point", "spot", "directional", "projector"]);
     }
 
     /// `pdf_li` is the density `sample_li` reports (at the emitter point the
@@ -228,7 +246,7 @@ mod tests {
     fn pdf_li_is_the_sampled_density() {
         let scene = every_light();
         let p_ref = Vec3::new(0.1, 0.2, 0.3);
-        let mut checked = [0usize; 7];
+        let mut checked = [0usize; 8];
         for (i, light) in scene.lights.iter().enumerate() {
             for k in 0..256 {
                 let u = Vec2::new((k % 16) as f32 + 0.5, (k / 16) as f32 + 0.5) / 16.0;

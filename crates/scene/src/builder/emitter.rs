@@ -7,8 +7,11 @@ use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
 use glam::{DVec3, Vec3};
+use penumbra_render::camera::tan_half_x;
 use penumbra_render::geometry::Shape;
-use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
+use penumbra_render::light::{
+    AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight, SpotLight,
+};
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
 
@@ -22,6 +25,7 @@ pub(super) const EMITTERS: &Plugins<BuildEmitter> = &[
     ("point", point),
     ("spot", spot),
     ("directional", directional),
+    ("projector", projector),
 ];
 
 fn rgb(v: [f64; 3]) -> Spectrum {
@@ -81,8 +85,8 @@ pub(super) fn area(
 /// An emitter declared at the top level (not attached to a shape).
 pub(super) fn top_level(node: &Node) -> Result<PendingLight> {
     let light = plugin(EMITTERS, node)?(node)?;
-    // Only a spot light takes a nested texture (its `texture`, checked there).
-    node.check_all_used(if node.plugin == "spot" { &[Kind::Texture] } else { &[] })?;
+    // Only spot and projector lights take a nested texture (checked there).
+    node.check_all_used(if matches!(node.plugin.as_str(), "spot" | "projector") { &[Kind::Texture] } else { &[] })?;
     Ok(light)
 }
 
@@ -164,4 +168,43 @@ fn envmap(node: &Node) -> Result<PendingLight> {
     let light = EnvMapLight::new(img.width as usize, img.height as usize, img.pixels, to_world.as_mat4(), scale as f32)
         .map_err(|e| LoadError::at(&loc, format!("'{}': {e}", path.display())))?;
     Ok(ready(Light::EnvMap(light)))
+}
+
+/// Mitsuba's `projector`: `irradiance` (a colour or a nested bitmap named
+/// `irradiance`, default 1), `scale`, `to_world` and the perspective
+/// sensor's `fov` / `focal_length` / `fov_axis` over the image's aspect ratio.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn projector(node: &Node) -> Result<PendingLight> {
+    let to_world = node.transform("to_world")?;
+    if let Some(c) = node.children_of(Kind::Texture).find(|c| c.name.as_deref() != Some("irradiance")) {
+        return Err(LoadError::at(&c.loc, "a projector takes one nested texture, named 'irradiance'"));
+    }
+    let irradiance = match node.children_of(Kind::Texture).next() {
+        Some(child) => {
+            let t = super::texture::build_bitmap_texture(&child.node)?;
+            child.node.check_all_used(&[])?;
+            t
+        }
+        None => {
+            let c = rgb(node.get_rgb("irradiance")?.unwrap_or([1.0; 3]));
+            if c.min_element() < 0.0 {
+                return Err(LoadError::at(node.loc_of("irradiance"), "projector: irradiance must not be negative"));
+            }
+            Texture::Constant(c)
+        }
+    };
+    let scale = node.float("scale", 1.0)?;
+    if !(scale >= 0.0) {
+        return Err(LoadError::at(node.loc_of("scale"), "projector: scale must not be negative"));
+    }
+    let (w, h) = match &irradiance {
+        Texture::Bitmap(b) => b.resolution(),
+        _ => (1, 1),
+    };
+    let aspect = w as f32 / h as f32;
+    let (fov, axis) = super::sensor::fov_and_axis(node)?;
+    let tan_x = tan_half_x(fov as f32, axis, aspect);
+    let tan_half = glam::Vec2::new(tan_x, tan_x / aspect);
+    let light = ProjectorLight::new(to_world.as_mat4(), irradiance, scale as f32, tan_half);
+    Ok(ready(Light::Projector(light)))
 }

@@ -58,7 +58,7 @@ pub(super) enum SensorModel {
     RadianceMeter { to_world: glam::DMat4 },
 }
 
-fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
+pub(super) fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
     let (fov, forced_axis) = field_of_view(node)?;
     let axis = match node.string("fov_axis", "x")?.as_str() {
         _ if forced_axis.is_some() => forced_axis.unwrap_or(FovAxis::X),
