@@ -209,3 +209,9 @@ fn projector_lights_match_mitsuba() {
     // A bitmap and a constant image projected by `projector` emitters.
     compare("projector", 256);
 }
+
+#[test]
+fn directionalarea_emitters_match_mitsuba() {
+    // `directionalarea` shapes: their BSDF (or a black one), no emission.
+    compare("directionalarea", 256);
+}

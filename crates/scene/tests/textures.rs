@@ -340,3 +340,35 @@ fn projector_parameters_and_errors() {
     assert!(e.contains("projector.xml:3") && e.contains("cutoff_angle"), "{e}");
     std::fs::remove_dir_all(dir.parent().unwrap()).ok();
 }
+
+/// `directionalarea` sits inside a shape with a colour `radiance` (default
+/// 1); at the top level, with a texture, a negative radiance or an unknown
+/// parameter it is an error at its line.
+#[test]
+fn directionalarea_parameters_and_errors() {
+    let scene = |shape_inner: &str, top: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<shape type=\"rectangle\">\n{shape_inner}\n</shape>\n{top}</scene>"
+        );
+        let desc = parse_str(&xml, Path::new("da.xml"), &[]).map_err(|e| e.to_string())?;
+        build(&desc, &Overrides::default()).map_err(|e| e.to_string())
+    };
+    let j = scene(r#"<emitter type="directionalarea"/>"#, "").unwrap();
+    let penumbra_render::light::Light::DirectionalArea(d) = &j.scene.lights[0] else { panic!("directionalarea") };
+    assert_eq!((d.shape, d.radiance), (0, Vec3::ONE));
+    assert_eq!(j.scene.shape_info[0].light, Some(0));
+    let j = scene(r#"<emitter type="directionalarea"><rgb name="radiance" value="2, 3, 4"/></emitter>"#, "").unwrap();
+    let penumbra_render::light::Light::DirectionalArea(d) = &j.scene.lights[0] else { panic!("directionalarea") };
+    assert_eq!(d.radiance, Vec3::new(2.0, 3.0, 4.0));
+    let e = scene("", r#"<emitter type="directionalarea"/>"#).unwrap_err();
+    assert!(e.contains("da.xml:5") && e.contains("nested inside a shape"), "{e}");
+    let e = scene(r#"<emitter type="directionalarea"><rgb name="radiance" value="-1"/></emitter>"#, "").unwrap_err();
+    assert!(e.contains("da.xml:3") && e.contains("negative"), "{e}");
+    let e = scene(r#"<emitter type="directionalarea"><texture type="checkerboard" name="radiance"/></emitter>"#, "")
+        .unwrap_err();
+    assert!(e.contains("da.xml:3") && e.contains("textured"), "{e}");
+    let e = scene(r#"<emitter type="directionalarea"><float name="scale" value="2"/></emitter>"#, "").unwrap_err();
+    assert!(e.contains("da.xml:3") && e.contains("scale"), "{e}");
+    let e = scene(r#"<emitter type="point"/>"#, "").unwrap_err();
+    assert!(e.contains("only 'area' and 'directionalarea'"), "{e}");
+}

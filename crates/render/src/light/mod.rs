@@ -24,6 +24,7 @@ pub mod area;
 pub mod bvh;
 pub mod constant;
 pub mod directional;
+pub mod directionalarea;
 pub mod envmap;
 pub mod point;
 pub mod projector;
@@ -34,6 +35,7 @@ pub use area::AreaLight;
 pub use bvh::LightBounds;
 pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
+pub use directionalarea::DirectionalAreaLight;
 pub use envmap::EnvMapLight;
 pub use point::PointLight;
 pub use projector::ProjectorLight;
@@ -76,6 +78,9 @@ pub enum Light {
     EnvMap(EnvMapLight),
     /// `projector`: an image projected from a point (delta in position).
     Projector(ProjectorLight),
+    /// `directionalarea`: emission along a shape's normals (delta in
+    /// direction), reached by no path this renderer traces.
+    DirectionalArea(DirectionalAreaLight),
 }
 
 impl Light {
@@ -89,6 +94,7 @@ impl Light {
             Light::Directional(_) => "directional",
             Light::EnvMap(_) => "envmap",
             Light::Projector(_) => "projector",
+            Light::DirectionalArea(_) => "directionalarea",
         }
     }
 
@@ -103,6 +109,7 @@ impl Light {
             Light::Directional(d) => d.sample_li(),
             Light::EnvMap(e) => e.sample_li(u2),
             Light::Projector(p) => p.sample_li(p_ref),
+            Light::DirectionalArea(d) => d.sample_li(),
         }
     }
 
@@ -116,7 +123,11 @@ impl Light {
             Light::Area(a) => hit.map_or(0.0, |hit| a.pdf_li(p_ref, hit, &shapes[a.shape as usize])),
             Light::Constant(c) => c.pdf(),
             Light::EnvMap(e) => e.pdf(wi),
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => 0.0,
+            Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => 0.0,
         }
     }
 
@@ -126,7 +137,12 @@ impl Light {
     pub fn is_environment(&self) -> bool {
         match self {
             Light::Constant(_) | Light::EnvMap(_) => true,
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => false,
+            Light::Area(_)
+            | Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => false,
         }
     }
 
@@ -138,9 +154,12 @@ impl Light {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => {
-                (Spectrum::ZERO, 0.0)
-            }
+            Light::Area(_)
+            | Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => (Spectrum::ZERO, 0.0),
         }
     }
 
@@ -151,16 +170,24 @@ impl Light {
         match self {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => {
-                Spectrum::ZERO
-            }
+            Light::Area(_)
+            | Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => Spectrum::ZERO,
         }
     }
 
-    /// Dirac-delta lights (point, spot, directional): reachable only by light sampling.
+    /// Dirac-delta lights (point, spot, directional, projector,
+    /// directionalarea): reachable only by light sampling.
     pub fn is_delta(&self) -> bool {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) | Light::Projector(_) => true,
+            Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => true,
             Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) => false,
         }
     }
@@ -177,6 +204,8 @@ impl Light {
             Light::Directional(d) => d.power(),
             Light::EnvMap(e) => e.power(scene_radius),
             Light::Projector(p) => p.power(),
+            // No weight for a light no sample can reach (see directionalarea.rs).
+            Light::DirectionalArea(_) => Spectrum::ZERO,
         }
     }
 
@@ -190,6 +219,7 @@ impl Light {
             Light::Point(p) => Some(p.bounds()),
             Light::Spot(s) => Some(s.bounds()),
             Light::Projector(p) => Some(p.bounds()),
+            Light::DirectionalArea(d) => Some(d.bounds(&shapes[d.shape as usize])),
             Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => None,
         }
     }

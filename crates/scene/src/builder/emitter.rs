@@ -10,7 +10,8 @@ use glam::{DVec3, Vec3};
 use penumbra_render::camera::tan_half_x;
 use penumbra_render::geometry::Shape;
 use penumbra_render::light::{
-    AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight, SpotLight,
+    AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight,
+    SpotLight,
 };
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
@@ -20,6 +21,7 @@ type BuildEmitter = fn(&Node) -> Result<PendingLight>;
 
 pub(super) const EMITTERS: &Plugins<BuildEmitter> = &[
     ("area (inside a shape)", area_at_top_level),
+    ("directionalarea (inside a shape)", area_at_top_level),
     ("constant", constant),
     ("envmap", envmap),
     ("point", point),
@@ -52,8 +54,14 @@ pub(super) fn area(
     shape_id: u32,
     textures: &mut Textures,
 ) -> Result<PendingLight> {
+    if en.plugin == "directionalarea" {
+        return directional_area(en, shape_node, shape, shape_id);
+    }
     if en.plugin != "area" {
-        return Err(en.error(format!("emitter '{}' cannot be attached to a shape; only 'area' can", en.plugin)));
+        return Err(en.error(format!(
+            "emitter '{}' cannot be attached to a shape; only 'area' and 'directionalarea' can",
+            en.plugin
+        )));
     }
     if let Some(c) = en.children_of(Kind::Texture).find(|c| c.name.as_deref() != Some("radiance")) {
         return Err(LoadError::at(&c.loc, "an area emitter takes one nested texture, named 'radiance'"));
@@ -91,7 +99,30 @@ pub(super) fn top_level(node: &Node) -> Result<PendingLight> {
 }
 
 fn area_at_top_level(node: &Node) -> Result<PendingLight> {
-    Err(node.error("an 'area' emitter must be nested inside a shape"))
+    Err(node.error(format!("the '{}' emitter must be nested inside a shape", node.plugin)))
+}
+
+/// Mitsuba's `directionalarea` on the shape `shape_node`: `radiance` (a
+/// colour, default 1) along the shape's normals.
+fn directional_area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
+    if let Some(c) = en.children_of(Kind::Texture).next() {
+        return Err(LoadError::at(&c.loc, "directionalarea: a textured radiance is not supported; give a colour"));
+    }
+    if en.has("to_world") {
+        return Err(LoadError::at(
+            en.loc_of("to_world"),
+            "a directionalarea emitter takes no 'to_world': it inherits its shape's transformation (as in Mitsuba)",
+        ));
+    }
+    let radiance = rgb(en.get_rgb("radiance")?.unwrap_or([1.0; 3]));
+    if radiance.min_element() < 0.0 {
+        return Err(LoadError::at(en.loc_of("radiance"), "directionalarea: radiance must not be negative"));
+    }
+    en.check_all_used(&[])?;
+    if shape.area() <= 0.0 {
+        return Err(shape_node.error("a directionalarea emitter's shape has zero area"));
+    }
+    Ok(ready(Light::DirectionalArea(DirectionalAreaLight { shape: shape_id, radiance })))
 }
 
 fn constant(node: &Node) -> Result<PendingLight> {

@@ -146,7 +146,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             // an area emitter or a sampler at the top level, referenced from
             // a shape or the sensor): built where it is used.
             Kind::Emitter | Kind::Sampler | Kind::Film | Kind::Rfilter
-                if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || node.plugin == "area") => {}
+                if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || matches!(node.plugin.as_str(), "area" | "directionalarea")) => {}
             Kind::Shape => b.shape(node)?,
             Kind::Emitter => b.lights.push(emitter::top_level(node)?),
             Kind::Sensor => {
