@@ -1,19 +1,18 @@
 //! Mitsuba `projector`: a pinhole projecting `irradiance` (a colour or a
-//! texture) into the scene along its local +z, the reciprocal of the
+//! bitmap) into the scene along its local +z, the reciprocal of the
 //! `perspective` sensor (the same fov conventions and film-to-direction map).
 //! A Dirac delta in position: only light sampling reaches it.
 //!
 //! | parameter    | type              | default |
 //! |--------------|-------------------|---------|
-//! | irradiance   | rgb or texture    | 1 (irradiance on the image plane z = 1) |
+//! | irradiance   | rgb or bitmap     | 1 (irradiance on the image plane z = 1) |
 //! | scale        | float             | 1 |
 //! | to_world     | transform         | identity (position and orientation) |
 //! | fov          | float             | (degrees, full angle; or `focal_length`) |
 //! | focal_length | string            | 50mm |
 //! | fov_axis     | string            | x (y, diagonal, smaller, larger) |
 //!
-//! The image's aspect ratio is the texture's (1 for a colour or a
-//! checkerboard). A point p at local (x, y, z), z > 0, maps to the uv of the
+//! The image's aspect ratio is the bitmap's (1 for a colour). A point p at local (x, y, z), z > 0, maps to the uv of the
 //! perspective sensor, uv = (½ − ½ x / (z t_x), ½ − ½ y / (z t_y)), and
 //! receives nothing outside uv ∈ [0, 1]². Its incident radiance, as a delta,
 //! is Mitsuba's (projector.cpp, `sample_direction`):
