@@ -77,6 +77,9 @@ SPP = {
     "spot_texture": 32768,
     "pplastic": 65536,
     "hair": 65536,
+    "area_texture": 16384,
+    "projector": 16384,
+    "directionalarea": 8192,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

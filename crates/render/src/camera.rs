@@ -1,5 +1,5 @@
-//! Cameras: Mitsuba's `perspective`, `thinlens`, `orthographic` and
-//! `radiancemeter` sensors.
+//! Cameras: Mitsuba's `perspective`, `thinlens`, `orthographic`,
+//! `radiancemeter`, `irradiancemeter` and `distant` sensors.
 //! All look down their local +z, with +y up and image x growing towards
 //! local -x (Mitsuba's convention, which makes `lookat` images come out
 //! unmirrored).
@@ -22,11 +22,12 @@
 //! orthographic camera maps the film to [-1, 1] x [-1/aspect, 1/aspect] on
 //! the near plane (z = `near_clip`) in camera space, then through `to_world`.
 
-use crate::geometry::Ray;
-use crate::math::Mat4;
-use crate::sampling::warp::sample_concentric_disk;
+use crate::geometry::{offset_origin, Ray, Shape};
+use crate::math::{Frame, Mat4, PI};
+use crate::sampling::warp::{sample_concentric_disk, sample_cosine_hemisphere};
 use crate::sampling::SampleStream;
 use glam::{Vec2, Vec3};
+use std::sync::Arc;
 
 /// Mitsuba's `fov_axis`: which film extent `fov` spans.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,6 +64,26 @@ pub enum Projection {
     /// Mitsuba `radiancemeter`: every sample is the one ray along the
     /// sensor's local +z from its origin (nudged forward by the ray epsilon).
     RadianceMeter,
+    /// Mitsuba `irradiancemeter`: a point of [`Camera::shape`] uniform by
+    /// area (from the film position), a cosine-weighted direction about its
+    /// normal (from the aperture sample), each ray weighted π
+    /// ([`Camera::ray_weight`]): the mean over the shape of the irradiance
+    /// E = ∫ L cos θ dω = π E_cos\[L\].
+    IrradianceMeter,
+    /// Mitsuba `distant`: rays along the sensor's local +z, starting outside
+    /// the scene's bounding sphere (centre `center`, radius `radius`) and
+    /// aimed at `target`, at a point of [`Camera::shape`] uniform by area
+    /// (when set), or at a point of the sphere's cross section uniform by
+    /// area (otherwise), from the aperture sample: the radiance leaving the
+    /// scene towards -z, averaged over the target.
+    Distant {
+        /// A target point, for `target` given as a point.
+        target: Option<Vec3>,
+        /// Centre of the scene's bounding sphere.
+        center: Vec3,
+        /// Its radius, as Mitsuba widens it: max(ε, r (1 + ε)), ε the ray epsilon.
+        radius: f32,
+    },
 }
 
 /// A camera: placement, field of view, clip range and projection.
@@ -78,13 +99,20 @@ pub struct Camera {
     pub far_clip: f32,
     /// How film positions turn into rays.
     pub projection: Projection,
+    /// The shape an `irradiancemeter` measures over, or a `distant` sensor's
+    /// target shape (world space; not part of the scene for `distant`).
+    pub shape: Option<Arc<Shape>>,
 }
+
+/// Mitsuba's `math::RayEpsilon<float>`.
+const RAY_EPS: f32 = crate::math::RAY_EPSILON;
 
 /// The name the pinhole camera had before the other projections existed.
 pub type PerspectiveCamera = Camera;
 
-/// tan of the half field of view along x for `fov_deg` along `axis`.
-fn tan_half_x(fov_deg: f32, axis: FovAxis, aspect: f32) -> f32 {
+/// tan of the half field of view along x for `fov_deg` along `axis`, on an
+/// image of width / height `aspect`.
+pub fn tan_half_x(fov_deg: f32, axis: FovAxis, aspect: f32) -> f32 {
     let t = (0.5 * fov_deg.to_radians()).tan();
     match axis {
         FovAxis::X => t,
@@ -126,6 +154,7 @@ impl Camera {
             near_clip: near,
             far_clip: far,
             projection: Projection::Pinhole,
+            shape: None,
         }
     }
 
@@ -159,6 +188,7 @@ impl Camera {
             near_clip: near,
             far_clip: far,
             projection: Projection::Orthographic { inv_aspect: 1.0 / aspect },
+            shape: None,
         }
     }
 
@@ -171,13 +201,67 @@ impl Camera {
             near_clip: 0.0,
             far_clip: f32::INFINITY,
             projection: Projection::RadianceMeter,
+            shape: None,
+        }
+    }
+
+    /// Mitsuba's `irradiancemeter` on `shape` (world space, positive area).
+    pub fn irradiance_meter(shape: Shape) -> Self {
+        Camera {
+            world_from_camera: Mat4::IDENTITY,
+            tan_half: Vec2::ZERO,
+            near_clip: 0.0,
+            far_clip: f32::INFINITY,
+            projection: Projection::IrradianceMeter,
+            shape: Some(Arc::new(shape)),
+        }
+    }
+
+    /// Mitsuba's `distant`, looking along `world_from_camera`'s +z, at
+    /// `target` (a point, or else `shape` when given, or else the whole
+    /// cross section); [`Camera::set_scene_bounds`] must give it the
+    /// scene's bounding sphere before rendering.
+    pub fn distant(world_from_camera: Mat4, target: Option<Vec3>, shape: Option<Shape>) -> Self {
+        Camera {
+            world_from_camera,
+            tan_half: Vec2::ZERO,
+            near_clip: 0.0,
+            far_clip: f32::INFINITY,
+            projection: Projection::Distant { target, center: Vec3::ZERO, radius: RAY_EPS },
+            shape: shape.map(Arc::new),
+        }
+    }
+
+    /// For a `distant` sensor: the scene's bounding box `[min, max]`, whose
+    /// bounding sphere (Mitsuba's `bbox().bounding_sphere()`, widened as in
+    /// its `set_scene`) places the rays' origins. Other cameras ignore it.
+    pub fn set_scene_bounds(&mut self, min: Vec3, max: Vec3) {
+        if let Projection::Distant { center, radius, .. } = &mut self.projection {
+            let c = 0.5 * (min + max);
+            let r = if (max - min).cmpge(Vec3::ZERO).all() { (max - c).length() } else { 0.0 };
+            *center = if c.is_finite() { c } else { Vec3::ZERO };
+            *radius = RAY_EPS.max(r * (1.0 + RAY_EPS));
+        }
+    }
+
+    /// The weight of every camera ray's radiance: π for `irradiancemeter`
+    /// (cosine-weighted directions), 1 otherwise.
+    #[inline]
+    pub fn ray_weight(&self) -> f32 {
+        if self.projection == Projection::IrradianceMeter {
+            PI
+        } else {
+            1.0
         }
     }
 
     /// Whether rays need an aperture sample (two more dimensions).
     #[inline]
     pub fn needs_aperture_sample(&self) -> bool {
-        matches!(self.projection, Projection::ThinLens { .. })
+        matches!(
+            self.projection,
+            Projection::ThinLens { .. } | Projection::IrradianceMeter | Projection::Distant { .. }
+        )
     }
 
     /// Ray through film position `s` in [0, 1)² (x right, y down), drawing
@@ -230,6 +314,36 @@ impl Camera {
             Projection::RadianceMeter => {
                 let d = self.world_from_camera.transform_vector3(Vec3::Z).normalize();
                 let o = self.world_from_camera.transform_point3(Vec3::ZERO) + d * crate::math::RAY_EPSILON;
+                Ray::new(o, d, f32::INFINITY)
+            }
+            Projection::IrradianceMeter => {
+                let Some(shape) = self.shape.as_deref() else { return Ray::new(Vec3::ZERO, Vec3::Z, 0.0) };
+                let ps = shape.sample_point(s);
+                // About the shading normal where a mesh interpolates one, as
+                // Mitsuba's `sample_position`; the geometric one otherwise.
+                let n = match shape {
+                    Shape::Mesh(m) if !m.face_normals && !m.mesh.normals.is_empty() => {
+                        let t = m.mesh.indices[ps.prim as usize].map(|i| m.mesh.normals[i as usize]);
+                        let b = ps.param;
+                        ((1.0 - b.x - b.y) * t[0] + b.x * t[1] + b.y * t[2]).normalize_or(ps.n)
+                    }
+                    _ => ps.n,
+                };
+                let d = Frame::from_normal(n).to_world(sample_cosine_hemisphere(a));
+                Ray::new(offset_origin(ps.p, ps.n, d), d, f32::INFINITY)
+            }
+            Projection::Distant { target, center, radius } => {
+                let d = self.world_from_camera.transform_vector3(Vec3::Z).normalize();
+                // Mitsuba: 2r behind a target, or r behind the cross section.
+                let o = match (target, self.shape.as_deref()) {
+                    (Some(t), _) => t - 2.0 * radius * d,
+                    (None, Some(shape)) => shape.sample_point(a).p - 2.0 * radius * d,
+                    (None, None) => {
+                        let q = sample_concentric_disk(a);
+                        let perp = self.world_from_camera.transform_vector3(Vec3::new(q.x, q.y, 0.0));
+                        center + perp * radius - d * radius
+                    }
+                };
                 Ray::new(o, d, f32::INFINITY)
             }
         }

@@ -58,8 +58,9 @@ pub struct Scene {
     pub accel: Accel,
     /// How `sample_light` picks a light (see [`Scene::set_light_selection`]).
     light_sampler: LightSampler,
-    /// [`Material::reads_uv`] per material: hits on the others skip the
-    /// surface parameterisation.
+    /// Per shape: whether its hits need the surface parameterisation
+    /// ([`Material::reads_uv`] of its material, or an area light with a
+    /// textured radiance); hits on the others skip it.
     reads_uv: Vec<bool>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
@@ -135,7 +136,14 @@ impl Scene {
     ) -> Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
-        let reads_uv = materials.iter().map(Material::reads_uv).collect();
+        let reads_uv = shape_info
+            .iter()
+            .map(|info| {
+                let textured =
+                    matches!(info.light.map(|l| &lights[l as usize]), Some(Light::Area(a)) if a.is_textured());
+                materials.get(info.material as usize).is_none_or(Material::reads_uv) || textured
+            })
+            .collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };
         Scene {
             shapes,
@@ -196,8 +204,7 @@ impl Scene {
     #[inline]
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let (id, i, t, uv) = (hit.shape, hit.index as usize, hit.t, hit.uv);
-        let material = self.shape_info[id as usize].material as usize;
-        let param = self.reads_uv.get(material).copied().unwrap_or(true);
+        let param = self.reads_uv[id as usize];
         let shape = &self.shapes[id as usize];
         // Instances and their flattened geometry take the same path (the same frames).
         if hit.instance == Hit::NOT_INSTANCED {
@@ -286,7 +293,7 @@ impl Scene {
     pub fn emitted(&self, si: &SurfaceInteraction) -> Spectrum {
         match self.shape_info[si.shape as usize].light {
             Some(l) => match &self.lights[l as usize] {
-                Light::Area(a) => a.emitted(si.sh_frame.n, si.wo),
+                Light::Area(a) => a.emitted(si),
                 _ => Spectrum::ZERO,
             },
             None => Spectrum::ZERO,
@@ -345,7 +352,7 @@ mod tests {
         let lights = vec![
             Light::Point(PointLight { position: Vec3::X, intensity: Vec3::splat(1.0) }),
             Light::Point(PointLight { position: Vec3::Y, intensity: Vec3::splat(5.0) }),
-            Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(2.0) }),
+            Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(2.0).into() }),
         ];
         Scene::new(shapes, info, materials, lights)
     }
@@ -394,7 +401,7 @@ mod tests {
         let shapes = vec![Shape::disk(light, false), Shape::disk(floor, false)];
         let info = vec![ShapeInfo { material: 0, light: Some(0) }, ShapeInfo { material: 0, light: None }];
         let materials = vec![Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Vec3::splat(0.5).into() })];
-        let lights = vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::ONE })];
+        let lights = vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::ONE.into() })];
         let scene = Scene::new(shapes, info, materials, lights);
         for x in [5.0f32, 20.0, 40.0] {
             let si = scene.intersect(&Ray::new(Vec3::new(x, 5.0, 0.0), -Vec3::Y, f32::INFINITY)).unwrap();

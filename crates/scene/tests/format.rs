@@ -142,7 +142,7 @@ fn spectrum_files_are_read_through_the_search_path() {
     };
     assert_close("paint.spd", [r.x as f64, r.y as f64, r.z as f64], [0.488679, 0.705918, 0.566785], 2e-5);
     let Light::Area(area) = &scene.lights[0] else { panic!("area light expected") };
-    let e = area.radiance;
+    let e = area.radiance.constant().expect("a constant radiance");
     assert_close("radiance", [e.x as f64, e.y as f64, e.z as f64], EMISSIONS[0].1, 2e-5);
 
     // As an emission spectrum, and with comments and blank lines.

@@ -96,7 +96,11 @@ const README_ROWS: &[(&str, &[Kind])] = &[
 ];
 
 /// Entries of the code's lists that the README names differently.
-const README_NAMES: &[(&str, &str)] = &[("area (inside a shape)", "area")];
+const README_NAMES: &[(&str, &str)] = &[
+    ("area (inside a shape)", "area"),
+    ("directionalarea (inside a shape)", "directionalarea"),
+    ("irradiancemeter (inside a shape)", "irradiancemeter"),
+];
 
 /// The names in a README "supported" list: comma-separated plugin names, where
 /// "direct (and Penumbra's bruteforce)" names direct and bruteforce.

@@ -211,3 +211,21 @@ fn hair_matches_mitsuba() {
     // sphere (along the meridians).
     compare("hair", 256);
 }
+
+#[test]
+fn textured_area_lights_match_mitsuba() {
+    // `area` emitters with a bitmap and a checkerboard `radiance`.
+    compare("area_texture", 256);
+}
+
+#[test]
+fn projector_lights_match_mitsuba() {
+    // A bitmap and a constant image projected by `projector` emitters.
+    compare("projector", 256);
+}
+
+#[test]
+fn directionalarea_emitters_match_mitsuba() {
+    // `directionalarea` shapes: their BSDF (or a black one), no emission.
+    compare("directionalarea", 256);
+}

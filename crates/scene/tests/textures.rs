@@ -261,3 +261,114 @@ fn spot_texture_errors_name_the_line() {
         .unwrap_err();
     assert!(e.contains("not found"), "{e}");
 }
+
+/// An area emitter's `radiance` may be a checkerboard or bitmap (named
+/// `radiance`); a mesh_attribute, a negative colour, a `to_world` or an
+/// unknown parameter is an error at its line; without `radiance` it is 1.
+#[test]
+fn area_radiance_textures_and_errors() {
+    let area = |inner: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<shape type=\"rectangle\"><emitter type=\"area\">\n{inner}\n</emitter></shape></scene>"
+        );
+        let desc = parse_str(&xml, Path::new("area.xml"), &[]).map_err(|e| e.to_string())?;
+        build(&desc, &Overrides::default()).map_err(|e| e.to_string())
+    };
+    let radiance = |j: &penumbra_render::render::RenderJob| match &j.scene.lights[0] {
+        penumbra_render::light::Light::Area(a) => a.radiance.clone(),
+        l => panic!("unexpected light {l:?}"),
+    };
+    let j = area(r#"<texture type="checkerboard" name="radiance"><rgb name="color0" value="0.9"/></texture>"#).unwrap();
+    let t = radiance(&j);
+    assert!(matches!(t, Texture::Checkerboard(_)));
+    assert_eq!(t.eval(&si(0.25, 0.25)), Vec3::splat(0.9));
+    assert_eq!(t.eval(&si(0.75, 0.25)), Vec3::splat(0.2));
+    assert!(j.scene.shape_info.iter().all(|i| i.light.is_some()));
+    assert_eq!(radiance(&area("").unwrap()).constant(), Some(Vec3::ONE));
+    let e =
+        area(r#"<texture type="mesh_attribute" name="radiance"><string name="name" value="vertex_color"/></texture>"#)
+            .unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("mesh_attribute"), "{e}");
+    let e = area(r#"<texture type="checkerboard" name="emission"/>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("named 'radiance'"), "{e}");
+    let e = area(r#"<rgb name="radiance" value="1, -1, 1"/>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("negative"), "{e}");
+    let e = area(r#"<float name="scale" value="2"/>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("scale"), "{e}");
+    let e = area(r#"<transform name="to_world"><translate x="1"/></transform>"#).unwrap_err();
+    assert!(e.contains("area.xml:3") && e.contains("to_world"), "{e}");
+}
+
+/// A projector's image is a colour or a bitmap named `irradiance`; other
+/// textures, negative values and unknown parameters are errors at their
+/// line. The image's aspect ratio sets the vertical field of view.
+#[test]
+fn projector_parameters_and_errors() {
+    let projector = |inner: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<emitter type=\"projector\">\n{inner}\n</emitter></scene>"
+        );
+        let desc = parse_str(&xml, Path::new("projector.xml"), &[]).map_err(|e| e.to_string())?;
+        build(&desc, &Overrides::default()).map_err(|e| e.to_string())
+    };
+    let j = projector(r#"<float name="fov" value="90"/><float name="scale" value="2"/>"#).unwrap();
+    let penumbra_render::light::Light::Projector(p) = &j.scene.lights[0] else { panic!("a projector") };
+    // On the axis at distance 2: L = π scale E / z².
+    let s = p.sample_li(Vec3::new(0.0, 0.0, 2.0)).unwrap();
+    assert!((s.li - Vec3::splat(std::f32::consts::PI * 2.0 / 4.0)).abs().max_element() < 1e-5, "{}", s.li);
+    // fov 90 along x: the image ends at |x| = z.
+    assert!(p.sample_li(Vec3::new(1.9, 0.0, 2.0)).is_some() && p.sample_li(Vec3::new(2.1, 0.0, 2.0)).is_none());
+    let dir = temp_scene("projector");
+    write_png(dir.parent().unwrap());
+    let bitmap = format!(
+        r#"<float name="fov" value="90"/><texture type="bitmap" name="irradiance"><string name="filename" value="{}"/></texture>"#,
+        dir.parent().unwrap().join("tex.png").display()
+    );
+    let j = projector(&bitmap).unwrap();
+    let penumbra_render::light::Light::Projector(p) = &j.scene.lights[0] else { panic!("a projector") };
+    // A 4x2 image: tan(fov_y / 2) = 1/2.
+    assert!(p.sample_li(Vec3::new(0.0, 0.9, 2.0)).is_some() && p.sample_li(Vec3::new(0.0, 1.1, 2.0)).is_none());
+    let e = projector(r#"<texture type="checkerboard" name="irradiance"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("give a bitmap"), "{e}");
+    let e = projector(r#"<texture type="bitmap" name="image"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("named 'irradiance'"), "{e}");
+    let e = projector(r#"<float name="scale" value="-1"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("negative"), "{e}");
+    let e = projector(r#"<float name="fov" value="180"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("fov"), "{e}");
+    let e = projector(r#"<float name="cutoff_angle" value="20"/>"#).unwrap_err();
+    assert!(e.contains("projector.xml:3") && e.contains("cutoff_angle"), "{e}");
+    std::fs::remove_dir_all(dir.parent().unwrap()).ok();
+}
+
+/// `directionalarea` sits inside a shape with a colour `radiance` (default
+/// 1); at the top level, with a texture, a negative radiance or an unknown
+/// parameter it is an error at its line.
+#[test]
+fn directionalarea_parameters_and_errors() {
+    let scene = |shape_inner: &str, top: &str| {
+        let xml = format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\"/></sensor>\n<shape type=\"rectangle\">\n{shape_inner}\n</shape>\n{top}</scene>"
+        );
+        let desc = parse_str(&xml, Path::new("da.xml"), &[]).map_err(|e| e.to_string())?;
+        build(&desc, &Overrides::default()).map_err(|e| e.to_string())
+    };
+    let j = scene(r#"<emitter type="directionalarea"/>"#, "").unwrap();
+    let penumbra_render::light::Light::DirectionalArea(d) = &j.scene.lights[0] else { panic!("directionalarea") };
+    assert_eq!((d.shape, d.radiance), (0, Vec3::ONE));
+    assert_eq!(j.scene.shape_info[0].light, Some(0));
+    let j = scene(r#"<emitter type="directionalarea"><rgb name="radiance" value="2, 3, 4"/></emitter>"#, "").unwrap();
+    let penumbra_render::light::Light::DirectionalArea(d) = &j.scene.lights[0] else { panic!("directionalarea") };
+    assert_eq!(d.radiance, Vec3::new(2.0, 3.0, 4.0));
+    let e = scene("", r#"<emitter type="directionalarea"/>"#).unwrap_err();
+    assert!(e.contains("da.xml:5") && e.contains("nested inside a shape"), "{e}");
+    let e = scene(r#"<emitter type="directionalarea"><rgb name="radiance" value="-1"/></emitter>"#, "").unwrap_err();
+    assert!(e.contains("da.xml:3") && e.contains("negative"), "{e}");
+    let e = scene(r#"<emitter type="directionalarea"><texture type="checkerboard" name="radiance"/></emitter>"#, "")
+        .unwrap_err();
+    assert!(e.contains("da.xml:3") && e.contains("textured"), "{e}");
+    let e = scene(r#"<emitter type="directionalarea"><float name="scale" value="2"/></emitter>"#, "").unwrap_err();
+    assert!(e.contains("da.xml:3") && e.contains("scale"), "{e}");
+    let e = scene(r#"<emitter type="point"/>"#, "").unwrap_err();
+    assert!(e.contains("only 'area' and 'directionalarea'"), "{e}");
+}

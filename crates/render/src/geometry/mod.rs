@@ -16,5 +16,5 @@ pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};
-pub use shape::{Mesh, Shape, ShapeSample};
+pub use shape::{AreaSample, Mesh, Shape, ShapeSample};
 pub use sphere::Sphere;

@@ -17,6 +17,29 @@ pub struct ShapeSample {
     pub n: Vec3,
     /// Density per unit solid angle at the reference point.
     pub pdf: f32,
+    /// The primitive holding `p` and its parameter, as
+    /// [`Shape::interaction`] takes them (see [`AreaSample`]).
+    pub prim: u32,
+    /// See [`AreaSample::param`].
+    pub param: Vec2,
+}
+
+/// A point sampled uniformly by area, with what [`Shape::interaction`]
+/// needs to complete it (for emitters whose radiance is a texture, and
+/// sensors that sample shapes).
+#[derive(Debug, Clone, Copy)]
+pub struct AreaSample {
+    /// Position of the sampled point.
+    pub p: Vec3,
+    /// Front-side geometric normal at `p`.
+    pub n: Vec3,
+    /// Density per unit area.
+    pub pdf: f32,
+    /// The triangle of a mesh (0 for analytic shapes).
+    pub prim: u32,
+    /// The triangle's barycentrics (b1, b2), the disk's local (x, y); unused
+    /// by spheres and cylinders, whose interaction follows from the point.
+    pub param: Vec2,
 }
 
 /// A triangle mesh shape with its area distribution for sampling.
@@ -222,7 +245,14 @@ impl Shape {
 
     /// Uniform point on the surface: (point, front normal, density per unit area).
     pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3, f32) {
-        match self {
+        let s = self.sample_point(u);
+        (s.p, s.n, s.pdf)
+    }
+
+    /// [`Shape::sample_area`] with the primitive and parameter of the point.
+    pub fn sample_point(&self, u: Vec2) -> AreaSample {
+        let (prim, param) = (0, Vec2::ZERO);
+        let ((p, n, pdf), prim, param) = match self {
             Shape::Mesh(m) => {
                 let d = m.area_distrib.as_ref().expect("sampling a mesh without area");
                 let (i, _, ux) = d.sample_discrete(u.x);
@@ -230,12 +260,16 @@ impl Shape {
                 let [p0, p1, p2] = m.vertices(i);
                 let p = (1.0 - b.x - b.y) * p0 + b.x * p1 + b.y * p2;
                 let n = (p1 - p0).cross(p2 - p0).normalize();
-                (p, n, 1.0 / d.total as f32)
+                ((p, n, 1.0 / d.total as f32), i as u32, b)
             }
-            Shape::Sphere(s) => s.sample_area(u),
-            Shape::Disk(d) => d.sample_area(u),
-            Shape::Cylinder(c) => c.sample_area(u),
-        }
+            Shape::Sphere(s) => (s.sample_area(u), prim, param),
+            Shape::Disk(d) => {
+                let q = warp::sample_concentric_disk(u);
+                (d.sample_area(u), prim, q)
+            }
+            Shape::Cylinder(c) => (c.sample_area(u), prim, param),
+        };
+        AreaSample { p, n, pdf, prim, param }
     }
 
     /// Samples a point of the shape as seen from `p_ref`, with the density per
@@ -247,9 +281,9 @@ impl Shape {
                 return Some(x);
             }
         }
-        let (p, n, pdf_area) = self.sample_area(u);
-        let pdf = area_to_solid_angle(pdf_area, p_ref, p, n)?;
-        Some(ShapeSample { p, n, pdf })
+        let a = self.sample_point(u);
+        let pdf = area_to_solid_angle(a.pdf, p_ref, a.p, a.n)?;
+        Some(ShapeSample { p: a.p, n: a.n, pdf, prim: a.prim, param: a.param })
     }
 
     /// Density per unit solid angle with which [`Shape::sample_direction`]

@@ -133,7 +133,7 @@ impl Sphere {
         let nd = frame.to_world(-w);
         let p = center + nd * radius;
         let n = if self.flip { -nd } else { nd };
-        Some(ShapeSample { p, n, pdf: 1.0 / (2.0 * PI * one_minus_cos_max) })
+        Some(ShapeSample { p, n, pdf: 1.0 / (2.0 * PI * one_minus_cos_max), prim: 0, param: Vec2::ZERO })
     }
 
     /// The density of [`Sphere::sample_cone`] from `p_ref` (uniform over

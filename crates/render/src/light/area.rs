@@ -3,17 +3,26 @@
 //! points to). Sampled by the shape's `sample_direction` (the subtended cone
 //! for spheres seen from outside, the area otherwise).
 //!
-//! | parameter | type | default |
-//! |-----------|------|---------|
-//! | radiance  | rgb  | (required) |
+//! | parameter | type                 | default |
+//! |-----------|----------------------|---------|
+//! | radiance  | rgb or texture       | (required) |
+//!
+//! A textured `radiance` (`bitmap`, `checkerboard`) varies with the
+//! surface's uv, L(x, ω) = T(uv(x)). Mitsuba 3.9.1 then samples the
+//! texture's own distribution and maps it onto the shape through the uv
+//! parameterisation (meshes with texture coordinates only); here the shape
+//! is still sampled by area (or by its cone) and the texture evaluated at
+//! the sampled point: the same estimator expectation, ∫ T(uv(x)) G dA, with
+//! a variance that grows with the texture's contrast, and on every shape.
 //!
 //! Declared inside a `<shape>`; the shape must have positive area and may
 //! not belong to a `shapegroup`.
 
 use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
-use crate::geometry::{Aabb, Mesh, Shape, SurfaceInteraction};
+use crate::geometry::{Aabb, Mesh, Ray, Shape, SurfaceInteraction};
 use crate::math::{luminance, Spectrum, PI};
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
 /// Mitsuba's `area` emitter on one shape.
@@ -21,19 +30,27 @@ use glam::{Vec2, Vec3};
 pub struct AreaLight {
     /// Index of the emitting shape in the scene's shapes.
     pub shape: u32,
-    /// Emitted radiance (W/(m² sr)), the same in every front-facing direction.
-    pub radiance: Spectrum,
+    /// Emitted radiance (W/(m² sr)), the same in every front-facing
+    /// direction; a texture makes it vary with the surface's uv.
+    pub radiance: Texture,
 }
 
 impl AreaLight {
-    /// Radiance leaving the surface with front normal `n` towards `w`.
+    /// Radiance leaving the surface point `si` (a hit on this light's
+    /// shape) towards `si.wo`: zero behind the shading normal.
     #[inline]
-    pub fn emitted(&self, n: Vec3, w: Vec3) -> Spectrum {
-        if n.dot(w) > 0.0 {
-            self.radiance
+    pub fn emitted(&self, si: &SurfaceInteraction) -> Spectrum {
+        if si.sh_frame.n.dot(si.wo) > 0.0 {
+            self.radiance.eval(si)
         } else {
             Spectrum::ZERO
         }
+    }
+
+    /// Whether the radiance varies over the surface: hits on the shape then
+    /// need their uv (see [`crate::scene::Scene`]'s `interaction`).
+    pub fn is_textured(&self) -> bool {
+        self.radiance.constant().is_none()
     }
 
     /// `shape`: this light's shape.
@@ -46,7 +63,19 @@ impl AreaLight {
             return None;
         }
         let wi = d / dist;
-        let li = self.emitted(s.n, -wi);
+        if s.n.dot(wi) >= 0.0 {
+            return None;
+        }
+        let li = match self.radiance.constant() {
+            Some(c) => c,
+            // The texture at the sampled point: its interaction as a ray from
+            // p_ref would find it.
+            None => {
+                let ray = Ray::new(p_ref, wi, f32::INFINITY);
+                let si = shape.interaction(self.shape, s.prim as usize, &ray, dist, s.param);
+                self.radiance.eval(&si)
+            }
+        };
         if li == Spectrum::ZERO {
             return None;
         }
@@ -60,9 +89,14 @@ impl AreaLight {
         shape.pdf_direction(p_ref, hit.p, hit.n)
     }
 
-    /// Φ = π A L for a one-sided diffuse emitter.
+    /// Φ = π A L for a one-sided diffuse emitter; a texture's mean value
+    /// over its uv domain stands in for L (it only weights light selection).
     pub fn power(&self, shape: &Shape) -> Spectrum {
-        PI * shape.area() * self.radiance
+        let l = match &self.radiance {
+            Texture::Constant(c) => *c,
+            t => Spectrum::splat(t.mean()),
+        };
+        PI * shape.area() * l
     }
 
     /// The shape's box and the cone of its front-facing normals; diffuse
@@ -124,6 +158,48 @@ mod tests {
     fn mesh_shape(mut m: TriangleMesh, world_from_object: Mat4) -> Shape {
         m.transform(&world_from_object);
         Shape::Mesh(Mesh::new(m, false))
+    }
+
+    /// A textured emitter's sampled radiance is the texture where a ray
+    /// along the sampled direction hits the shape (what `emitted` gives
+    /// there), on a mesh, a disk and a sphere, so light sampling and hits
+    /// weigh the same radiance; and the squares of the checkerboard are
+    /// both reached.
+    #[test]
+    fn textured_radiance_agrees_between_samples_and_hits() {
+        use crate::material::Material;
+        use crate::scene::{Scene, ShapeInfo};
+        use crate::texture::Checkerboard;
+        let checker = Texture::Checkerboard(std::sync::Arc::new(Checkerboard {
+            color0: Spectrum::new(1.0, 0.5, 0.25).into(),
+            color1: Spectrum::new(0.1, 0.2, 0.9).into(),
+            to_uv: glam::Affine2::from_scale(Vec2::new(3.0, 2.0)),
+        }));
+        let rect = Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)) * Mat4::from_scale(Vec3::new(1.5, 1.0, 1.0));
+        let shapes = vec![
+            mesh_shape(TriangleMesh::rectangle(), rect),
+            Shape::disk(Mat4::from_translation(Vec3::new(3.0, 0.0, -2.0)), false),
+            Shape::sphere(Vec3::new(-3.0, 0.0, -2.0), 0.7, false),
+        ];
+        let info = (0..3).map(|i| ShapeInfo { material: 0, light: Some(i) }).collect();
+        let lights =
+            (0..3).map(|i| super::super::Light::Area(AreaLight { shape: i, radiance: checker.clone() })).collect();
+        let material = Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Spectrum::ZERO.into() });
+        let scene = Scene::new(shapes, info, vec![material], lights);
+        let p_ref = Vec3::new(0.2, 0.1, 1.0);
+        for (i, light) in scene.lights.iter().enumerate() {
+            let super::super::Light::Area(a) = light else { unreachable!() };
+            let mut seen = [false; 2];
+            for k in 0..400 {
+                let u = Vec2::new((k % 20) as f32 + 0.5, (k / 20) as f32 + 0.5) / 20.0;
+                let Some(s) = a.sample_li(p_ref, u, &scene.shapes[i]) else { continue };
+                let si = scene.intersect(&Ray::new(p_ref, s.wi, f32::INFINITY)).expect("sampled point is hit");
+                assert_eq!(si.shape, i as u32);
+                assert_eq!(s.li, scene.emitted(&si), "shape {i}, sample {k}");
+                seen[(s.li.z > 0.5) as usize] = true;
+            }
+            assert_eq!(seen, [true, true], "shape {i}");
+        }
     }
 
     #[test]

@@ -577,7 +577,7 @@ mod tests {
 
     fn area(shapes: &mut Vec<Shape>, shape: Shape, radiance: f32) -> Light {
         shapes.push(shape);
-        Light::Area(AreaLight { shape: shapes.len() as u32 - 1, radiance: Spectrum::splat(radiance) })
+        Light::Area(AreaLight { shape: shapes.len() as u32 - 1, radiance: Spectrum::splat(radiance).into() })
     }
 
     fn spot(pos: Vec3, target: Vec3, intensity: f32, cutoff_deg: f32) -> Light {
@@ -789,7 +789,7 @@ mod tests {
     #[test]
     fn one_sided_lights_are_unimportant_from_behind() {
         let shapes = vec![rectangle(Vec3::ZERO, Vec3::Z, Vec2::splat(0.5))];
-        let light = Light::Area(AreaLight { shape: 0, radiance: Spectrum::ONE });
+        let light = Light::Area(AreaLight { shape: 0, radiance: Spectrum::ONE.into() });
         let b = light.bounds(&shapes).unwrap();
         assert!((b.w - Vec3::Z).length() < 1e-5 && b.cos_theta_o > 0.99999 && !b.two_sided);
         let (front, back) = (Vec3::new(0.3, 0.2, 3.0), Vec3::new(0.3, 0.2, -3.0));
@@ -853,7 +853,7 @@ mod tests {
         // At the light's own position: still finite.
         assert_eq!(bvh.pmf(Vec3::X, Vec3::ZERO, 0), 1.0);
         // Only lights at infinity: uniform among them.
-        let constant = Light::Constant(ConstantLight { radiance: Spectrum::ONE });
+        let constant = Light::Constant(ConstantLight { radiance: Spectrum::ONE.into() });
         let sun =
             Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Spectrum::ONE, scene_radius: 1.0 });
         let bvh = LightBvh::build(&[constant.clone(), sun.clone()], &[]);

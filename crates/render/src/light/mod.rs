@@ -24,8 +24,10 @@ pub mod area;
 pub mod bvh;
 pub mod constant;
 pub mod directional;
+pub mod directionalarea;
 pub mod envmap;
 pub mod point;
+pub mod projector;
 pub mod sampler;
 pub mod spot;
 
@@ -33,8 +35,10 @@ pub use area::AreaLight;
 pub use bvh::LightBounds;
 pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
+pub use directionalarea::DirectionalAreaLight;
 pub use envmap::EnvMapLight;
 pub use point::PointLight;
+pub use projector::ProjectorLight;
 pub use sampler::{LightSampler, LightSelection};
 pub use spot::SpotLight;
 
@@ -72,6 +76,11 @@ pub enum Light {
     Directional(DirectionalLight),
     /// `envmap`: radiance at infinity from a latitude-longitude image.
     EnvMap(EnvMapLight),
+    /// `projector`: an image projected from a point (delta in position).
+    Projector(ProjectorLight),
+    /// `directionalarea`: emission along a shape's normals (delta in
+    /// direction), reached by no path this renderer traces.
+    DirectionalArea(DirectionalAreaLight),
 }
 
 impl Light {
@@ -84,6 +93,8 @@ impl Light {
             Light::Spot(_) => "spot",
             Light::Directional(_) => "directional",
             Light::EnvMap(_) => "envmap",
+            Light::Projector(_) => "projector",
+            Light::DirectionalArea(_) => "directionalarea",
         }
     }
 
@@ -97,6 +108,8 @@ impl Light {
             Light::Spot(s) => s.sample_li(p_ref),
             Light::Directional(d) => d.sample_li(),
             Light::EnvMap(e) => e.sample_li(u2),
+            Light::Projector(p) => p.sample_li(p_ref),
+            Light::DirectionalArea(d) => d.sample_li(),
         }
     }
 
@@ -110,7 +123,11 @@ impl Light {
             Light::Area(a) => hit.map_or(0.0, |hit| a.pdf_li(p_ref, hit, &shapes[a.shape as usize])),
             Light::Constant(c) => c.pdf(),
             Light::EnvMap(e) => e.pdf(wi),
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => 0.0,
+            Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => 0.0,
         }
     }
 
@@ -120,7 +137,12 @@ impl Light {
     pub fn is_environment(&self) -> bool {
         match self {
             Light::Constant(_) | Light::EnvMap(_) => true,
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => false,
+            Light::Area(_)
+            | Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => false,
         }
     }
 
@@ -132,7 +154,12 @@ impl Light {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => (Spectrum::ZERO, 0.0),
+            Light::Area(_)
+            | Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => (Spectrum::ZERO, 0.0),
         }
     }
 
@@ -143,14 +170,24 @@ impl Light {
         match self {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
-            Light::Area(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => Spectrum::ZERO,
+            Light::Area(_)
+            | Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => Spectrum::ZERO,
         }
     }
 
-    /// Dirac-delta lights (point, spot, directional): reachable only by light sampling.
+    /// Dirac-delta lights (point, spot, directional, projector,
+    /// directionalarea): reachable only by light sampling.
     pub fn is_delta(&self) -> bool {
         match self {
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => true,
+            Light::Point(_)
+            | Light::Spot(_)
+            | Light::Directional(_)
+            | Light::Projector(_)
+            | Light::DirectionalArea(_) => true,
             Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) => false,
         }
     }
@@ -166,6 +203,9 @@ impl Light {
             Light::Spot(s) => s.power(),
             Light::Directional(d) => d.power(),
             Light::EnvMap(e) => e.power(scene_radius),
+            Light::Projector(p) => p.power(),
+            // No weight for a light no sample can reach (see directionalarea.rs).
+            Light::DirectionalArea(_) => Spectrum::ZERO,
         }
     }
 
@@ -178,6 +218,8 @@ impl Light {
             Light::Area(a) => Some(a.bounds(&shapes[a.shape as usize])),
             Light::Point(p) => Some(p.bounds()),
             Light::Spot(s) => Some(s.bounds()),
+            Light::Projector(p) => Some(p.bounds()),
+            Light::DirectionalArea(d) => Some(d.bounds(&shapes[d.shape as usize])),
             Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => None,
         }
     }
@@ -199,13 +241,19 @@ mod tests {
         let info = vec![ShapeInfo { material: 0, light: Some(0) }, ShapeInfo { material: 0, light: Some(1) }];
         let texels: Vec<[f32; 3]> = (0..8 * 5).map(|k| [1.0 + (k % 7) as f32, 0.5, 0.2 * (k / 8) as f32]).collect();
         let lights = vec![
-            Light::Area(AreaLight { shape: 0, radiance: Spectrum::splat(2.0) }),
-            Light::Area(AreaLight { shape: 1, radiance: Spectrum::ONE }),
+            Light::Area(AreaLight { shape: 0, radiance: Spectrum::splat(2.0).into() }),
+            Light::Area(AreaLight { shape: 1, radiance: Spectrum::ONE.into() }),
             Light::Constant(ConstantLight { radiance: Spectrum::splat(0.5) }),
             Light::EnvMap(EnvMapLight::new(8, 5, texels, Mat4::from_rotation_y(0.3), 1.0).unwrap()),
             Light::Point(PointLight { position: Vec3::new(0.0, 2.0, 1.0), intensity: Spectrum::ONE }),
             Light::Spot(SpotLight::new(Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)), Spectrum::ONE, 60.0, 30.0)),
             Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Spectrum::ONE, scene_radius: 3.0 }),
+            Light::Projector(ProjectorLight::new(
+                crate::math::look_at(Vec3::new(0.0, 2.0, 2.0), Vec3::ZERO, Vec3::Y),
+                Spectrum::new(1.0, 0.5, 0.2).into(),
+                2.0,
+                Vec2::new(0.6, 0.4),
+            )),
         ];
         Scene::new(
             shapes,
@@ -218,7 +266,7 @@ mod tests {
     #[test]
     fn names_are_mitsubas_plugins() {
         let names: Vec<&str> = every_light().lights.iter().map(Light::name).collect();
-        assert_eq!(names, ["area", "area", "constant", "envmap", "point", "spot", "directional"]);
+        assert_eq!(names, ["area", "area", "constant", "envmap", "point", "spot", "directional", "projector"]);
     }
 
     /// `pdf_li` is the density `sample_li` reports (at the emitter point the
@@ -228,7 +276,7 @@ mod tests {
     fn pdf_li_is_the_sampled_density() {
         let scene = every_light();
         let p_ref = Vec3::new(0.1, 0.2, 0.3);
-        let mut checked = [0usize; 7];
+        let mut checked = [0usize; 8];
         for (i, light) in scene.lights.iter().enumerate() {
             for k in 0..256 {
                 let u = Vec2::new((k % 16) as f32 + 0.5, (k / 16) as f32 + 0.5) / 16.0;

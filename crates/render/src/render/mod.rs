@@ -182,7 +182,10 @@ impl RenderJob {
     fn eye(&self, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
         if matches!(
             self.camera.projection,
-            crate::camera::Projection::Orthographic { .. } | crate::camera::Projection::RadianceMeter
+            crate::camera::Projection::Orthographic { .. }
+                | crate::camera::Projection::RadianceMeter
+                | crate::camera::Projection::IrradianceMeter
+                | crate::camera::Projection::Distant { .. }
         ) {
             return ray.o;
         }
@@ -275,6 +278,7 @@ impl RenderJob {
     /// are then the same however the radiance was computed.
     pub(crate) fn add_sample(&self, tile: &mut Tile, p: &TilePixel, s: u32, u: Vec2, ray: &Ray, l: Spectrum) {
         tile.stats.samples += 1;
+        let l = l * self.camera.ray_weight();
         if !l.is_finite() {
             tile.stats.non_finite += 1;
             return;

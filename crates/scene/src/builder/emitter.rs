@@ -1,13 +1,18 @@
 //! `<emitter>` nodes → [`Light`]s: area emitters inside shapes and the
 //! emitters declared at the top level.
 
+use super::texture::Textures;
 use super::{plugin, resolve, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
 use glam::{DVec3, Vec3};
+use penumbra_render::camera::tan_half_x;
 use penumbra_render::geometry::Shape;
-use penumbra_render::light::{AreaLight, ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, SpotLight};
+use penumbra_render::light::{
+    AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight,
+    SpotLight,
+};
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
 
@@ -16,11 +21,13 @@ type BuildEmitter = fn(&Node) -> Result<PendingLight>;
 
 pub(super) const EMITTERS: &Plugins<BuildEmitter> = &[
     ("area (inside a shape)", area_at_top_level),
+    ("directionalarea (inside a shape)", area_at_top_level),
     ("constant", constant),
     ("envmap", envmap),
     ("point", point),
     ("spot", spot),
     ("directional", directional),
+    ("projector", projector),
 ];
 
 fn rgb(v: [f64; 3]) -> Spectrum {
@@ -38,29 +45,84 @@ fn ready(light: Light) -> PendingLight {
 }
 
 /// The area emitter `en` attached to the shape `shape_node`, built as
-/// `shape` with id `shape_id`.
-pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
-    if en.plugin != "area" {
-        return Err(en.error(format!("emitter '{}' cannot be attached to a shape; only 'area' can", en.plugin)));
+/// `shape` with id `shape_id`. Its `radiance` (Mitsuba's default 1) is a
+/// colour or a nested `bitmap` / `checkerboard` texture.
+pub(super) fn area(
+    en: &Node,
+    shape_node: &Node,
+    shape: &Shape,
+    shape_id: u32,
+    textures: &mut Textures,
+) -> Result<PendingLight> {
+    if en.plugin == "directionalarea" {
+        return directional_area(en, shape_node, shape, shape_id);
     }
-    let radiance = en.get_rgb("radiance")?.ok_or_else(|| en.error("area emitter needs a 'radiance' value"))?;
-    en.check_all_used(&[])?;
+    if en.plugin != "area" {
+        return Err(en.error(format!(
+            "emitter '{}' cannot be attached to a shape; only 'area' and 'directionalarea' can",
+            en.plugin
+        )));
+    }
+    if let Some(c) = en.children_of(Kind::Texture).find(|c| c.name.as_deref() != Some("radiance")) {
+        return Err(LoadError::at(&c.loc, "an area emitter takes one nested texture, named 'radiance'"));
+    }
+    if en.has("to_world") {
+        return Err(LoadError::at(
+            en.loc_of("to_world"),
+            "an area emitter takes no 'to_world': it inherits its shape's transformation (as in Mitsuba)",
+        ));
+    }
+    let radiance = textures.spectrum(en, "radiance", Spectrum::ONE)?;
+    match &radiance {
+        Texture::MeshAttribute(_) => {
+            let loc = &en.children_of(Kind::Texture).next().map_or(en.loc.clone(), |c| c.loc.clone());
+            return Err(LoadError::at(loc, "an area emitter's radiance cannot be a mesh_attribute texture"));
+        }
+        Texture::Constant(c) if c.min_element() < 0.0 => {
+            return Err(LoadError::at(en.loc_of("radiance"), "an area emitter's radiance must not be negative"));
+        }
+        _ => {}
+    }
+    en.check_all_used(&[Kind::Texture])?;
     if shape.area() <= 0.0 {
         return Err(shape_node.error("an area emitter's shape has zero area"));
     }
-    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance: rgb(radiance) })))
+    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance })))
 }
 
 /// An emitter declared at the top level (not attached to a shape).
 pub(super) fn top_level(node: &Node) -> Result<PendingLight> {
     let light = plugin(EMITTERS, node)?(node)?;
-    // Only a spot light takes a nested texture (its `texture`, checked there).
-    node.check_all_used(if node.plugin == "spot" { &[Kind::Texture] } else { &[] })?;
+    // Only spot and projector lights take a nested texture (checked there).
+    node.check_all_used(if matches!(node.plugin.as_str(), "spot" | "projector") { &[Kind::Texture] } else { &[] })?;
     Ok(light)
 }
 
 fn area_at_top_level(node: &Node) -> Result<PendingLight> {
-    Err(node.error("an 'area' emitter must be nested inside a shape"))
+    Err(node.error(format!("the '{}' emitter must be nested inside a shape", node.plugin)))
+}
+
+/// Mitsuba's `directionalarea` on the shape `shape_node`: `radiance` (a
+/// colour, default 1) along the shape's normals.
+fn directional_area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
+    if let Some(c) = en.children_of(Kind::Texture).next() {
+        return Err(LoadError::at(&c.loc, "directionalarea: a textured radiance is not supported; give a colour"));
+    }
+    if en.has("to_world") {
+        return Err(LoadError::at(
+            en.loc_of("to_world"),
+            "a directionalarea emitter takes no 'to_world': it inherits its shape's transformation (as in Mitsuba)",
+        ));
+    }
+    let radiance = rgb(en.get_rgb("radiance")?.unwrap_or([1.0; 3]));
+    if radiance.min_element() < 0.0 {
+        return Err(LoadError::at(en.loc_of("radiance"), "directionalarea: radiance must not be negative"));
+    }
+    en.check_all_used(&[])?;
+    if shape.area() <= 0.0 {
+        return Err(shape_node.error("a directionalarea emitter's shape has zero area"));
+    }
+    Ok(ready(Light::DirectionalArea(DirectionalAreaLight { shape: shape_id, radiance })))
 }
 
 fn constant(node: &Node) -> Result<PendingLight> {
@@ -137,4 +199,43 @@ fn envmap(node: &Node) -> Result<PendingLight> {
     let light = EnvMapLight::new(img.width as usize, img.height as usize, img.pixels, to_world.as_mat4(), scale as f32)
         .map_err(|e| LoadError::at(&loc, format!("'{}': {e}", path.display())))?;
     Ok(ready(Light::EnvMap(light)))
+}
+
+/// Mitsuba's `projector`: `irradiance` (a colour or a nested bitmap named
+/// `irradiance`, default 1), `scale`, `to_world` and the perspective
+/// sensor's `fov` / `focal_length` / `fov_axis` over the image's aspect ratio.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn projector(node: &Node) -> Result<PendingLight> {
+    let to_world = node.transform("to_world")?;
+    if let Some(c) = node.children_of(Kind::Texture).find(|c| c.name.as_deref() != Some("irradiance")) {
+        return Err(LoadError::at(&c.loc, "a projector takes one nested texture, named 'irradiance'"));
+    }
+    let irradiance = match node.children_of(Kind::Texture).next() {
+        Some(child) => {
+            let t = super::texture::build_bitmap_texture(&child.node)?;
+            child.node.check_all_used(&[])?;
+            t
+        }
+        None => {
+            let c = rgb(node.get_rgb("irradiance")?.unwrap_or([1.0; 3]));
+            if c.min_element() < 0.0 {
+                return Err(LoadError::at(node.loc_of("irradiance"), "projector: irradiance must not be negative"));
+            }
+            Texture::Constant(c)
+        }
+    };
+    let scale = node.float("scale", 1.0)?;
+    if !(scale >= 0.0) {
+        return Err(LoadError::at(node.loc_of("scale"), "projector: scale must not be negative"));
+    }
+    let (w, h) = match &irradiance {
+        Texture::Bitmap(b) => b.resolution(),
+        _ => (1, 1),
+    };
+    let aspect = w as f32 / h as f32;
+    let (fov, axis) = super::sensor::fov_and_axis(node)?;
+    let tan_x = tan_half_x(fov as f32, axis, aspect);
+    let tan_half = glam::Vec2::new(tan_x, tan_x / aspect);
+    let light = ProjectorLight::new(to_world.as_mat4(), irradiance, scale as f32, tan_half);
+    Ok(ready(Light::Projector(light)))
 }

@@ -146,7 +146,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             // an area emitter or a sampler at the top level, referenced from
             // a shape or the sensor): built where it is used.
             Kind::Emitter | Kind::Sampler | Kind::Film | Kind::Rfilter
-                if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || node.plugin == "area") => {}
+                if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || matches!(node.plugin.as_str(), "area" | "directionalarea")) => {}
             Kind::Shape => b.shape(node)?,
             Kind::Emitter => b.lights.push(emitter::top_level(node)?),
             Kind::Sensor => {
@@ -194,8 +194,22 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         Kind::Rfilter,
         Kind::Medium,
     ])?;
-    let sensor = sensor.ok_or_else(|| root.error("the scene has no <sensor>; add a perspective sensor"))?;
-    let (camera, filter, film, sampler) = build_sensor(&sensor, ov)?;
+    // A sensor nested in a shape measures over that shape.
+    let (sensor, on_shape) = match (sensor, b.shape_sensors.first()) {
+        (_, Some((extra, _))) if b.shape_sensors.len() > 1 => {
+            return Err(extra.error("the scene has more than one sensor; Penumbra renders one"))
+        }
+        (Some(top), Some((nested, _))) => {
+            return Err(top.error(format!(
+                "the scene has more than one sensor (another at {}); Penumbra renders one",
+                nested.loc
+            )))
+        }
+        (Some(top), None) => (top, None),
+        (None, Some((nested, id))) => (nested.clone(), Some(b.shapes[*id as usize].clone())),
+        (None, None) => return Err(root.error("the scene has no <sensor>; add a perspective sensor")),
+    };
+    let (mut camera, filter, film, sampler) = build_sensor(&sensor, ov, on_shape)?;
     let camera_medium = match sensor.single_child(Kind::Medium)? {
         Some(m) => Some(b.media.get(&m)?),
         None => None,
@@ -221,6 +235,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     cache.shapes_built += b.shapes_built;
     cache.shapes = std::mem::take(&mut b.cache);
     let radius = accel.bounds.bounding_radius();
+    camera.set_scene_bounds(accel.bounds.min, accel.bounds.max);
     let lights = b.lights.into_iter().map(|light| light(radius)).collect();
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
     scene.set_light_selection(selection);
@@ -272,6 +287,8 @@ struct Builder {
     media: medium::Media,
     /// Per shape id, the media it bounds.
     shape_media: Vec<ShapeMedia>,
+    /// Sensors nested in shapes (`irradiancemeter`), with the shape's id.
+    shape_sensors: Vec<(Rc<Node>, u32)>,
 }
 
 impl Builder {

@@ -56,9 +56,11 @@ pub(super) enum SensorModel {
     ThinLens { fov: f64, axis: FovAxis, aperture_radius: f64, focus_distance: f64 },
     Orthographic,
     RadianceMeter { to_world: glam::DMat4 },
+    IrradianceMeter,
+    Distant { to_world: glam::DMat4, target: Option<glam::DVec3>, shape: Option<Box<penumbra_render::geometry::Shape>> },
 }
 
-fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
+pub(super) fn fov_and_axis(node: &Node) -> Result<(f64, FovAxis)> {
     let (fov, forced_axis) = field_of_view(node)?;
     let axis = match node.string("fov_axis", "x")?.as_str() {
         _ if forced_axis.is_some() => forced_axis.unwrap_or(FovAxis::X),
@@ -92,6 +94,8 @@ pub(super) const SENSORS: &Plugins<BuildSensor> = &[
     ("thinlens", thinlens),
     ("orthographic", orthographic),
     ("radiancemeter", radiancemeter),
+    ("irradiancemeter (inside a shape)", irradiancemeter),
+    ("distant", distant),
 ];
 
 /// A builder of a film's geometry and reconstruction filter.
@@ -157,6 +161,73 @@ fn orthographic(_: &Node, _: &glam::DMat4, _: f64) -> Result<SensorModel> {
     Ok(SensorModel::Orthographic)
 }
 
+/// A frame whose +z is the unit vector `d` and whose origin is `o` (any
+/// perpendicular axes: Mitsuba's `coordinate_system`).
+fn frame_along(o: glam::DVec3, d: glam::DVec3) -> glam::DMat4 {
+    let up = if d.z.abs() < 0.9 { glam::DVec3::Z } else { glam::DVec3::X };
+    let up = (up - d * d.dot(up)).normalize();
+    let x = up.cross(d);
+    glam::DMat4::from_cols(x.extend(0.0), up.extend(0.0), d.extend(0.0), o.extend(1.0))
+}
+
+/// Mitsuba's `irradiancemeter`, nested in the shape it measures over (no
+/// parameters of its own; `srf` is for spectral variants).
+///
+/// | parameter | type | default |
+/// |-----------|------|---------|
+/// | (film)    | hdrfilm | any size; Mitsuba advises a box filter |
+fn irradiancemeter(node: &Node, _: &glam::DMat4, _: f64) -> Result<SensorModel> {
+    if node.has("to_world") {
+        return Err(LoadError::at(
+            node.loc_of("to_world"),
+            "irradiancemeter takes no 'to_world': it measures over its shape (as in Mitsuba)",
+        ));
+    }
+    Ok(SensorModel::IrradianceMeter)
+}
+
+/// Mitsuba's `distant`: the radiance leaving the scene along -`direction`,
+/// averaged over a target.
+///
+/// | parameter | type | default |
+/// |-----------|------|---------|
+/// | direction | vector | (or `to_world`): the direction the sensor's rays travel |
+/// | to_world  | transform | identity: rays along its +z |
+/// | target    | point or nested shape | the scene's bounding-sphere cross section |
+/// | (film)    | hdrfilm | width or height 1 |
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn distant(node: &Node, to_world: &glam::DMat4, _: f64) -> Result<SensorModel> {
+    let to_world = match node.get_point("direction")? {
+        Some(_) if node.has("to_world") => {
+            return Err(LoadError::at(
+                node.loc_of("direction"),
+                "distant: give either 'direction' or 'to_world', not both",
+            ))
+        }
+        Some(d) => {
+            if !(d.is_finite() && d.length() > 0.0) {
+                return Err(LoadError::at(node.loc_of("direction"), "direction must be a non-zero vector"));
+            }
+            frame_along(glam::DVec3::ZERO, d.normalize())
+        }
+        None => *to_world,
+    };
+    let target = node.get_point("target")?;
+    let shapes: Vec<_> = node.children_of(Kind::Shape).collect();
+    let shape = match (target, shapes.as_slice()) {
+        (None, []) => None,
+        (None, [c]) if c.name.as_deref() == Some("target") => Some(Box::new(super::shape::detached_shape(&c.node)?)),
+        (Some(_), [c, ..]) => {
+            return Err(LoadError::at(&c.loc, "distant: give 'target' as a point or as a shape, not both"))
+        }
+        (None, [c, ..]) => {
+            return Err(LoadError::at(&c.loc, "distant: the sensor takes one nested shape, named 'target'"))
+        }
+        (Some(_), []) => None,
+    };
+    Ok(SensorModel::Distant { to_world, target, shape })
+}
+
 /// Mitsuba's `radiancemeter`: `to_world`, or `origin` and `direction`
 /// (both), placing one ray along local +z.
 fn radiancemeter(node: &Node, to_world: &glam::DMat4, _: f64) -> Result<SensorModel> {
@@ -171,13 +242,7 @@ fn radiancemeter(node: &Node, to_world: &glam::DMat4, _: f64) -> Result<SensorMo
             if !(d.is_finite() && d.length() > 0.0) {
                 return Err(LoadError::at(node.loc_of("direction"), "direction must be a non-zero vector"));
             }
-            let d = d.normalize();
-            // Any up vector perpendicular to d (Mitsuba's coordinate_system).
-            let up = if d.z.abs() < 0.9 { glam::DVec3::Z } else { glam::DVec3::X };
-            let up = (up - d * d.dot(up)).normalize();
-            let x = up.cross(d);
-            let m = glam::DMat4::from_cols(x.extend(0.0), up.extend(0.0), d.extend(0.0), o.extend(1.0));
-            Ok(SensorModel::RadianceMeter { to_world: m })
+            Ok(SensorModel::RadianceMeter { to_world: frame_along(o, d.normalize()) })
         }
         _ => Err(node.error("radiancemeter: give both 'origin' and 'direction', or a 'to_world'")),
     }
@@ -245,7 +310,12 @@ fn orthogonal(s: &Node) -> Result<SamplerKind> {
 }
 
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
-pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
+/// The sensor `node`; `on_shape` is the shape it is nested in (world space).
+pub(super) fn build_sensor(
+    node: &Node,
+    ov: &Overrides,
+    on_shape: Option<penumbra_render::geometry::Shape>,
+) -> Result<SensorParts> {
     let sensor_model = plugin(SENSORS, node)?;
     let to_world = node.transform("to_world")?;
     let near = node.float("near_clip", 0.01)?;
@@ -254,7 +324,17 @@ pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
         return Err(node.error("near_clip must be positive and smaller than far_clip"));
     }
     let model = sensor_model(node, &to_world, far)?;
-    if let SensorModel::RadianceMeter { .. } = model {
+    match (&model, &on_shape) {
+        (SensorModel::IrradianceMeter, None) => {
+            return Err(node.error("an irradiancemeter must be nested inside the shape it measures over"))
+        }
+        (SensorModel::IrradianceMeter, Some(_)) | (_, None) => {}
+        (_, Some(_)) => {
+            return Err(node
+                .error(format!("a {} sensor cannot be nested in a shape; only an irradiancemeter can", node.plugin)))
+        }
+    }
+    if let SensorModel::RadianceMeter { .. } | SensorModel::IrradianceMeter | SensorModel::Distant { .. } = model {
         node.accept(&["near_clip", "far_clip"]);
     } else if !matches!(model, SensorModel::Orthographic) {
         for p in ["principal_point_offset_x", "principal_point_offset_y"] {
@@ -312,7 +392,12 @@ pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
     if let Some(o) = ov.seed {
         seed = o;
     }
-    node.check_all_used(&[Kind::Film, Kind::Sampler, Kind::Medium])?;
+    let target_shape = matches!(model, SensorModel::Distant { shape: Some(_), .. });
+    node.check_all_used(if target_shape {
+        &[Kind::Film, Kind::Sampler, Kind::Medium, Kind::Shape]
+    } else {
+        &[Kind::Film, Kind::Sampler, Kind::Medium]
+    })?;
     let (m, (w, h)) = (to_world.as_mat4(), rect.size);
     let camera = match model {
         SensorModel::Perspective { fov, axis } => Camera::new(m, fov as f32, axis, w, h, near as f32, far as f32),
@@ -334,6 +419,17 @@ pub(super) fn build_sensor(node: &Node, ov: &Overrides) -> Result<SensorParts> {
                 return Err(node.error(format!("radiancemeter needs a film of 1x1 pixels, not {w}x{h}")));
             }
             Camera::radiance_meter(to_world.as_mat4())
+        }
+        SensorModel::IrradianceMeter => match on_shape {
+            Some(shape) => Camera::irradiance_meter(shape),
+            None => return Err(node.error("an irradiancemeter must be nested inside the shape it measures over")),
+        },
+        SensorModel::Distant { to_world, target, shape } => {
+            // Mitsuba refuses films whose width and height both differ from 1.
+            if w != 1 && h != 1 {
+                return Err(node.error(format!("distant needs a film of 1x1 pixels, not {w}x{h}")));
+            }
+            Camera::distant(to_world.as_mat4(), target.map(|t| t.as_vec3()), shape.map(|s| *s))
         }
     };
     Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))

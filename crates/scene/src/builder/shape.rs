@@ -99,6 +99,9 @@ impl Builder {
                     format!("a {} inside a shapegroup is not supported (nested instancing)", c.plugin),
                 ));
             }
+            if c.single_child(Kind::Sensor)?.is_some() {
+                return Err(LoadError::at(&child.loc, "a sensor inside a shapegroup is not supported"));
+            }
             if c.single_child(Kind::Emitter)?.is_some() {
                 return Err(LoadError::at(
                     &child.loc,
@@ -171,13 +174,16 @@ impl Builder {
         }
         let light = match emitter {
             Some(en) => {
-                self.lights.push(emitter::area(&en, node, &shape, shape_id)?);
+                self.lights.push(emitter::area(&en, node, &shape, shape_id, &mut self.textures)?);
                 Some((self.lights.len() - 1) as u32)
             }
             None => None,
         };
+        if let Some(sensor) = node.single_child(Kind::Sensor)? {
+            self.shape_sensors.push((sensor, shape_id));
+        }
         let media = self.shape_media(node)?;
-        node.check_all_used(&[Kind::Bsdf, Kind::Emitter, Kind::Medium])?;
+        node.check_all_used(&[Kind::Bsdf, Kind::Emitter, Kind::Medium, Kind::Sensor])?;
         self.shapes.push(shape);
         self.infos.push(ShapeInfo { material: bsdf, light });
         self.shape_media.push(media);
@@ -240,6 +246,23 @@ impl Builder {
         self.cache.insert(key, (geometry.clone(), read));
         Ok(geometry)
     }
+}
+
+/// A shape's geometry alone, outside the scene (a `distant` sensor's
+/// target): a plain shape of positive area with no BSDF, emitter or media.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+pub(super) fn detached_shape(node: &Node) -> Result<Shape> {
+    let Some(ShapeBuilder::Geometry(build)) = find_plugin(SHAPES, &node.plugin) else {
+        return Err(node.error(format!("a {} cannot be a sensor's target; give a plain shape", node.plugin)));
+    };
+    let to_world = node.transform("to_world")?;
+    let flip = node.bool("flip_normals", false)?;
+    let (shape, _) = build(node, &to_world, flip)?;
+    node.check_all_used(&[])?;
+    if !(shape.area() > 0.0) {
+        return Err(node.error("the target shape has zero area"));
+    }
+    Ok(shape)
 }
 
 /// A mesh of `m`'s triangles placed by `to_world`.
