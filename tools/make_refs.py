@@ -75,6 +75,7 @@ SPP = {
     "glass_medium": 65536,
     "emitter_in_medium": 65536,
     "spot_texture": 32768,
+    "ellipsoids": 16384,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

@@ -197,3 +197,10 @@ fn textured_spot_light_matches_mitsuba() {
     // spot_light.xml with a bitmap projected through the cone (`texture`).
     compare("spot_texture", 256);
 }
+
+/// Mitsuba's `ellipsoids` (analytic) and `ellipsoidsmesh` (icosahedral
+/// shells) from one PLY file, two of the ellipsoids overlapping (back faces culled).
+#[test]
+fn ellipsoids_match_mitsuba() {
+    compare("ellipsoids", 256);
+}

@@ -272,3 +272,148 @@ fn merge_renders_its_shapes_as_they_are() {
     let e = load("<shape type=\"merge\"><bsdf type=\"diffuse\"/></shape>", &dir).unwrap_err().to_string();
     assert!(e.contains("a nested bsdf is not supported"), "{e}");
 }
+
+/// A binary little-endian PLY of ellipsoids in Mitsuba's layout with the
+/// given extra columns; rows: (centre, log radii, quaternion r i j k).
+fn ellipsoid_ply(extras: &[&str], rows: &[([f32; 3], [f32; 3], [f32; 4], Vec<f32>)]) -> Vec<u8> {
+    let mut names = vec!["x", "y", "z", "nx", "ny", "nz"];
+    names.extend_from_slice(extras);
+    names.extend_from_slice(&["scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]);
+    let mut out = format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", rows.len());
+    for n in &names {
+        out += &format!("property float {n}\n");
+    }
+    out += "end_header\n";
+    let mut bytes = out.into_bytes();
+    for (c, s, q, extra) in rows {
+        let row: Vec<f32> = c.iter().chain(&[0.0; 3]).chain(extra).chain(s).chain(q).copied().collect();
+        bytes.extend(row.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    bytes
+}
+
+#[test]
+fn ellipsoids_are_read_as_mitsuba_reads_them() {
+    let dir = temp_dir().join("ellipsoids");
+    std::fs::create_dir_all(&dir).unwrap();
+    // Radius e^ln(0.1) * extent 3 = 0.3 along x; a 90 degree turn about z in the file.
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let rows = vec![
+        ([1.0, 0.0, 0.0], [0.1f32.ln(), 0.2f32.ln(), 0.05f32.ln()], [h, 0.0, 0.0, h], vec![0.5]),
+        ([0.0, 0.0, 0.0], [0.1f32.ln(); 3], [2.0, 0.0, 0.0, 0.0], vec![0.02]),
+    ];
+    std::fs::write(dir.join("e.ply"), ellipsoid_ply(&["opacities"], &rows)).unwrap();
+    let shape = |extra: &str, plugin: &str| {
+        format!(
+            r#"<shape type="{plugin}"><string name="filename" value="e.ply"/>{extra}
+               <transform name="to_world"><scale value="2"/><rotate y="1" angle="90"/><translate z="1"/></transform></shape>"#
+        )
+    };
+    let job = load(&shape("", "ellipsoids"), &dir).unwrap();
+    let Shape::Ellipsoids(e) = &job.scene.shapes[0] else { panic!("not ellipsoids") };
+    assert_eq!(e.items.len(), 2);
+    let a = &e.items[0];
+    // Centre (1,0,0) → scale 2 → rotate y 90 → (0,0,-2) → translate → (0,0,-1).
+    assert!((a.center - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5, "{}", a.center);
+    // Radii × extent 3 × to_world's scale 2.
+    assert!((a.scale - Vec3::new(0.6, 1.2, 0.3)).abs().max_element() < 1e-5, "{}", a.scale);
+    // Local x → (file: about z by 90) y → (to_world: about y) y.
+    assert!((a.rot * Vec3::X - Vec3::Y).length() < 1e-5, "{}", a.rot * Vec3::X);
+    assert!((a.rot * Vec3::Y - Vec3::Z).length() < 1e-5, "{}", a.rot * Vec3::Y);
+    // An unnormalised quaternion is normalised, as Mitsuba does.
+    assert!((e.items[1].rot - glam::Mat3::from_rotation_y(90f32.to_radians())).abs_diff_eq(glam::Mat3::ZERO, 1e-5));
+    // extent and scale_factor multiply; adaptive clamping uses the opacities
+    // (0.5: sqrt(2 ln 50) / 3 times; 0.02 is nearly invisible: kept, small).
+    let job = load(
+        &shape(
+            r#"<float name="extent" value="2"/><boolean name="extent_adaptive_clamping" value="true"/>"#,
+            "ellipsoids",
+        ),
+        &dir,
+    )
+    .unwrap();
+    let Shape::Ellipsoids(e) = &job.scene.shapes[0] else { panic!("not ellipsoids") };
+    let k = (2.0f32 * 50f32.ln()).sqrt() / 3.0;
+    assert!((e.items[0].scale.x - 0.1 * 2.0 * 2.0 * k).abs() < 1e-5, "{}", e.items[0].scale);
+    let k2 = (2.0f32 * 2f32.ln()).sqrt() / 3.0;
+    assert!((e.items[1].scale.x - 0.1 * 2.0 * 2.0 * k2).abs() < 1e-5, "{}", e.items[1].scale);
+    // ellipsoidsmesh: 20 culled triangles per ellipsoid (12 with the box shell).
+    let job = load(&shape("", "ellipsoidsmesh"), &dir).unwrap();
+    let Shape::CulledMesh(m) = &job.scene.shapes[0] else { panic!("not a culled mesh") };
+    assert_eq!(m.mesh.indices.len(), 40);
+    let job = load(&shape(r#"<string name="shell" value="box"/>"#, "ellipsoidsmesh"), &dir).unwrap();
+    assert_eq!(job.scene.shapes[0].prim_count(), 24);
+}
+
+#[test]
+fn ellipsoid_errors_name_the_problem() {
+    let dir = temp_dir().join("ellipsoid_errors");
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = ([0.0f32; 3], [0.0f32; 3], [1.0f32, 0.0, 0.0, 0.0], vec![]);
+    std::fs::write(dir.join("ok.ply"), ellipsoid_ply(&[], std::slice::from_ref(&good))).unwrap();
+    let mut truncated = ellipsoid_ply(&[], &[good.clone(), good.clone()]);
+    truncated.truncate(truncated.len() - 6);
+    std::fs::write(dir.join("short.ply"), &truncated).unwrap();
+    // A header claiming a billion rows: refused before allocating them.
+    let mut huge = ellipsoid_ply(&[], std::slice::from_ref(&good));
+    let at = huge.windows(16).position(|w| w == b"element vertex 1").unwrap() + 16;
+    huge.splice(at..at, *b"000000000");
+    std::fs::write(dir.join("huge.ply"), &huge).unwrap();
+    let nan = ([0.0f32, f32::NAN, 0.0], [0.0f32; 3], [1.0f32, 0.0, 0.0, 0.0], vec![]);
+    std::fs::write(dir.join("nan.ply"), ellipsoid_ply(&[], &[good.clone(), nan])).unwrap();
+    // An extra column is fine; a misnamed one is not.
+    let mut cols = ellipsoid_ply(&["a"], &[(good.0, good.1, good.2, vec![1.0])]);
+    let at = cols.windows(8).position(|w| w == b"float nz").unwrap();
+    cols[at + 7] = b'w';
+    std::fs::write(dir.join("cols.ply"), &cols).unwrap();
+    let mut ascii = String::from("ply\nformat ascii 1.0\nelement vertex 2\n");
+    for n in ["x", "y", "z", "nx", "ny", "nz", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"] {
+        ascii += &format!("property float {n}\n");
+    }
+    ascii += "end_header\n0 0 0 0 0 0 0 0 0 1 0 0 0\n0 zero 0 0 0 0 0 0 0 1 0 0 0\n";
+    std::fs::write(dir.join("bad.ply"), ascii).unwrap();
+    let zero_q = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 4], vec![]);
+    std::fs::write(dir.join("zeroq.ply"), ellipsoid_ply(&[], &[zero_q])).unwrap();
+    std::fs::write(
+        dir.join("double.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nend_header\n1\n",
+    )
+    .unwrap();
+    let err = |body: &str| load(body, &dir).err().unwrap_or_else(|| panic!("loaded: {body}")).to_string();
+    let e = |file: &str, extra: &str| {
+        err(&format!(r#"<shape type="ellipsoids"><string name="filename" value="{file}"/>{extra}</shape>"#))
+    };
+    assert!(load(r#"<shape type="ellipsoids"><string name="filename" value="ok.ply"/></shape>"#, &dir).is_ok());
+    let m = e("short.ply", "");
+    assert!(m.contains("truncated") && m.contains("need 104 bytes") && m.contains("has 98"), "{m}");
+    let m = e("bad.ply", "");
+    assert!(m.contains("vertex 1 of 2, property 'y', at line 19"), "{m}");
+    let m = e("huge.ply", "");
+    assert!(m.contains("truncated") && m.contains("1000000000"), "{m}");
+    let m = e("nan.ply", "");
+    assert!(m.contains("ellipsoid 1") && m.contains("'y'"), "{m}");
+    let m = e("cols.ply", "");
+    assert!(m.contains("columns must be") && m.contains("found x y z nx ny nw a scale_0"), "{m}");
+    let m = e("zeroq.ply", "");
+    assert!(m.contains("quaternion"), "{m}");
+    let m = e("double.ply", "");
+    assert!(m.contains("property 'x'") && m.contains("float32"), "{m}");
+    let m = e("ok.ply", r#"<float name="extent" value="-1"/>"#);
+    assert!(m.contains("extent must be positive") && m.contains("scene.xml:"), "{m}");
+    let m = e("ok.ply", r#"<boolean name="extent_adaptive_clamping" value="true"/>"#);
+    assert!(m.contains("needs opacities"), "{m}");
+    let m = e("ok.ply", r#"<float name="no_such" value="1"/>"#);
+    assert!(m.contains("parameter 'no_such'") && m.contains("scene.xml:"), "{m}");
+    let m = e("ok.ply", r#"<transform name="to_world"><scale x="1" y="2" z="1"/></transform>"#);
+    assert!(m.contains("uniformly"), "{m}");
+    let m = e("ok.ply", r#"<string name="data" value="x"/>"#);
+    assert!(m.contains("tensor"), "{m}");
+    let m = e("ok.ply", r#"<emitter type="area"/>"#);
+    assert!(m.contains("cannot carry an area emitter"), "{m}");
+    let m = err(
+        r#"<shape type="ellipsoidsmesh"><string name="filename" value="ok.ply"/><string name="shell" value="cone"/></shape>"#,
+    );
+    assert!(m.contains("shell type 'cone'"), "{m}");
+    let m = err(r#"<shape type="ellipsoids"/>"#);
+    assert!(m.contains("needs a 'filename'"), "{m}");
+}

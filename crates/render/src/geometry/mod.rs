@@ -1,8 +1,10 @@
-//! Geometric primitives: rays, boxes, triangles, meshes, spheres, disks and cylinders.
+//! Geometric primitives: rays, boxes, triangles, meshes, spheres, disks,
+//! cylinders and ellipsoids.
 
 pub mod bounds;
 pub mod cylinder;
 pub mod disk;
+pub mod ellipsoids;
 pub mod interaction;
 pub mod mesh;
 pub mod ray;
@@ -13,6 +15,7 @@ pub mod triangle;
 pub use bounds::Aabb;
 pub use cylinder::Cylinder;
 pub use disk::Disk;
+pub use ellipsoids::{Ellipsoid, Ellipsoids, Shell};
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};

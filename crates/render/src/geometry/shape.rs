@@ -1,9 +1,10 @@
-//! Shapes: triangle meshes and the analytic sphere, disk and cylinder (each
-//! in its own module). A shape answers the geometric questions (bounds of
-//! its primitives, the interaction at a hit, area and direction sampling);
-//! the BVH intersects its primitives.
+//! Shapes: triangle meshes, the analytic sphere, disk and cylinder, and the
+//! multi-part shapes (ellipsoid clouds, culled shell meshes) whose parts the
+//! BVH bounds one by one (each in its own module). A shape answers the
+//! geometric questions (bounds of its primitives, the interaction at a hit,
+//! area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Cylinder, Disk, Ray, Sphere, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Cylinder, Disk, Ellipsoids, Ray, Sphere, SurfaceInteraction, TriangleMesh};
 use crate::math::{Frame, Mat3, Mat4};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -74,6 +75,12 @@ pub enum Shape {
     Disk(Disk),
     /// Mitsuba `cylinder`: an open tube (see [`Cylinder`]).
     Cylinder(Cylinder),
+    /// Mitsuba `ellipsoids`: analytic ellipsoids, back faces culled (see [`Ellipsoids`]).
+    Ellipsoids(Ellipsoids),
+    /// A triangle mesh whose back faces are culled (d · N_g > 0 never hits),
+    /// intersected triangle by triangle: Mitsuba `ellipsoidsmesh` (see
+    /// [`super::ellipsoids`]). Hits are completed as a [`Shape::Mesh`]'s.
+    CulledMesh(Mesh),
 }
 
 impl Shape {
@@ -95,38 +102,72 @@ impl Shape {
     /// Number of primitives the BVH sees.
     pub fn prim_count(&self) -> usize {
         match self {
-            Shape::Mesh(m) => m.mesh.indices.len(),
-            _ => 1,
+            Shape::Mesh(m) | Shape::CulledMesh(m) => m.mesh.indices.len(),
+            Shape::Ellipsoids(e) => e.items.len(),
+            Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_) => 1,
         }
+    }
+
+    /// Whether the BVH bounds and intersects this shape part by part
+    /// ([`Shape::intersect_prim`]), rather than as one analytic primitive
+    /// or as triangles of the shared 4-wide blocks.
+    pub fn is_multi_part(&self) -> bool {
+        matches!(self, Shape::Ellipsoids(_) | Shape::CulledMesh(_))
+    }
+
+    /// Whether Mitsuba 3.9.1 can sample points on this shape, which an
+    /// `area` emitter needs (it cannot on ellipsoids, SDF grids and curves).
+    pub fn can_emit(&self) -> bool {
+        matches!(self, Shape::Mesh(_) | Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_))
     }
 
     /// Bounds of primitive `i` in the shape's space.
     pub fn prim_bounds(&self, i: usize) -> Aabb {
         match self {
-            Shape::Mesh(m) => Aabb::from_points(&m.vertices(i)),
+            Shape::Mesh(m) | Shape::CulledMesh(m) => Aabb::from_points(&m.vertices(i)),
             Shape::Sphere(s) => s.bounds(),
             Shape::Disk(d) => d.bounds(),
             Shape::Cylinder(c) => c.bounds(),
+            Shape::Ellipsoids(e) => e.items[i].bounds(),
         }
     }
 
-    /// Total surface area.
+    /// Total surface area (0 for the shapes that cannot emit, see [`Shape::can_emit`]).
     pub fn area(&self) -> f32 {
         match self {
             Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
             Shape::Sphere(s) => s.area(),
             Shape::Disk(d) => d.area(),
             Shape::Cylinder(c) => c.area(),
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) => 0.0,
         }
     }
 
-    /// Intersects an analytic shape (meshes are intersected per triangle by the BVH).
+    /// Intersects an analytic shape (meshes are intersected per triangle by
+    /// the BVH); a multi-part shape's part 0.
     #[inline]
     pub fn intersect_analytic(&self, ray: &Ray) -> Option<(f32, Vec2)> {
+        self.intersect_prim(0, ray)
+    }
+
+    /// Intersects primitive `i` of an analytic or multi-part shape (None for
+    /// a [`Shape::Mesh`], whose triangles the BVH tests in blocks). `uv` as
+    /// in [`Shape::interaction`].
+    #[inline]
+    pub fn intersect_prim(&self, i: usize, ray: &Ray) -> Option<(f32, Vec2)> {
         match self {
             Shape::Sphere(s) => s.intersect(ray).map(|t| (t, Vec2::ZERO)),
             Shape::Disk(d) => d.intersect(ray),
             Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
+            Shape::Ellipsoids(e) => e.items[i].intersect(ray).map(|t| (t, Vec2::ZERO)),
+            Shape::CulledMesh(m) => {
+                let v = m.vertices(i);
+                if ray.d.dot((v[1] - v[0]).cross(v[2] - v[0])) > 0.0 {
+                    return None;
+                }
+                let sh = super::triangle::RayShear::new(ray.d);
+                super::triangle::intersect_triangle(ray, &sh, &v).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
+            }
             Shape::Mesh(_) => None,
         }
     }
@@ -156,7 +197,7 @@ impl Shape {
     ) -> SurfaceInteraction {
         let wo = -ray.d.normalize();
         let (p, n, sh_n, tex, dpdu, dpdv) = match self {
-            Shape::Mesh(m) => {
+            Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let t_idx = m.mesh.indices[prim];
                 let [p0, p1, p2] = m.vertices(prim);
                 let (b1, b2) = (uv.x, uv.y);
@@ -204,6 +245,10 @@ impl Shape {
                 let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);
                 (p, n, n, tex, dpdu, dpdv)
             }
+            Shape::Ellipsoids(e) => {
+                let (p, n) = e.items[prim].interaction(ray, t);
+                (p, n, n, Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+            }
         };
         SurfaceInteraction {
             p,
@@ -215,7 +260,7 @@ impl Shape {
             dpdv,
             shape: shape_id,
             prim: prim as u32,
-            bary: if matches!(self, Shape::Mesh(_)) { uv } else { Vec2::ZERO },
+            bary: if matches!(self, Shape::Mesh(_) | Shape::CulledMesh(_)) { uv } else { Vec2::ZERO },
             wo,
         }
     }
@@ -235,6 +280,8 @@ impl Shape {
             Shape::Sphere(s) => s.sample_area(u),
             Shape::Disk(d) => d.sample_area(u),
             Shape::Cylinder(c) => c.sample_area(u),
+            // Never emitters (the scene builder refuses them): a zero density.
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) => (Vec3::ZERO, Vec3::Z, 0.0),
         }
     }
 

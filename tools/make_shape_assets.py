@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""Write the small data files of Penumbra's shape test scenes (deterministic).
+
+Usage: python3 tools/make_shape_assets.py
+
+tests/scenes/shapes/ellipsoids.ply: five ellipsoids in the layout Mitsuba
+    3.9.1's `ellipsoids` and `ellipsoidsmesh` read (binary little-endian,
+    float32): x y z, nx ny nz, one extra column `opacities`, scale_0..2
+    (natural log of the radii before `extent`), rot_0..3 (the quaternion,
+    real part first). Two of them overlap, so rays leave one surface from
+    inside the other (both plugins cull back faces).
+"""
+import math
+import os
+import struct
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(os.path.dirname(HERE), "tests", "scenes", "shapes")
+
+
+def quat(axis, angle_deg):
+    """(r, i, j, k) of a rotation by `angle_deg` about `axis`."""
+    n = math.sqrt(sum(a * a for a in axis))
+    h = math.radians(angle_deg) / 2
+    s = math.sin(h) / n
+    return (math.cos(h), axis[0] * s, axis[1] * s, axis[2] * s)
+
+
+# (center, radii after the default extent 3, rotation)
+ELLIPSOIDS = [
+    ((-0.55, 0.30, 0.10), (0.45, 0.30, 0.25), quat((0, 1, 0), 30)),
+    ((-0.05, 0.35, 0.25), (0.20, 0.35, 0.20), quat((1, 0, 1), 40)),
+    ((0.55, 0.25, -0.10), (0.25, 0.25, 0.25), quat((0, 0, 1), 0)),
+    ((0.25, 0.15, 0.55), (0.30, 0.12, 0.18), quat((0, 1, 0), -50)),
+    ((-0.30, 0.70, -0.35), (0.18, 0.18, 0.40), quat((1, 0.3, 0), 70)),
+]
+
+
+def write_ellipsoids(path):
+    names = ["x", "y", "z", "nx", "ny", "nz", "opacities",
+             "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+    header = "ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % len(ELLIPSOIDS)
+    header += "".join("property float %s\n" % n for n in names) + "end_header\n"
+    with open(path, "wb") as f:
+        f.write(header.encode("ascii"))
+        for c, r, q in ELLIPSOIDS:
+            row = list(c) + [0.0, 0.0, 0.0, 0.9] + [math.log(x / 3.0) for x in r] + list(q)
+            f.write(struct.pack("<%df" % len(row), *row))
+
+
+if __name__ == "__main__":
+    os.makedirs(OUT, exist_ok=True)
+    write_ellipsoids(os.path.join(OUT, "ellipsoids.ply"))
+    print("wrote", os.path.join(OUT, "ellipsoids.ply"))
