@@ -76,6 +76,7 @@ SPP = {
     "emitter_in_medium": 65536,
     "spot_texture": 32768,
     "ellipsoids": 16384,
+    "sdfgrid": 32768,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

@@ -9,6 +9,9 @@ tests/scenes/shapes/ellipsoids.ply: five ellipsoids in the layout Mitsuba
     (natural log of the radii before `extent`), rot_0..3 (the quaternion,
     real part first). Two of them overlap, so rays leave one surface from
     inside the other (both plugins cull back faces).
+tests/scenes/shapes/torus.sdf.vol: a 20^3 grid (Mitsuba's .vol v3, one
+    channel) of signed distances, in the grid's [0,1]^3 object space, to a
+    tilted torus joined with a sphere (negative inside), for `sdfgrid`.
 """
 import math
 import os
@@ -48,7 +51,35 @@ def write_ellipsoids(path):
             f.write(struct.pack("<%df" % len(row), *row))
 
 
+def sdf_torus_sphere(p):
+    """Signed distance to a torus (R 0.28, r 0.1) tilted 30 degrees about x,
+    centred at (0.5, 0.45, 0.5), joined with a sphere (r 0.16) at (0.62, 0.62, 0.45)."""
+    x, y, z = p[0] - 0.5, p[1] - 0.45, p[2] - 0.5
+    c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    y, z = c * y - s * z, s * y + c * z
+    q = math.hypot(x, z) - 0.28
+    torus = math.hypot(q, y) - 0.1
+    sphere = math.dist(p, (0.62, 0.62, 0.45)) - 0.16
+    return min(torus, sphere)
+
+
+def write_sdf(path, n=20):
+    vals = []
+    for k in range(n):
+        for j in range(n):
+            for i in range(n):
+                vals.append(sdf_torus_sphere((i / (n - 1), j / (n - 1), k / (n - 1))))
+    with open(path, "wb") as f:
+        f.write(b"VOL")
+        f.write(bytes([3]))
+        f.write(struct.pack("<iiiii", 1, n, n, n, 1))
+        f.write(struct.pack("<6f", 0, 0, 0, 1, 1, 1))
+        f.write(struct.pack("<%df" % len(vals), *vals))
+
+
 if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     write_ellipsoids(os.path.join(OUT, "ellipsoids.ply"))
     print("wrote", os.path.join(OUT, "ellipsoids.ply"))
+    write_sdf(os.path.join(OUT, "torus.sdf.vol"))
+    print("wrote", os.path.join(OUT, "torus.sdf.vol"))

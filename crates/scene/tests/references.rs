@@ -204,3 +204,10 @@ fn textured_spot_light_matches_mitsuba() {
 fn ellipsoids_match_mitsuba() {
     compare("ellipsoids", 256);
 }
+
+/// Mitsuba's `sdfgrid`: a 20³ signed distance grid with smooth shading
+/// normals (diffuse) and with analytic ones (rough copper), one scaled unevenly.
+#[test]
+fn sdfgrid_matches_mitsuba() {
+    compare("sdfgrid", 256);
+}

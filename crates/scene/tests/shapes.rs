@@ -417,3 +417,65 @@ fn ellipsoid_errors_name_the_problem() {
     let m = err(r#"<shape type="ellipsoids"/>"#);
     assert!(m.contains("needs a 'filename'"), "{m}");
 }
+
+#[test]
+fn sdfgrid_is_read_and_its_errors_name_the_problem() {
+    use penumbra_render::medium::Grid;
+    let dir = temp_dir().join("sdfgrid");
+    std::fs::create_dir_all(&dir).unwrap();
+    let unit = Aabb { min: Vec3::ZERO, max: Vec3::ONE };
+    // z - 0.5 on a 3³ grid: the plane z = 0.5, 4 voxels touching it from each side.
+    let plane: Vec<f32> = (0..27).map(|i| (i / 9) as f32 * 0.5 - 0.5).collect();
+    let write = |name: &str, res: [u32; 3], channels: u32, data: Vec<f32>| {
+        let bytes = penumbra_scene::vol::encode(&Grid { res, channels, data }, &unit);
+        std::fs::write(dir.join(name), bytes).unwrap();
+    };
+    write("plane.vol", [3, 3, 3], 1, plane.clone());
+    write("rgb.vol", [3, 3, 3], 3, plane.iter().flat_map(|v| [*v; 3]).collect());
+    write("flat.vol", [3, 3, 1], 1, vec![1.0; 9]);
+    write("empty.vol", [3, 3, 3], 1, vec![1.0; 27]);
+    let mut truncated = std::fs::read(dir.join("plane.vol")).unwrap();
+    truncated.truncate(60);
+    std::fs::write(dir.join("short.vol"), truncated).unwrap();
+    let shape = |file: &str, extra: &str| {
+        format!(r#"<shape type="sdfgrid"><string name="filename" value="{file}"/>{extra}</shape>"#)
+    };
+    let job = load(
+        &shape("plane.vol", r#"<transform name="to_world"><scale x="2" y="3" z="4"/><translate x="1"/></transform>"#),
+        &dir,
+    )
+    .unwrap();
+    let Shape::SdfGrid(g) = &job.scene.shapes[0] else { panic!("not an SDF grid") };
+    // Only the voxels whose corners change sign or are zero: the 8 around z = 0.5.
+    assert_eq!(g.voxel_count(), 8);
+    assert!(g.smooth);
+    let b = (0..8).fold(Aabb::EMPTY, |b, i| b.union(g.bounds(i)));
+    assert!((b.min - Vec3::new(1.0, 0.0, 2.0)).abs().max_element() < 1e-4, "{b:?}");
+    assert!((b.max - Vec3::new(3.0, 3.0, 2.0)).abs().max_element() < 1e-4, "{b:?}");
+    let job = load(&shape("plane.vol", r#"<string name="normals" value="analytic"/>"#), &dir).unwrap();
+    let Shape::SdfGrid(g) = &job.scene.shapes[0] else { panic!("not an SDF grid") };
+    assert!(!g.smooth);
+    let err = |body: &str| load(body, &dir).err().unwrap_or_else(|| panic!("loaded: {body}")).to_string();
+    let m = err(&shape("rgb.vol", ""));
+    assert!(m.contains("3 channels"), "{m}");
+    let m = err(&shape("flat.vol", ""));
+    assert!(m.contains("at least 2 values"), "{m}");
+    let m = err(&shape("empty.vol", ""));
+    assert!(m.contains("no voxel holds a surface"), "{m}");
+    let m = err(&shape("short.vol", ""));
+    assert!(m.contains("truncated"), "{m}");
+    let m = err(&shape("plane.vol", r#"<string name="normals" value="flat"/>"#));
+    assert!(m.contains("invalid normals mode 'flat'") && m.contains("scene.xml:"), "{m}");
+    let m = err(&shape("plane.vol", r#"<transform name="to_world"><rotate y="1" angle="30"/></transform>"#));
+    assert!(m.contains("must not rotate"), "{m}");
+    let m = err(&shape("plane.vol", r#"<emitter type="area"/>"#));
+    assert!(m.contains("sdfgrid cannot carry an area emitter"), "{m}");
+    let m = err(&shape("plane.vol", r#"<boolean name="flip_normals" value="true"/>"#));
+    assert!(m.contains("no parameter 'flip_normals'"), "{m}");
+    let m = err(&shape("plane.vol", r#"<string name="grid" value="x"/>"#));
+    assert!(m.contains("tensor"), "{m}");
+    let m = err(&shape("nowhere.vol", ""));
+    assert!(m.contains("nowhere.vol") && m.contains("not found"), "{m}");
+    let m = err(r#"<shape type="sdfgrid"/>"#);
+    assert!(m.contains("needs a 'filename'"), "{m}");
+}

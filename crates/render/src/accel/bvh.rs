@@ -751,7 +751,7 @@ mod tests {
         }
     }
 
-    /// Multi-part shapes (an ellipsoid cloud, culled shells): each part is
+    /// Multi-part shapes (an ellipsoid cloud, culled shells, an SDF grid): each part is
     /// a primitive of its own, and the BVH finds the closest part a brute
     /// force over all parts finds (culled back faces included).
     #[test]
@@ -768,13 +768,16 @@ mod tests {
         };
         let cloud: Vec<Ellipsoid> = (0..300).map(ellipsoid).collect();
         let shells: Vec<Ellipsoid> = (300..500).map(ellipsoid).collect();
+        let sdf = crate::accel::packet::tests::sdf_blob(glam::DMat4::from_translation(glam::DVec3::new(4.0, 4.0, 4.0)));
+        let voxels = sdf.voxel_count();
         let shapes = vec![
             Shape::Ellipsoids(Ellipsoids { items: cloud }),
             Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
+            Shape::SdfGrid(sdf),
         ];
         let accel = Accel::build_shapes(&shapes);
         accel.validate().unwrap();
-        assert_eq!(accel.prims.len(), 300 + 200 * 20);
+        assert_eq!(accel.prims.len(), 300 + 200 * 20 + voxels);
         let mut hits = 0;
         for i in 0..3000u64 {
             let o = Vec3::new(rnd(i, 100), rnd(i, 101), rnd(i, 102)) * 12.0 - 1.0;

@@ -531,10 +531,10 @@ pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Optio
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::geometry::ellipsoids::quat_to_matrix;
-    use crate::geometry::{Ellipsoid, Ellipsoids, Mesh, Shell, TriangleMesh};
+    use crate::geometry::{Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shell, TriangleMesh};
     use crate::sampling::rng::{hash_words, to_unit_f32};
     use glam::Vec3;
 
@@ -544,7 +544,8 @@ mod tests {
 
     /// A triangle soup, a grid of quads (shared edges and vertices, hit
     /// exactly by axis-aligned rays through them), spheres, and the
-    /// multi-part shapes: a cloud of ellipsoids and culled ellipsoid shells.
+    /// multi-part shapes: a cloud of ellipsoids, culled ellipsoid shells and
+    /// a signed distance grid.
     fn scene() -> Vec<Shape> {
         let mut m = TriangleMesh::default();
         for i in 0..3000u64 {
@@ -592,7 +593,29 @@ mod tests {
             Shape::sphere(Vec3::new(2.0, 7.0, 3.0), 0.7, false),
             Shape::Ellipsoids(Ellipsoids { items: cloud }),
             Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
+            Shape::SdfGrid(sdf_blob(glam::DMat4::from_scale_rotation_translation(
+                glam::DVec3::splat(3.0),
+                glam::DQuat::IDENTITY,
+                glam::DVec3::new(6.0, 1.0, 5.0),
+            ))),
         ]
+    }
+
+    /// A 9³ signed distance grid of two overlapping spheres, placed by `to_world`.
+    pub(crate) fn sdf_blob(to_world: glam::DMat4) -> SdfGrid {
+        let n = 9;
+        let mut data = Vec::new();
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let p = glam::DVec3::new(i as f64, j as f64, k as f64) / (n - 1) as f64;
+                    let a = (p - glam::DVec3::new(0.4, 0.5, 0.5)).length() - 0.3;
+                    let b = (p - glam::DVec3::new(0.7, 0.6, 0.4)).length() - 0.2;
+                    data.push(a.min(b) as f32);
+                }
+            }
+        }
+        SdfGrid::new([n; 3], data, to_world, true).unwrap()
     }
 
     /// Coherent bundles (a pinhole's rays over a small patch, some aimed

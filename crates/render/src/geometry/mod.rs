@@ -1,5 +1,5 @@
 //! Geometric primitives: rays, boxes, triangles, meshes, spheres, disks,
-//! cylinders and ellipsoids.
+//! cylinders, ellipsoids and signed distance grids.
 
 pub mod bounds;
 pub mod cylinder;
@@ -8,6 +8,7 @@ pub mod ellipsoids;
 pub mod interaction;
 pub mod mesh;
 pub mod ray;
+pub mod sdfgrid;
 pub mod shape;
 pub mod sphere;
 pub mod triangle;
@@ -19,5 +20,6 @@ pub use ellipsoids::{Ellipsoid, Ellipsoids, Shell};
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use ray::{offset_origin, Ray};
+pub use sdfgrid::SdfGrid;
 pub use shape::{Mesh, Shape, ShapeSample};
 pub use sphere::Sphere;

@@ -4,7 +4,7 @@
 //! geometric questions (bounds of its primitives, the interaction at a hit,
 //! area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Cylinder, Disk, Ellipsoids, Ray, Sphere, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Cylinder, Disk, Ellipsoids, Ray, SdfGrid, Sphere, SurfaceInteraction, TriangleMesh};
 use crate::math::{Frame, Mat3, Mat4};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -81,6 +81,9 @@ pub enum Shape {
     /// intersected triangle by triangle: Mitsuba `ellipsoidsmesh` (see
     /// [`super::ellipsoids`]). Hits are completed as a [`Shape::Mesh`]'s.
     CulledMesh(Mesh),
+    /// Mitsuba `sdfgrid`: a signed distance grid, one part per voxel the
+    /// surface crosses (see [`SdfGrid`]).
+    SdfGrid(SdfGrid),
 }
 
 impl Shape {
@@ -104,6 +107,7 @@ impl Shape {
         match self {
             Shape::Mesh(m) | Shape::CulledMesh(m) => m.mesh.indices.len(),
             Shape::Ellipsoids(e) => e.items.len(),
+            Shape::SdfGrid(g) => g.voxel_count(),
             Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_) => 1,
         }
     }
@@ -112,7 +116,7 @@ impl Shape {
     /// ([`Shape::intersect_prim`]), rather than as one analytic primitive
     /// or as triangles of the shared 4-wide blocks.
     pub fn is_multi_part(&self) -> bool {
-        matches!(self, Shape::Ellipsoids(_) | Shape::CulledMesh(_))
+        matches!(self, Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_))
     }
 
     /// Whether Mitsuba 3.9.1 can sample points on this shape, which an
@@ -129,6 +133,7 @@ impl Shape {
             Shape::Disk(d) => d.bounds(),
             Shape::Cylinder(c) => c.bounds(),
             Shape::Ellipsoids(e) => e.items[i].bounds(),
+            Shape::SdfGrid(g) => g.bounds(i),
         }
     }
 
@@ -139,7 +144,7 @@ impl Shape {
             Shape::Sphere(s) => s.area(),
             Shape::Disk(d) => d.area(),
             Shape::Cylinder(c) => c.area(),
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) => 0.0,
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) => 0.0,
         }
     }
 
@@ -160,6 +165,7 @@ impl Shape {
             Shape::Disk(d) => d.intersect(ray),
             Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
             Shape::Ellipsoids(e) => e.items[i].intersect(ray).map(|t| (t, Vec2::ZERO)),
+            Shape::SdfGrid(g) => g.intersect(i, ray).map(|t| (t, Vec2::ZERO)),
             Shape::CulledMesh(m) => {
                 let v = m.vertices(i);
                 if ray.d.dot((v[1] - v[0]).cross(v[2] - v[0])) > 0.0 {
@@ -249,6 +255,10 @@ impl Shape {
                 let (p, n) = e.items[prim].interaction(ray, t);
                 (p, n, n, Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
             }
+            Shape::SdfGrid(g) => {
+                let (p, n, sh_n) = g.interaction(ray, t);
+                (p, n, sh_n, Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+            }
         };
         SurfaceInteraction {
             p,
@@ -281,7 +291,7 @@ impl Shape {
             Shape::Disk(d) => d.sample_area(u),
             Shape::Cylinder(c) => c.sample_area(u),
             // Never emitters (the scene builder refuses them): a zero density.
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) => (Vec3::ZERO, Vec3::Z, 0.0),
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) => (Vec3::ZERO, Vec3::Z, 0.0),
         }
     }
 

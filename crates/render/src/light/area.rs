@@ -85,7 +85,7 @@ fn normal_cone(shape: &Shape) -> DirectionCone {
     match shape {
         // The shapes that cannot emit (the builder refuses them) get the
         // whole sphere too.
-        Shape::Sphere(_) | Shape::Cylinder(_) | Shape::Ellipsoids(_) | Shape::CulledMesh(_) => {
+        Shape::Sphere(_) | Shape::Cylinder(_) | Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) => {
             DirectionCone::ENTIRE_SPHERE
         }
         Shape::Disk(d) => DirectionCone { w: d.n, cos_theta: 1.0 },

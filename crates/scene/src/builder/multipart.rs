@@ -1,7 +1,7 @@
 //! The shapes whose BVH primitives are parts of one plugin: Mitsuba's
 //! `ellipsoids` and `ellipsoidsmesh` (each reading a PLY file of
-//! ellipsoids). None of them can carry an `area` emitter (Mitsuba 3.9.1
-//! cannot sample points on them; [`Shape::can_emit`]).
+//! ellipsoids) and `sdfgrid`. None of them can carry an `area` emitter
+//! (Mitsuba 3.9.1 cannot sample points on them; [`Shape::can_emit`]).
 
 use super::resolve;
 use super::shape::Geometry;
@@ -10,7 +10,7 @@ use crate::error::{LoadError, Result};
 use crate::ply;
 use glam::{DMat3, DMat4, DVec3};
 use penumbra_render::geometry::ellipsoids::quat_to_matrix;
-use penumbra_render::geometry::{Ellipsoid, Ellipsoids, Mesh, Shape, Shell};
+use penumbra_render::geometry::{Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shape, Shell};
 
 /// Mitsuba's `ellipsoids`: analytic ellipsoids with back faces culled.
 ///
@@ -163,4 +163,58 @@ fn load_ellipsoids(node: &Node, to_world: &DMat4, flip: bool) -> Result<Vec<Elli
         return Err(in_file("the file holds no ellipsoids".into()));
     }
     Ok(items)
+}
+
+/// Mitsuba's `sdfgrid`: a signed distance grid over the object-space unit
+/// cube, its zero set the surface.
+///
+/// | parameter | type | default | meaning |
+/// |---|---|---|---|
+/// | `filename` | string | required | a Mitsuba `.vol` file with one channel, at least 2 values per axis (the header's box is ignored: the grid spans [0, 1]³) |
+/// | `normals` | string | `smooth` | shading normals: `smooth` (blended across voxels) or `analytic` (the gradient) |
+/// | `to_world` | transform | identity | places the unit cube; it may scale (also unevenly) and translate but not rotate (Mitsuba's voxel boxes are then wrong: use `shapegroup` and `instance`) |
+///
+/// The tensor parameter `grid` cannot be written in XML; an area emitter is refused.
+pub(super) fn sdfgrid(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    if node.has("grid") {
+        return Err(LoadError::at(
+            node.loc_of("grid"),
+            "'grid' of sdfgrid is a tensor, which a scene file cannot give; use 'filename' (a .vol file)",
+        ));
+    }
+    if flip {
+        return Err(LoadError::at(node.loc_of("flip_normals"), "sdfgrid has no parameter 'flip_normals'"));
+    }
+    let smooth = match node.get_string("normals")? {
+        None => true,
+        Some((s, loc)) => match s.as_str() {
+            "smooth" => true,
+            "analytic" => false,
+            _ => {
+                return Err(LoadError::at(
+                    &loc,
+                    format!("invalid normals mode '{s}'; it must be 'analytic' or 'smooth'"),
+                ))
+            }
+        },
+    };
+    let a = DMat3::from_mat4(*to_world);
+    let off_diagonal = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)];
+    let size = a.to_cols_array().iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if off_diagonal.iter().any(|&(c, r)| a.col(c)[r].abs() > 1e-6 * size) {
+        return Err(LoadError::at(
+            node.loc_of("to_world"),
+            "sdfgrid: to_world must not rotate the grid (use a shapegroup and an instance)",
+        ));
+    }
+    let (file, loc) = node.get_string("filename")?.ok_or_else(|| node.error("sdfgrid needs a 'filename'"))?;
+    let path = resolve(&loc, &file, "SDF grid file")?;
+    let in_file = |msg: String| LoadError::at(&loc, format!("'{}': {msg}", path.display()));
+    let vol = crate::vol::read(&path).map_err(in_file)?;
+    if vol.grid.channels != 1 {
+        return Err(in_file(format!("the grid has {} channels; an SDF grid has 1", vol.grid.channels)));
+    }
+    let res = vol.grid.res.map(|r| r as usize);
+    let g = SdfGrid::new(res, vol.grid.data, *to_world, smooth).map_err(in_file)?;
+    Ok((Shape::SdfGrid(g), Vec::new()))
 }

@@ -46,6 +46,7 @@ pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("cylinder", ShapeBuilder::Geometry(cylinder)),
     ("ellipsoids", ShapeBuilder::Geometry(multipart::ellipsoids)),
     ("ellipsoidsmesh", ShapeBuilder::Geometry(multipart::ellipsoidsmesh)),
+    ("sdfgrid", ShapeBuilder::Geometry(multipart::sdfgrid)),
     ("obj", ShapeBuilder::Geometry(mesh_file)),
     ("ply", ShapeBuilder::Geometry(mesh_file)),
     ("serialized", ShapeBuilder::Geometry(serialized)),
