@@ -77,6 +77,7 @@ SPP = {
     "spot_texture": 32768,
     "ellipsoids": 16384,
     "sdfgrid": 32768,
+    "linearcurve": 16384,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

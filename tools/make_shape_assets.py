@@ -12,6 +12,9 @@ tests/scenes/shapes/ellipsoids.ply: five ellipsoids in the layout Mitsuba
 tests/scenes/shapes/torus.sdf.vol: a 20^3 grid (Mitsuba's .vol v3, one
     channel) of signed distances, in the grid's [0,1]^3 object space, to a
     tilted torus joined with a sphere (negative inside), for `sdfgrid`.
+tests/scenes/shapes/curves.txt: control points (x y z radius per line, an
+    empty line between curves) of a tapering helix, a zigzag whose radius
+    jumps between points, and a single segment, for `linearcurve`.
 """
 import math
 import os
@@ -77,9 +80,28 @@ def write_sdf(path, n=20):
         f.write(struct.pack("<%df" % len(vals), *vals))
 
 
+def curves():
+    helix = []
+    for k in range(24):
+        a = k * 0.45
+        helix.append((0.25 * math.cos(a) - 0.45, 0.15 + 0.035 * k, 0.25 * math.sin(a) - 0.2,
+                      0.06 - 0.0017 * k))
+    zigzag = [(-0.1 + 0.16 * k, 0.12 + 0.1 * (k % 2), 0.35 - 0.05 * k, [0.12, 0.03, 0.1, 0.05, 0.09, 0.04][k])
+              for k in range(6)]
+    single = [(0.55, 0.5, -0.3, 0.08), (0.75, 0.2, 0.15, 0.04)]
+    return [helix, zigzag, single]
+
+
+def write_curves(path):
+    with open(path, "w", newline="\n") as f:
+        f.write("\n\n".join("\n".join("%.6f %.6f %.6f %.6f" % p for p in c) for c in curves()) + "\n")
+
+
 if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     write_ellipsoids(os.path.join(OUT, "ellipsoids.ply"))
     print("wrote", os.path.join(OUT, "ellipsoids.ply"))
     write_sdf(os.path.join(OUT, "torus.sdf.vol"))
     print("wrote", os.path.join(OUT, "torus.sdf.vol"))
+    write_curves(os.path.join(OUT, "curves.txt"))
+    print("wrote", os.path.join(OUT, "curves.txt"))

@@ -211,3 +211,11 @@ fn ellipsoids_match_mitsuba() {
 fn sdfgrid_matches_mitsuba() {
     compare("sdfgrid", 256);
 }
+
+/// Mitsuba's `linearcurve` (Embree's round linear curves): a tapering
+/// helix, a zigzag with jumping radii and a single segment, textured on the
+/// curves' uv by a checkerboard.
+#[test]
+fn linearcurve_matches_mitsuba() {
+    compare("linearcurve", 256);
+}

@@ -479,3 +479,55 @@ fn sdfgrid_is_read_and_its_errors_name_the_problem() {
     let m = err(r#"<shape type="sdfgrid"/>"#);
     assert!(m.contains("needs a 'filename'"), "{m}");
 }
+
+#[test]
+fn linearcurve_is_read_and_its_errors_name_the_problem() {
+    let dir = temp_dir().join("linearcurve");
+    std::fs::create_dir_all(&dir).unwrap();
+    let files = [
+        ("ok.txt", "0 0 0 0.1\n1 0 0 0.2\n2 1 0 0.1\n \t\r\n5 5 5 0.3\n6 5 5 0\n"),
+        ("short.txt", "0 0 0 0.1\n1 0 0 0.2\n\n\n5 5 5 0.3\n"),
+        ("three.txt", "0 0 0 0.1 7\n"),
+        ("word.txt", "0 0 0 0.1\n1 zero 0 0.2\n"),
+        ("nan.txt", "0 0 0 0.1\n1 nan 0 0.2\n"),
+        ("negative.txt", "0 0 0 0.1\n1 0 0 -0.2\n"),
+        ("empty.txt", "\n\n"),
+    ];
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    std::fs::write(dir.join("binary.txt"), b"0 0 0 0.1\n\xff\xfe").unwrap();
+    let shape = |file: &str, extra: &str| {
+        format!(r#"<shape type="linearcurve"><string name="filename" value="{file}"/>{extra}</shape>"#)
+    };
+    let job =
+        load(&shape("ok.txt", r#"<transform name="to_world"><scale value="2"/><translate x="1"/></transform>"#), &dir)
+            .unwrap();
+    let Shape::Curves(c) = &job.scene.shapes[0] else { panic!("not curves") };
+    // Two curves (3 and 2 points, a blank line of spaces between): 3 segments;
+    // positions placed by to_world, radii as written.
+    assert_eq!(c.segments, [0, 1, 3]);
+    assert_eq!(c.points.len(), 5);
+    assert!((c.points[2] - glam::Vec4::new(5.0, 2.0, 0.0, 0.1)).abs().max_element() < 1e-6, "{}", c.points[2]);
+    let err = |body: &str| load(body, &dir).err().unwrap_or_else(|| panic!("loaded: {body}")).to_string();
+    let m = err(&shape("short.txt", ""));
+    assert!(m.contains("line 5: the curve starting here has 1 control point;"), "{m}");
+    let m = err(&shape("three.txt", ""));
+    assert!(m.contains("line 1: expected 4 numbers"), "{m}");
+    let m = err(&shape("word.txt", ""));
+    assert!(m.contains("line 2: expected 4 numbers") && m.contains("'1 zero 0 0.2'"), "{m}");
+    let m = err(&shape("nan.txt", ""));
+    assert!(m.contains("line 2") && m.contains("NaN"), "{m}");
+    let m = err(&shape("negative.txt", ""));
+    assert!(m.contains("line 2: the radius -0.2 is negative"), "{m}");
+    let m = err(&shape("empty.txt", ""));
+    assert!(m.contains("no control points"), "{m}");
+    let m = err(&shape("binary.txt", ""));
+    assert!(m.contains("not valid UTF-8 text: line 2"), "{m}");
+    let m = err(&shape("ok.txt", r#"<emitter type="area"/>"#));
+    assert!(m.contains("linearcurve cannot carry an area emitter"), "{m}");
+    let m = err(&shape("ok.txt", r#"<integer name="control_point_count" value="5"/>"#));
+    assert!(m.contains("parameter 'control_point_count'") && m.contains("scene.xml:"), "{m}");
+    let m = err(r#"<shape type="linearcurve"/>"#);
+    assert!(m.contains("needs a 'filename'"), "{m}");
+}

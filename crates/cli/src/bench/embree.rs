@@ -83,8 +83,8 @@ pub fn with_embree_shapes<R>(
                 }
             }
             Shape::Cylinder(_) => return Err("a cylinder has no Embree counterpart here".into()),
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) => {
-                return Err("ellipsoids and SDF grids have no Embree counterpart here".into())
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_) => {
+                return Err("ellipsoids, SDF grids and curves have no Embree counterpart here".into())
             }
         }
     }

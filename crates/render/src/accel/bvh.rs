@@ -751,7 +751,8 @@ mod tests {
         }
     }
 
-    /// Multi-part shapes (an ellipsoid cloud, culled shells, an SDF grid): each part is
+    /// Multi-part shapes (an ellipsoid cloud, culled shells, an SDF grid,
+    /// curves): each part is
     /// a primitive of its own, and the BVH finds the closest part a brute
     /// force over all parts finds (culled back faces included).
     #[test]
@@ -774,10 +775,16 @@ mod tests {
             Shape::Ellipsoids(Ellipsoids { items: cloud }),
             Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
             Shape::SdfGrid(sdf),
+            Shape::Curves(crate::geometry::Curves {
+                points: (0..200)
+                    .map(|k| glam::Vec4::new(rnd(k, 60) * 10.0, rnd(k, 61) * 10.0, rnd(k, 62) * 10.0, 0.3 * rnd(k, 63)))
+                    .collect(),
+                segments: (0..199).filter(|k| k % 5 != 4).collect(),
+            }),
         ];
         let accel = Accel::build_shapes(&shapes);
         accel.validate().unwrap();
-        assert_eq!(accel.prims.len(), 300 + 200 * 20 + voxels);
+        assert_eq!(accel.prims.len(), 300 + 200 * 20 + voxels + 160);
         let mut hits = 0;
         for i in 0..3000u64 {
             let o = Vec3::new(rnd(i, 100), rnd(i, 101), rnd(i, 102)) * 12.0 - 1.0;

@@ -534,7 +534,7 @@ pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Optio
 pub(crate) mod tests {
     use super::*;
     use crate::geometry::ellipsoids::quat_to_matrix;
-    use crate::geometry::{Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shell, TriangleMesh};
+    use crate::geometry::{Curves, Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shell, TriangleMesh};
     use crate::sampling::rng::{hash_words, to_unit_f32};
     use glam::Vec3;
 
@@ -544,8 +544,8 @@ pub(crate) mod tests {
 
     /// A triangle soup, a grid of quads (shared edges and vertices, hit
     /// exactly by axis-aligned rays through them), spheres, and the
-    /// multi-part shapes: a cloud of ellipsoids, culled ellipsoid shells and
-    /// a signed distance grid.
+    /// multi-part shapes: a cloud of ellipsoids, culled ellipsoid shells,
+    /// curves and a signed distance grid.
     fn scene() -> Vec<Shape> {
         let mut m = TriangleMesh::default();
         for i in 0..3000u64 {
@@ -593,6 +593,20 @@ pub(crate) mod tests {
             Shape::sphere(Vec3::new(2.0, 7.0, 3.0), 0.7, false),
             Shape::Ellipsoids(Ellipsoids { items: cloud }),
             Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
+            Shape::Curves(Curves {
+                points: (0..40)
+                    .map(|k| {
+                        let a = k as f32 * 0.5;
+                        glam::Vec4::new(
+                            3.0 + 2.0 * a.cos(),
+                            0.2 * k as f32,
+                            6.0 + 2.0 * a.sin(),
+                            0.05 + 0.1 * rnd(k, 50),
+                        )
+                    })
+                    .collect(),
+                segments: (0..39).filter(|k| k % 10 != 9).collect(),
+            }),
             Shape::SdfGrid(sdf_blob(glam::DMat4::from_scale_rotation_translation(
                 glam::DVec3::splat(3.0),
                 glam::DQuat::IDENTITY,

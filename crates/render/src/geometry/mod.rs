@@ -1,7 +1,8 @@
 //! Geometric primitives: rays, boxes, triangles, meshes, spheres, disks,
-//! cylinders, ellipsoids and signed distance grids.
+//! cylinders, ellipsoids, signed distance grids and curves.
 
 pub mod bounds;
+pub mod curves;
 pub mod cylinder;
 pub mod disk;
 pub mod ellipsoids;
@@ -14,6 +15,7 @@ pub mod sphere;
 pub mod triangle;
 
 pub use bounds::Aabb;
+pub use curves::Curves;
 pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use ellipsoids::{Ellipsoid, Ellipsoids, Shell};

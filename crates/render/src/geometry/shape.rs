@@ -4,7 +4,7 @@
 //! geometric questions (bounds of its primitives, the interaction at a hit,
 //! area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Cylinder, Disk, Ellipsoids, Ray, SdfGrid, Sphere, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Curves, Cylinder, Disk, Ellipsoids, Ray, SdfGrid, Sphere, SurfaceInteraction, TriangleMesh};
 use crate::math::{Frame, Mat3, Mat4};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -84,6 +84,9 @@ pub enum Shape {
     /// Mitsuba `sdfgrid`: a signed distance grid, one part per voxel the
     /// surface crosses (see [`SdfGrid`]).
     SdfGrid(SdfGrid),
+    /// Mitsuba `linearcurve`: round tubes through control points, one part
+    /// per segment, back faces culled (see [`Curves`]).
+    Curves(Curves),
 }
 
 impl Shape {
@@ -108,6 +111,7 @@ impl Shape {
             Shape::Mesh(m) | Shape::CulledMesh(m) => m.mesh.indices.len(),
             Shape::Ellipsoids(e) => e.items.len(),
             Shape::SdfGrid(g) => g.voxel_count(),
+            Shape::Curves(c) => c.segment_count(),
             Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_) => 1,
         }
     }
@@ -116,7 +120,7 @@ impl Shape {
     /// ([`Shape::intersect_prim`]), rather than as one analytic primitive
     /// or as triangles of the shared 4-wide blocks.
     pub fn is_multi_part(&self) -> bool {
-        matches!(self, Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_))
+        matches!(self, Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_))
     }
 
     /// Whether Mitsuba 3.9.1 can sample points on this shape, which an
@@ -134,6 +138,7 @@ impl Shape {
             Shape::Cylinder(c) => c.bounds(),
             Shape::Ellipsoids(e) => e.items[i].bounds(),
             Shape::SdfGrid(g) => g.bounds(i),
+            Shape::Curves(c) => c.bounds(i),
         }
     }
 
@@ -144,7 +149,7 @@ impl Shape {
             Shape::Sphere(s) => s.area(),
             Shape::Disk(d) => d.area(),
             Shape::Cylinder(c) => c.area(),
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) => 0.0,
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_) => 0.0,
         }
     }
 
@@ -166,6 +171,7 @@ impl Shape {
             Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
             Shape::Ellipsoids(e) => e.items[i].intersect(ray).map(|t| (t, Vec2::ZERO)),
             Shape::SdfGrid(g) => g.intersect(i, ray).map(|t| (t, Vec2::ZERO)),
+            Shape::Curves(c) => c.intersect(i, ray),
             Shape::CulledMesh(m) => {
                 let v = m.vertices(i);
                 if ray.d.dot((v[1] - v[0]).cross(v[2] - v[0])) > 0.0 {
@@ -179,7 +185,8 @@ impl Shape {
     }
 
     /// Completes a hit on primitive `prim` at distance `t`; `uv` holds the
-    /// triangle barycentrics (b1, b2), or the disk's local (x, y). Fills in
+    /// triangle barycentrics (b1, b2), the disk's local (x, y), or a curve's
+    /// parameter along its segment (x). Fills in
     /// Mitsuba's uv, dp/du, dp/dv and a shading frame aligned with dp/du;
     /// `shape_id` becomes the result's `shape`.
     pub fn interaction(&self, shape_id: u32, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
@@ -259,6 +266,10 @@ impl Shape {
                 let (p, n, sh_n) = g.interaction(ray, t);
                 (p, n, sh_n, Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
             }
+            Shape::Curves(c) => {
+                let (p, n, tex, dpdu, dpdv) = c.interaction(prim, ray, t, uv.x);
+                (p, n, n, tex, dpdu, dpdv)
+            }
         };
         SurfaceInteraction {
             p,
@@ -291,7 +302,9 @@ impl Shape {
             Shape::Disk(d) => d.sample_area(u),
             Shape::Cylinder(c) => c.sample_area(u),
             // Never emitters (the scene builder refuses them): a zero density.
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) => (Vec3::ZERO, Vec3::Z, 0.0),
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_) => {
+                (Vec3::ZERO, Vec3::Z, 0.0)
+            }
         }
     }
 

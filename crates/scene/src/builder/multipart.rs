@@ -1,16 +1,18 @@
 //! The shapes whose BVH primitives are parts of one plugin: Mitsuba's
 //! `ellipsoids` and `ellipsoidsmesh` (each reading a PLY file of
-//! ellipsoids) and `sdfgrid`. None of them can carry an `area` emitter
-//! (Mitsuba 3.9.1 cannot sample points on them; [`Shape::can_emit`]).
+//! ellipsoids), `sdfgrid` and `linearcurve`. None of them can carry an
+//! `area` emitter (Mitsuba 3.9.1 cannot sample points on them;
+//! [`Shape::can_emit`]).
 
 use super::resolve;
 use super::shape::Geometry;
 use crate::desc::Node;
 use crate::error::{LoadError, Result};
 use crate::ply;
+use glam::Vec4;
 use glam::{DMat3, DMat4, DVec3};
 use penumbra_render::geometry::ellipsoids::quat_to_matrix;
-use penumbra_render::geometry::{Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shape, Shell};
+use penumbra_render::geometry::{Curves, Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shape, Shell};
 
 /// Mitsuba's `ellipsoids`: analytic ellipsoids with back faces culled.
 ///
@@ -217,4 +219,90 @@ pub(super) fn sdfgrid(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geome
     let res = vol.grid.res.map(|r| r as usize);
     let g = SdfGrid::new(res, vol.grid.data, *to_world, smooth).map_err(in_file)?;
     Ok((Shape::SdfGrid(g), Vec::new()))
+}
+
+/// Mitsuba's `linearcurve`: round tubes through control points (Embree's
+/// round linear curves: cones between spheres at the control points), back
+/// faces culled.
+///
+/// | parameter | type | default | meaning |
+/// |---|---|---|---|
+/// | `filename` | string | required | a text file, one control point per line: `x y z radius`; an empty line starts a new curve; each curve has at least 2 points |
+/// | `to_world` | transform | identity | moves the control points (the radii are not transformed, as in Mitsuba) |
+///
+/// Radii must be finite and not negative; an area emitter is refused.
+pub(super) fn linearcurve(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    if flip {
+        return Err(LoadError::at(node.loc_of("flip_normals"), "linearcurve has no parameter 'flip_normals'"));
+    }
+    let (points, curves) = load_curves(node, to_world, 2)?;
+    let mut segments = Vec::new();
+    for (first, n) in curves {
+        segments.extend((first..first + n - 1).map(|k| k as u32));
+    }
+    Ok((Shape::Curves(Curves { points, segments }), Vec::new()))
+}
+
+/// A curve file's control points (x, y, z, radius) and each curve's
+/// (first point, point count).
+type CurveFile = (Vec<Vec4>, Vec<(usize, usize)>);
+
+/// The control points of a curve file (positions placed by `to_world`,
+/// radii as written) and each curve's (first point, point count); every
+/// curve needs `min_points`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(r >= 0)` is also true for NaN, on purpose
+fn load_curves(node: &Node, to_world: &DMat4, min_points: usize) -> Result<CurveFile> {
+    let what = node.plugin.as_str();
+    let (file, loc) = node.get_string("filename")?.ok_or_else(|| node.error(format!("{what} needs a 'filename'")))?;
+    let path = resolve(&loc, &file, "curve file")?;
+    let in_file = |msg: String| LoadError::at(&loc, format!("'{}': {msg}", path.display()));
+    let bytes = std::fs::read(&path).map_err(|e| in_file(format!("cannot read: {e}")))?;
+    let text = crate::error::utf8_text(bytes).map_err(in_file)?;
+    let mut points = Vec::new();
+    let mut curves: Vec<(usize, usize)> = Vec::new();
+    // (first point, line it starts on) of the curve being read.
+    let mut open: Option<(usize, usize)> = None;
+    let mut close = |open: &mut Option<(usize, usize)>, points: &Vec<Vec4>| -> Result<()> {
+        if let Some((first, line)) = open.take() {
+            let n = points.len() - first;
+            if n < min_points {
+                return Err(in_file(format!(
+                    "line {line}: the curve starting here has {n} control point{}; a {what} needs at least {min_points}",
+                    if n == 1 { "" } else { "s" }
+                )));
+            }
+            curves.push((first, n));
+        }
+        Ok(())
+    };
+    for (i, raw) in text.split('\n').enumerate() {
+        let line = i + 1;
+        let words: Vec<&str> = raw.split([' ', '\t', '\r']).filter(|w| !w.is_empty()).collect();
+        if words.is_empty() {
+            close(&mut open, &points)?;
+            continue;
+        }
+        let values: Vec<f64> = words.iter().filter_map(|w| w.parse::<f64>().ok()).collect();
+        if words.len() != 4 || values.len() != 4 {
+            return Err(in_file(format!("line {line}: expected 4 numbers (x y z radius), found '{}'", raw.trim())));
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(in_file(format!("line {line}: '{}' holds a NaN or infinite value", raw.trim())));
+        }
+        let r = values[3];
+        if !(r >= 0.0) {
+            return Err(in_file(format!("line {line}: the radius {r} is negative")));
+        }
+        let p = to_world.transform_point3(DVec3::new(values[0], values[1], values[2]));
+        if !p.as_vec3().is_finite() {
+            return Err(in_file(format!("line {line}: the placed point overflows")));
+        }
+        open.get_or_insert((points.len(), line));
+        points.push(p.as_vec3().extend(r as f32));
+    }
+    close(&mut open, &points)?;
+    if points.is_empty() {
+        return Err(in_file("the file holds no control points".into()));
+    }
+    Ok((points, curves))
 }

@@ -47,6 +47,7 @@ pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("ellipsoids", ShapeBuilder::Geometry(multipart::ellipsoids)),
     ("ellipsoidsmesh", ShapeBuilder::Geometry(multipart::ellipsoidsmesh)),
     ("sdfgrid", ShapeBuilder::Geometry(multipart::sdfgrid)),
+    ("linearcurve", ShapeBuilder::Geometry(multipart::linearcurve)),
     ("obj", ShapeBuilder::Geometry(mesh_file)),
     ("ply", ShapeBuilder::Geometry(mesh_file)),
     ("serialized", ShapeBuilder::Geometry(serialized)),

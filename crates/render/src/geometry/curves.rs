@@ -1,0 +1,344 @@
+//! Mitsuba's `linearcurve`: tubes of varying radius through control points
+//! (x, y, z, r), one BVH primitive per segment.
+//!
+//! Mitsuba 3.9.1 (`src/shapes/linearcurve.cpp`) hands the control points
+//! to Embree as round linear curves (`RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE`,
+//! built with `EMBREE_BACKFACE_CULLING_CURVES`). Each segment from p0/r0 to
+//! p1/r1 is then the cone touching both spheres tangentially, with the
+//! spheres as caps: the convex hull of the two spheres (the larger sphere
+//! alone when it holds the other). A curve is the union of its segments, so
+//! joints are round and the ends are spherical caps. Back faces are culled:
+//! a segment is hit only where a ray enters it, never from inside.
+//!
+//! Embree reports the hit's curve parameter u (the centre of the sphere
+//! touching the surface there: y / (|Δp|² − Δr²) with y = (h − p0)·Δp +
+//! r0 Δr on the cone, 0 and 1 on the caps), from which Mitsuba derives the
+//! normal n = normalize(p − c(u)), c(u) = (1 − u) p0 + u p1, and its uv:
+//! u_tex = the angle about the segment's axis (from a frame whose rotation
+//! axis leans towards +z) / 2π, v_tex = (u + segment) / segments, with
+//! dp/du = 2π axis × (p − c) and dp/dv = segments · (Δp + Δr n).
+
+use super::{Aabb, Ray};
+use glam::{DVec3, Vec2, Vec3, Vec4};
+
+/// Linear curves: control points and the segments between them.
+#[derive(Debug, Clone)]
+pub struct Curves {
+    /// Control points in world space (x, y, z) with their radius (w).
+    pub points: Vec<Vec4>,
+    /// Each segment's first control point (the next one ends it).
+    pub segments: Vec<u32>,
+}
+
+/// Which part of a segment a hit is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Part {
+    Cone,
+    Start,
+    End,
+}
+
+impl Curves {
+    /// Number of segments (the BVH's primitives).
+    pub fn segment_count(&self) -> usize {
+        self.segments.len()
+    }
+
+    fn ends(&self, i: usize) -> (Vec4, Vec4) {
+        let k = self.segments[i] as usize;
+        (self.points[k], self.points[k + 1])
+    }
+
+    /// The box of segment `i`: the boxes of its two end spheres.
+    pub fn bounds(&self, i: usize) -> Aabb {
+        let (a, b) = self.ends(i);
+        let lo = (a.truncate() - Vec3::splat(a.w)).min(b.truncate() - Vec3::splat(b.w));
+        let hi = (a.truncate() + Vec3::splat(a.w)).max(b.truncate() + Vec3::splat(b.w));
+        let pad = 1e-6 * (lo.abs().max(hi.abs()).max_element());
+        Aabb { min: lo - Vec3::splat(pad), max: hi + Vec3::splat(pad) }
+    }
+
+    /// Where the ray enters segment `i` (0 < t < ray.t_max), with Embree's
+    /// curve parameter u in the result's x (see the module docs); None for
+    /// a miss or a ray starting inside the segment (culled).
+    pub fn intersect(&self, i: usize, ray: &Ray) -> Option<(f32, Vec2)> {
+        let (a, b) = self.ends(i);
+        let (t, u) = enter_segment(a, b, ray.o.as_dvec3(), ray.d.as_dvec3())?;
+        let tf = t as f32;
+        (t > 0.0 && tf > 0.0 && tf < ray.t_max).then_some((tf, Vec2::new(u as f32, 0.0)))
+    }
+
+    /// (p, normal, uv, dp/du, dp/dv) of the hit at `t` with curve parameter
+    /// `u` on segment `i`, as Mitsuba's `linearcurve` computes them.
+    pub fn interaction(&self, i: usize, ray: &Ray, t: f32, u: f32) -> (Vec3, Vec3, Vec2, Vec3, Vec3) {
+        let (a, b) = self.ends(i);
+        let (p0, p1) = (a.truncate(), b.truncate());
+        let p = ray.o + ray.d * t;
+        let c = p0 * (1.0 - u) + p1 * u;
+        let n = (p - c).normalize_or_zero();
+        let axis = (p1 - p0).normalize_or_zero();
+        let (rot, rad) = local_frame(axis);
+        let mut phi = rot.dot(n).atan2(rad.dot(n));
+        if phi < 0.0 {
+            phi += std::f32::consts::TAU;
+        }
+        let count = self.segments.len() as f32;
+        let uv = Vec2::new(phi / std::f32::consts::TAU, (u + i as f32) / count);
+        let dpdu = std::f32::consts::TAU * axis.cross(p - c);
+        let dpdv = count * ((p1 - p0) + (b.w - a.w) * n);
+        (p, n, uv, dpdu, dpdv)
+    }
+}
+
+/// Mitsuba's `local_frame`: a rotation axis in the plane of `axis` and +z
+/// (+y when `axis` is ±z), and the radial direction rot × axis.
+fn local_frame(axis: Vec3) -> (Vec3, Vec3) {
+    let guide = Vec3::Z;
+    let rot = if guide.dot(axis).abs() == 1.0 { Vec3::Y } else { (guide - axis * axis.dot(guide)).normalize() };
+    (rot, rot.cross(axis))
+}
+
+/// The entry of the line o + t d into a sphere (smaller root), if it meets it.
+fn sphere_entry(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
+    let dd = d.length_squared();
+    let f = o - c;
+    let b = f.dot(d);
+    // The foot of the perpendicular, for precision (Haines et al. 2019).
+    let l = f - (b / dd) * d;
+    let disc = dd * (r * r - l.length_squared());
+    if disc < 0.0 {
+        return None;
+    }
+    Some((-b - disc.sqrt()) / dd)
+}
+
+/// The entry (t, u) of the line o + t d into the convex hull of the
+/// spheres a (centre xyz, radius w) and b; t may be negative (an origin
+/// inside) only when the entry lies behind, and then None is returned.
+fn enter_segment(a: Vec4, b: Vec4, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    let (p0, r0) = (a.truncate().as_dvec3(), a.w as f64);
+    let (p1, r1) = (b.truncate().as_dvec3(), b.w as f64);
+    // Work from the point of the line nearest the segment's middle.
+    let dd = d.length_squared();
+    let mid = 0.5 * (p0 + p1);
+    let dt = (mid - o).dot(d) / dd;
+    let o = o + d * dt;
+    let dp = p1 - p0;
+    let dr = r1 - r0;
+    let g = dp.length_squared() - dr * dr;
+    let mut best: Option<(f64, Part)> = None;
+    let mut consider = |t: f64, part: Part| {
+        if best.is_none_or(|(bt, _)| t < bt) {
+            best = Some((t, part));
+        }
+    };
+    // y of a point h: 0 on the start sphere's tangent circle, g on the end one's.
+    let y_of = |h: DVec3| (h - p0).dot(dp) + r0 * dr;
+    if g <= 0.0 {
+        // One sphere holds the other: the segment is the larger sphere.
+        let (c, r, part) = if r0 >= r1 { (p0, r0, Part::Start) } else { (p1, r1, Part::End) };
+        if let Some(t) = sphere_entry(o, d, c, r) {
+            consider(t, part);
+        }
+    } else {
+        // The cone's lateral surface: (dP² − dr²)|h|² − (h·dP)² − r0² dP² − 2 r0 dr (h·dP) = 0
+        // for h relative to p0 (Embree's derivation), between the tangent circles.
+        let h0 = o - p0;
+        let (od, odp, hdp) = (d.dot(h0), d.dot(dp), h0.dot(dp));
+        let qa = g * dd - odp * odp;
+        let qb = 2.0 * (g * od - odp * (hdp + r0 * dr));
+        let qc = g * h0.length_squared() - hdp * hdp - r0 * r0 * dp.length_squared() - 2.0 * r0 * dr * hdp;
+        let disc = qb * qb - 4.0 * qa * qc;
+        if qa.abs() > 1e-300 && disc >= 0.0 {
+            let q = -0.5 * (qb + disc.sqrt().copysign(qb));
+            for t in [q / qa, qc / q] {
+                if !t.is_finite() {
+                    continue;
+                }
+                let h = o + d * t;
+                let y = y_of(h);
+                // The outward normal g (h − p0) − dP y; an entry faces the ray.
+                let n = g * (h - p0) - dp * y;
+                if (0.0..=g).contains(&y) && n.dot(d) < 0.0 {
+                    consider(t, Part::Cone);
+                }
+            }
+        }
+        // The caps: the parts of the spheres beyond the tangent circles.
+        if let Some(t) = sphere_entry(o, d, p0, r0) {
+            if y_of(o + d * t) <= 0.0 {
+                consider(t, Part::Start);
+            }
+        }
+        if let Some(t) = sphere_entry(o, d, p1, r1) {
+            if y_of(o + d * t) >= g {
+                consider(t, Part::End);
+            }
+        }
+    }
+    let (t, part) = best?;
+    let u = match part {
+        Part::Start => 0.0,
+        Part::End => 1.0,
+        Part::Cone => (y_of(o + d * t) / g).clamp(0.0, 1.0),
+    };
+    // Entries behind the origin mean the origin is inside: culled.
+    let t = t + dt;
+    (t > 0.0).then_some((t, u))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Shape;
+    use crate::sampling::rng::{hash_words, to_unit_f32};
+
+    fn rnd(i: u64, k: u64) -> f32 {
+        to_unit_f32(hash_words(&[i, 33, k]))
+    }
+
+    fn curves(points: &[[f32; 4]]) -> Shape {
+        let points: Vec<Vec4> = points.iter().map(|p| Vec4::from_array(*p)).collect();
+        let segments = (0..points.len() as u32 - 1).collect();
+        Shape::Curves(Curves { points, segments })
+    }
+
+    fn closest(s: &Shape, ray: &Ray) -> Option<(f32, usize, Vec2)> {
+        (0..s.prim_count())
+            .filter_map(|i| s.intersect_prim(i, ray).map(|(t, uv)| (t, i, uv)))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    }
+
+    // Values printed by Mitsuba 3.9.1 (llvm_ad_rgb) for the curve file
+    //   0 0 0 0.5 / 2 0.5 0 0.25 / 2 2 1 0.3
+    // s = mi.load_dict({'type': 'scene', 'c': {'type': 'linearcurve', 'filename': ...}})
+    // si = s.ray_intersect(mi.Ray3f(o, d)); si.t, si.n, si.uv, si.prim_index. The
+    // last two rays start inside (culled: t = inf).
+    #[test]
+    fn hits_match_mitsuba() {
+        let s = curves(&[[0.0, 0.0, 0.0, 0.5], [2.0, 0.5, 0.0, 0.25], [2.0, 2.0, 1.0, 0.3]]);
+        let cases = [
+            ([1.0, 0.2, 5.0], [0.0, 0.0, -1.0], 4.62385, [0.148438, -0.0937499, 0.984468], [0.270411, 0.235821], 0),
+            ([-3.0, 0.1, 0.05], [1.0, 0.0, 0.0], 2.51266, [-0.974679, 0.2, 0.1], [0.0363319, 0.0], 0),
+            ([2.1, 1.2, -4.0], [0.0, 0.0, 1.0], 4.16677, [0.371849, 0.491618, -0.787427], [0.689337, 0.689264], 1),
+            ([2.0, 2.5, 1.2], [0.0, -1.0, 0.0], 0.276393, [0.0, 0.745356, 0.666667], [0.25, 1.0], 1),
+        ];
+        for (o, d, t, n, uv, prim) in cases {
+            let ray = Ray::new(Vec3::from_array(o), Vec3::from_array(d), f32::INFINITY);
+            let (th, i, puv) = closest(&s, &ray).expect("missed");
+            assert_eq!(i, prim);
+            assert!((th - t).abs() < 2e-5, "t {th} vs {t}");
+            let si = s.interaction(0, i, &ray, th, puv);
+            assert!((si.n - Vec3::from_array(n)).abs().max_element() < 2e-5, "n {} vs {n:?}", si.n);
+            assert!((si.uv - Vec2::from_array(uv)).abs().max_element() < 2e-5, "uv {} vs {uv:?}", si.uv);
+            assert_eq!(si.sh_frame.n, si.n);
+            // dp/du runs around the tube: orthogonal to the normal and the axis.
+            assert!(si.dpdu.dot(si.n).abs() < 1e-4 && si.sh_frame.s.dot(si.dpdu.normalize()) > 0.9999);
+        }
+        for o in [[0.0, 0.0, 0.0], [1.0, 0.2, 0.0]] {
+            let d = if o[0] == 0.0 { Vec3::Y } else { Vec3::Z };
+            assert!(closest(&s, &Ray::new(Vec3::from_array(o), d, f32::INFINITY)).is_none(), "a hit from inside");
+        }
+        let b = (0..2).fold(crate::geometry::Aabb::EMPTY, |b, i| b.union(s.prim_bounds(i)));
+        assert!(
+            (b.min - Vec3::splat(-0.5)).abs().max_element() < 1e-5
+                && (b.max - Vec3::new(2.3, 2.3, 1.3)).abs().max_element() < 1e-5
+        );
+    }
+
+    /// The signed distance-like function of a segment's hull: min over s of
+    /// |x − c(s)| − r(s), sampled densely (the union of the interpolated spheres).
+    fn hull(a: Vec4, b: Vec4, x: Vec3) -> f32 {
+        (0..=2000)
+            .map(|k| {
+                let s = k as f32 / 2000.0;
+                let c = a.lerp(b, s);
+                (x - c.truncate()).length() - c.w
+            })
+            .fold(f32::INFINITY, f32::min)
+    }
+
+    /// Rays from outside hit where a march along the ray first enters the
+    /// hull of the two end spheres; the normal there is the hull's outward
+    /// normal (the distance to c(u) is r(u)); rays from inside are culled;
+    /// rays that pass outside miss.
+    #[test]
+    fn segments_are_hulls_of_their_spheres() {
+        let (mut hits, mut cone_hits) = (0, 0);
+        for i in 0..300u64 {
+            let a = Vec4::new(rnd(i, 0), rnd(i, 1), rnd(i, 2), 0.05 + 0.3 * rnd(i, 3));
+            let b = Vec4::new(rnd(i, 4) + 0.5, rnd(i, 5), rnd(i, 6), 0.05 + 0.3 * rnd(i, 7));
+            let s = Shape::Curves(Curves { points: vec![a, b], segments: vec![0] });
+            for k in 0..10u64 {
+                let target = a.truncate().lerp(b.truncate(), rnd(k, 8 + i));
+                let o = target
+                    + Vec3::new(rnd(k, 20 + i) - 0.5, rnd(k, 30 + i) - 0.5, rnd(k, 40 + i) - 0.5).normalize() * 2.0;
+                let d =
+                    (target + 0.2 * Vec3::new(rnd(k, 50 + i), rnd(k, 60 + i), rnd(k, 70 + i)) - 0.1 - o).normalize();
+                let ray = Ray::new(o, d, f32::INFINITY);
+                let f = |t: f32| hull(a, b, o + d * t);
+                let mut expected = None;
+                let steps = 400;
+                for j in 1..=steps {
+                    let t = 4.0 * j as f32 / steps as f32;
+                    if f(t) <= 0.0 {
+                        let (mut lo, mut hi) = (t - 4.0 / steps as f32, t);
+                        for _ in 0..30 {
+                            let mid = 0.5 * (lo + hi);
+                            if f(mid) <= 0.0 {
+                                hi = mid
+                            } else {
+                                lo = mid
+                            }
+                        }
+                        expected = Some(hi);
+                        break;
+                    }
+                }
+                let got = s.intersect_prim(0, &ray);
+                match (got, expected) {
+                    (Some((t, uv)), Some(e)) => {
+                        assert!((t - e).abs() < 2e-3, "{i}/{k}: {t} vs {e}");
+                        let si = s.interaction(0, 0, &ray, t, uv);
+                        let c = a.lerp(b, uv.x);
+                        assert!(((si.p - c.truncate()).length() - c.w).abs() < 1e-3, "{i}/{k}: not tangent at u");
+                        assert!(si.n.dot(d) < 0.0, "{i}/{k}: the normal faces away from the ray");
+                        // Culled from just inside.
+                        let inside = Ray::new(si.p - si.n * 1e-3, d, f32::INFINITY);
+                        assert!(s.intersect_prim(0, &inside).is_none(), "{i}/{k}: hit from inside");
+                        hits += 1;
+                        cone_hits += (uv.x > 0.0 && uv.x < 1.0) as usize;
+                    }
+                    (None, None) => {}
+                    // A grazing ray may tip either way.
+                    (g, e) => {
+                        let t = g.map(|h| h.0).or(e).unwrap();
+                        assert!(f(t).abs() < 1e-3, "{i}/{k}: {g:?} vs {e:?}");
+                    }
+                }
+            }
+        }
+        assert!(hits > 1500 && cone_hits > 500, "{hits} hits, {cone_hits} on cones");
+    }
+
+    /// A cylinder-like segment (equal radii): closed-form distance for a ray
+    /// perpendicular to the axis, tangent rays graze, caps are hemispheres.
+    #[test]
+    fn equal_radii_match_closed_form() {
+        let s = curves(&[[0.0, 0.0, 0.0, 0.5], [3.0, 0.0, 0.0, 0.5]]);
+        let hit = |o: [f32; 3], d: [f32; 3]| {
+            s.intersect_prim(0, &Ray::new(Vec3::from_array(o), Vec3::from_array(d), f32::INFINITY))
+        };
+        let (t, uv) = hit([1.2, 0.3, 5.0], [0.0, 0.0, -1.0]).unwrap();
+        assert!((t - (5.0 - (0.25f32 - 0.09).sqrt())).abs() < 1e-5 && (uv.x - 0.4).abs() < 1e-5, "{t} {uv}");
+        assert!(hit([1.2, 0.5001, 5.0], [0.0, 0.0, -1.0]).is_none());
+        assert!(hit([1.2, 0.4999, 5.0], [0.0, 0.0, -1.0]).is_some());
+        // The end cap: along the axis from beyond p1.
+        let (t, uv) = hit([5.0, 0.0, 0.0], [-1.0, 0.0, 0.0]).unwrap();
+        assert!((t - 1.5).abs() < 1e-5 && uv.x == 1.0, "{t} {uv}");
+        let (t, uv) = hit([-2.0, 0.1, 0.0], [1.0, 0.0, 0.0]).unwrap();
+        assert!((t - (2.0 - (0.25f32 - 0.01).sqrt())).abs() < 1e-5 && uv.x == 0.0, "{t} {uv}");
+        // Ending before the surface: no hit.
+        assert!(s.intersect_prim(0, &Ray::new(Vec3::new(1.2, 0.3, 5.0), Vec3::NEG_Z, 4.5)).is_none());
+    }
+}
