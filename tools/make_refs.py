@@ -78,6 +78,7 @@ SPP = {
     "ellipsoids": 16384,
     "sdfgrid": 32768,
     "linearcurve": 16384,
+    "bsplinecurve": 16384,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

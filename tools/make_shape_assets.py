@@ -15,6 +15,8 @@ tests/scenes/shapes/torus.sdf.vol: a 20^3 grid (Mitsuba's .vol v3, one
 tests/scenes/shapes/curves.txt: control points (x y z radius per line, an
     empty line between curves) of a tapering helix, a zigzag whose radius
     jumps between points, and a single segment, for `linearcurve`.
+tests/scenes/shapes/bspline.txt: the same helix and zigzag, and a curve of
+    four points whose end radii are zero, for `bsplinecurve`.
 """
 import math
 import os
@@ -92,9 +94,9 @@ def curves():
     return [helix, zigzag, single]
 
 
-def write_curves(path):
+def write_curves(path, cs):
     with open(path, "w", newline="\n") as f:
-        f.write("\n\n".join("\n".join("%.6f %.6f %.6f %.6f" % p for p in c) for c in curves()) + "\n")
+        f.write("\n\n".join("\n".join("%.6f %.6f %.6f %.6f" % p for p in c) for c in cs) + "\n")
 
 
 if __name__ == "__main__":
@@ -103,5 +105,8 @@ if __name__ == "__main__":
     print("wrote", os.path.join(OUT, "ellipsoids.ply"))
     write_sdf(os.path.join(OUT, "torus.sdf.vol"))
     print("wrote", os.path.join(OUT, "torus.sdf.vol"))
-    write_curves(os.path.join(OUT, "curves.txt"))
+    write_curves(os.path.join(OUT, "curves.txt"), curves())
     print("wrote", os.path.join(OUT, "curves.txt"))
+    tip = [(0.45, 0.1, -0.35, 0.0), (0.6, 0.7, -0.3, 0.12), (0.75, 0.35, 0.1, 0.1), (0.85, 0.15, 0.3, 0.0)]
+    write_curves(os.path.join(OUT, "bspline.txt"), curves()[:2] + [tip])
+    print("wrote", os.path.join(OUT, "bspline.txt"))

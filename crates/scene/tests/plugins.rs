@@ -73,8 +73,8 @@ fn unsupported_plugin_message_format() {
     assert!(
         e.ends_with(
             "shape plugin 'blender' is not supported by Penumbra; supported shape plugins: \
-             rectangle, cube, sphere, disk, cylinder, ellipsoids, ellipsoidsmesh, sdfgrid, linearcurve, obj, \
-             ply, serialized, shapegroup, instance, merge"
+             rectangle, cube, sphere, disk, cylinder, ellipsoids, ellipsoidsmesh, sdfgrid, linearcurve, \
+             bsplinecurve, obj, ply, serialized, shapegroup, instance, merge"
         ),
         "{e}"
     );

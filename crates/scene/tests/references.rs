@@ -219,3 +219,11 @@ fn sdfgrid_matches_mitsuba() {
 fn linearcurve_matches_mitsuba() {
     compare("linearcurve", 256);
 }
+
+/// Mitsuba's `bsplinecurve` (Embree's round B-spline curves, open ends): the
+/// helix and zigzag of linearcurve.xml as B-splines, and a curve whose end
+/// radii are zero, textured on the curves' uv.
+#[test]
+fn bsplinecurve_matches_mitsuba() {
+    compare("bsplinecurve", 256);
+}

@@ -531,3 +531,23 @@ fn linearcurve_is_read_and_its_errors_name_the_problem() {
     let m = err(r#"<shape type="linearcurve"/>"#);
     assert!(m.contains("needs a 'filename'"), "{m}");
 }
+
+#[test]
+fn bsplinecurve_is_read_and_needs_four_points_per_curve() {
+    let dir = temp_dir().join("bsplinecurve");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("ok.txt"),
+        "0 0 0 0.1\n1 0 0 0.2\n2 1 0 0.1\n3 1 1 0.1\n4 0 0 0.1\n\n5 5 5 0.3\n6 5 5 0\n7 5 5 0\n8 5 5 0\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("three.txt"), "0 0 0 0.1\n1 0 0 0.2\n2 1 0 0.1\n").unwrap();
+    let shape = |file: &str| format!(r#"<shape type="bsplinecurve"><string name="filename" value="{file}"/></shape>"#);
+    let job = load(&shape("ok.txt"), &dir).unwrap();
+    let Shape::Curves(c) = &job.scene.shapes[0] else { panic!("not curves") };
+    // Five points make two segments, four make one.
+    assert_eq!(c.segments, [0, 1, 5]);
+    assert_eq!(c.basis, penumbra_render::geometry::curves::Basis::BSpline);
+    let m = load(&shape("three.txt"), &dir).err().unwrap().to_string();
+    assert!(m.contains("line 1: the curve starting here has 3 control points; a bsplinecurve needs at least 4"), "{m}");
+}

@@ -769,22 +769,28 @@ mod tests {
         };
         let cloud: Vec<Ellipsoid> = (0..300).map(ellipsoid).collect();
         let shells: Vec<Ellipsoid> = (300..500).map(ellipsoid).collect();
+        // 200 random control points; every fifth segment left out.
+        let curves = |basis| {
+            let points = (0..200)
+                .map(|k| glam::Vec4::new(rnd(k, 60) * 10.0, rnd(k, 61) * 10.0, rnd(k, 62) * 10.0, 0.3 * rnd(k, 63)));
+            Shape::Curves(crate::geometry::Curves {
+                points: points.collect(),
+                segments: (0..196).filter(|k| k % 5 != 4).collect(),
+                basis,
+            })
+        };
         let sdf = crate::accel::packet::tests::sdf_blob(glam::DMat4::from_translation(glam::DVec3::new(4.0, 4.0, 4.0)));
         let voxels = sdf.voxel_count();
         let shapes = vec![
             Shape::Ellipsoids(Ellipsoids { items: cloud }),
             Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
             Shape::SdfGrid(sdf),
-            Shape::Curves(crate::geometry::Curves {
-                points: (0..200)
-                    .map(|k| glam::Vec4::new(rnd(k, 60) * 10.0, rnd(k, 61) * 10.0, rnd(k, 62) * 10.0, 0.3 * rnd(k, 63)))
-                    .collect(),
-                segments: (0..199).filter(|k| k % 5 != 4).collect(),
-            }),
+            curves(crate::geometry::curves::Basis::Linear),
+            curves(crate::geometry::curves::Basis::BSpline),
         ];
         let accel = Accel::build_shapes(&shapes);
         accel.validate().unwrap();
-        assert_eq!(accel.prims.len(), 300 + 200 * 20 + voxels + 160);
+        assert_eq!(accel.prims.len(), 300 + 200 * 20 + voxels + 2 * 157);
         let mut hits = 0;
         for i in 0..3000u64 {
             let o = Vec3::new(rnd(i, 100), rnd(i, 101), rnd(i, 102)) * 12.0 - 1.0;

@@ -533,6 +533,7 @@ pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Optio
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::geometry::curves::Basis;
     use crate::geometry::ellipsoids::quat_to_matrix;
     use crate::geometry::{Curves, Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shell, TriangleMesh};
     use crate::sampling::rng::{hash_words, to_unit_f32};
@@ -593,26 +594,31 @@ pub(crate) mod tests {
             Shape::sphere(Vec3::new(2.0, 7.0, 3.0), 0.7, false),
             Shape::Ellipsoids(Ellipsoids { items: cloud }),
             Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
-            Shape::Curves(Curves {
-                points: (0..40)
-                    .map(|k| {
-                        let a = k as f32 * 0.5;
-                        glam::Vec4::new(
-                            3.0 + 2.0 * a.cos(),
-                            0.2 * k as f32,
-                            6.0 + 2.0 * a.sin(),
-                            0.05 + 0.1 * rnd(k, 50),
-                        )
-                    })
-                    .collect(),
-                segments: (0..39).filter(|k| k % 10 != 9).collect(),
-            }),
+            helix(Basis::Linear, 0.0),
+            helix(Basis::BSpline, 2.5),
             Shape::SdfGrid(sdf_blob(glam::DMat4::from_scale_rotation_translation(
                 glam::DVec3::splat(3.0),
                 glam::DQuat::IDENTITY,
                 glam::DVec3::new(6.0, 1.0, 5.0),
             ))),
         ]
+    }
+
+    /// Curves along a helix (every tenth segment left out), lifted by `lift`.
+    fn helix(basis: Basis, lift: f32) -> Shape {
+        let points = (0..40)
+            .map(|k| {
+                let a = k as f32 * 0.5;
+                glam::Vec4::new(
+                    3.0 + 2.0 * a.cos(),
+                    lift + 0.2 * k as f32,
+                    6.0 + 2.0 * a.sin(),
+                    0.05 + 0.1 * rnd(k, 50),
+                )
+            })
+            .collect();
+        let last = if basis == Basis::Linear { 39 } else { 37 };
+        Shape::Curves(Curves { points, segments: (0..last).filter(|k| k % 10 != 9).collect(), basis })
     }
 
     /// A 9³ signed distance grid of two overlapping spheres, placed by `to_world`.

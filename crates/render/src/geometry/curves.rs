@@ -1,5 +1,7 @@
-//! Mitsuba's `linearcurve`: tubes of varying radius through control points
-//! (x, y, z, r), one BVH primitive per segment.
+//! Mitsuba's `linearcurve` and `bsplinecurve`: tubes of varying radius
+//! through control points (x, y, z, r), one BVH primitive per segment.
+//!
+//! ## Linear curves
 //!
 //! Mitsuba 3.9.1 (`src/shapes/linearcurve.cpp`) hands the control points
 //! to Embree as round linear curves (`RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE`,
@@ -17,17 +19,89 @@
 //! u_tex = the angle about the segment's axis (from a frame whose rotation
 //! axis leans towards +z) / 2π, v_tex = (u + segment) / segments, with
 //! dp/du = 2π axis × (p − c) and dp/dv = segments · (Δp + Δr n).
+//!
+//! ## B-spline curves
+//!
+//! Mitsuba 3.9.1 (`src/shapes/bsplinecurve.cpp`) hands the control points
+//! to Embree as round B-spline curves (`RTC_GEOMETRY_TYPE_ROUND_BSPLINE_CURVE`):
+//! segment k is the uniform cubic B-spline of points k..k+3, centre c(v)
+//! and radius r(v) interpolated alike, and the surface is swept by the
+//! circle of radius r(v) about c(v) perpendicular to c'(v), open at the
+//! curve's ends (no caps), back faces culled. A hit solves
+//! |o + t d − c(v)|² = r(v)² and (o + t d − c(v)) · c'(v) = 0 for (t, v):
+//! here by Newton's method, started from the entries of the ray into a
+//! chain of 16 round linear pieces through c and r (the linear curve above),
+//! kept where v lies in [0, 1] and the ray enters the surface. Mitsuba's
+//! normal is ∝ (|c'|² − (p − c)·c'') (p − c) − r r' c', its uv the angle
+//! about c' (from the frame of the linear curves) / 2π and (v + segment) /
+//! segments, its dp/du and dp/dv from the Frenet frame.
 
 use super::{Aabb, Ray};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 
-/// Linear curves: control points and the segments between them.
+/// Curves: control points and the segments between them.
 #[derive(Debug, Clone)]
 pub struct Curves {
     /// Control points in world space (x, y, z) with their radius (w).
     pub points: Vec<Vec4>,
-    /// Each segment's first control point (the next one ends it).
+    /// Each segment's first control point (linear: it and the next one;
+    /// B-spline: it and the next three).
     pub segments: Vec<u32>,
+    /// How the control points are interpolated.
+    pub basis: Basis,
+}
+
+/// The interpolation of a curve's control points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Basis {
+    /// Mitsuba `linearcurve`.
+    Linear,
+    /// Mitsuba `bsplinecurve` (uniform cubic B-spline).
+    BSpline,
+}
+
+/// Pieces per B-spline segment in the linear chain that seeds Newton's method.
+const PIECES: usize = 16;
+
+/// A B-spline segment at v: centre, c', c'', c''', radius, r', r''
+/// (Mitsuba's `cubic_interpolation`).
+#[derive(Debug, Clone, Copy)]
+struct Spline {
+    c: DVec3,
+    dc: DVec3,
+    ddc: DVec3,
+    dddc: DVec3,
+    r: f64,
+    dr: f64,
+}
+
+fn spline(p: &[Vec4; 4], v: f64) -> Spline {
+    let (v2, v3) = (v * v, v * v * v);
+    let b = [
+        (-v3 + 3.0 * v2 - 3.0 * v + 1.0) / 6.0,
+        (3.0 * v3 - 6.0 * v2 + 4.0) / 6.0,
+        (-3.0 * v3 + 3.0 * v2 + 3.0 * v + 1.0) / 6.0,
+        v3 / 6.0,
+    ];
+    let db = [
+        (-3.0 * v2 + 6.0 * v - 3.0) / 6.0,
+        (9.0 * v2 - 12.0 * v) / 6.0,
+        (-9.0 * v2 + 6.0 * v + 3.0) / 6.0,
+        3.0 * v2 / 6.0,
+    ];
+    let ddb = [1.0 - v, 3.0 * v - 2.0, 1.0 - 3.0 * v, v];
+    let dddb = [-1.0, 3.0, -3.0, 1.0];
+    let mut s = Spline { c: DVec3::ZERO, dc: DVec3::ZERO, ddc: DVec3::ZERO, dddc: DVec3::ZERO, r: 0.0, dr: 0.0 };
+    for k in 0..4 {
+        let (q, w) = (p[k].truncate().as_dvec3(), p[k].w as f64);
+        s.c += b[k] * q;
+        s.dc += db[k] * q;
+        s.ddc += ddb[k] * q;
+        s.dddc += dddb[k] * q;
+        s.r += b[k] * w;
+        s.dr += db[k] * w;
+    }
+    s
 }
 
 /// Which part of a segment a hit is on.
@@ -49,28 +123,50 @@ impl Curves {
         (self.points[k], self.points[k + 1])
     }
 
-    /// The box of segment `i`: the boxes of its two end spheres.
+    fn controls(&self, i: usize) -> [Vec4; 4] {
+        let k = self.segments[i] as usize;
+        [self.points[k], self.points[k + 1], self.points[k + 2], self.points[k + 3]]
+    }
+
+    /// The box of segment `i`: the boxes of its control spheres (a
+    /// B-spline stays in their convex hull, its radius below their largest).
     pub fn bounds(&self, i: usize) -> Aabb {
-        let (a, b) = self.ends(i);
-        let lo = (a.truncate() - Vec3::splat(a.w)).min(b.truncate() - Vec3::splat(b.w));
-        let hi = (a.truncate() + Vec3::splat(a.w)).max(b.truncate() + Vec3::splat(b.w));
+        let k = self.segments[i] as usize;
+        let n = if self.basis == Basis::Linear { 2 } else { 4 };
+        let pts = &self.points[k..k + n];
+        let r = if self.basis == Basis::Linear { None } else { Some(pts.iter().map(|p| p.w).fold(0.0, f32::max)) };
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for p in pts {
+            let w = Vec3::splat(r.unwrap_or(p.w));
+            lo = lo.min(p.truncate() - w);
+            hi = hi.max(p.truncate() + w);
+        }
         let pad = 1e-6 * (lo.abs().max(hi.abs()).max_element());
         Aabb { min: lo - Vec3::splat(pad), max: hi + Vec3::splat(pad) }
     }
 
     /// Where the ray enters segment `i` (0 < t < ray.t_max), with Embree's
-    /// curve parameter u in the result's x (see the module docs); None for
-    /// a miss or a ray starting inside the segment (culled).
+    /// curve parameter in the result's x (see the module docs); None for a
+    /// miss or a ray starting inside the segment (culled).
     pub fn intersect(&self, i: usize, ray: &Ray) -> Option<(f32, Vec2)> {
-        let (a, b) = self.ends(i);
-        let (t, u) = enter_segment(a, b, ray.o.as_dvec3(), ray.d.as_dvec3())?;
+        let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
+        let (t, u) = match self.basis {
+            Basis::Linear => {
+                let (a, b) = self.ends(i);
+                enter_segment(a, b, o, d)?
+            }
+            Basis::BSpline => enter_bspline(&self.controls(i), o, d, ray.t_max as f64)?,
+        };
         let tf = t as f32;
         (t > 0.0 && tf > 0.0 && tf < ray.t_max).then_some((tf, Vec2::new(u as f32, 0.0)))
     }
 
     /// (p, normal, uv, dp/du, dp/dv) of the hit at `t` with curve parameter
-    /// `u` on segment `i`, as Mitsuba's `linearcurve` computes them.
+    /// `u` on segment `i`, as Mitsuba's `linearcurve` and `bsplinecurve` compute them.
     pub fn interaction(&self, i: usize, ray: &Ray, t: f32, u: f32) -> (Vec3, Vec3, Vec2, Vec3, Vec3) {
+        if self.basis == Basis::BSpline {
+            return self.bspline_interaction(i, ray, t, u);
+        }
         let (a, b) = self.ends(i);
         let (p0, p1) = (a.truncate(), b.truncate());
         let p = ray.o + ray.d * t;
@@ -88,6 +184,108 @@ impl Curves {
         let dpdv = count * ((p1 - p0) + (b.w - a.w) * n);
         (p, n, uv, dpdu, dpdv)
     }
+}
+
+impl Curves {
+    fn bspline_interaction(&self, i: usize, ray: &Ray, t: f32, v: f32) -> (Vec3, Vec3, Vec2, Vec3, Vec3) {
+        let sp = spline(&self.controls(i), v as f64);
+        let p = ray.o + ray.d * t;
+        let q = p.as_dvec3() - sp.c;
+        let n = ((sp.dc.length_squared() - q.dot(sp.ddc)) * q - (sp.dr * sp.r) * sp.dc).normalize_or_zero();
+        let axis = sp.dc.normalize_or_zero();
+        let (rot, rad_dir) = local_frame(axis.as_vec3());
+        let (rot, rad_dir) = (rot.as_dvec3(), rad_dir.as_dvec3());
+        let qn = q.normalize_or_zero();
+        let mut phi = rot.dot(qn).atan2(rad_dir.dot(qn));
+        if phi < 0.0 {
+            phi += std::f64::consts::TAU;
+        }
+        let count = self.segments.len() as f64;
+        let u = phi / std::f64::consts::TAU;
+        let uv = Vec2::new(u as f32, ((v as f64 + i as f64) / count) as f32);
+        // Mitsuba's `partials`: the Frenet frame, its curvature and torsion.
+        let len = sp.dc.length();
+        let cross = sp.dc.cross(sp.ddc);
+        let cross_len = cross.length();
+        let mut kappa = cross_len / (len * len * len);
+        let mut tau = if cross_len < 1e-6 || sp.dddc.length() < 1e-6 {
+            0.0
+        } else {
+            sp.dddc.dot(cross) / (cross_len * cross_len)
+        };
+        let ft = sp.dc / len;
+        let (mut fn_, mut fb) = (cross.cross(sp.dc).normalize(), DVec3::ZERO);
+        fb = if kappa < f32::EPSILON as f64 { fb } else { ft.cross(fn_).normalize() };
+        if kappa < f32::EPSILON as f64 {
+            kappa = 0.0;
+            tau = 0.0;
+            let f = crate::math::Frame::from_normal(ft.as_vec3());
+            (fn_, fb) = (f.s.as_dvec3(), f.t.as_dvec3());
+        }
+        let (s_, c_) = (u * std::f64::consts::TAU).sin_cos();
+        let rad = c_ * rad_dir + s_ * rot;
+        let (cos_t, sin_t) = (fn_.dot(rad), fb.dot(rad));
+        let radu = -sin_t * fn_ + cos_t * fb;
+        let radv = len * cos_t * (-kappa * ft + tau * fb) + len * sin_t * (-tau * fn_);
+        let dpdu = std::f64::consts::TAU * sp.r * radu;
+        let dpdv = count * (sp.dc + sp.dr * rad + sp.r * radv);
+        (p, n.as_vec3(), uv, dpdu.as_vec3(), dpdv.as_vec3())
+    }
+}
+
+/// The entry (t, v) of the line o + t d into B-spline segment `p`: Newton's
+/// method on (t, v) from each entry into the chain of linear pieces (see
+/// the module docs); the closest solution with v in [0, 1], 0 < t < t_max,
+/// where the ray enters the surface.
+fn enter_bspline(p: &[Vec4; 4], o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
+    let nodes: Vec<Spline> = (0..=PIECES).map(|j| spline(p, j as f64 / PIECES as f64)).collect();
+    let sphere = |s: &Spline| s.c.as_vec3().extend(s.r as f32);
+    let mut best: Option<(f64, f64)> = None;
+    for j in 0..PIECES {
+        let Some((t0, u0)) = enter_piece(sphere(&nodes[j]), sphere(&nodes[j + 1]), o, d) else { continue };
+        let (mut t, mut v) = (t0, (j as f64 + u0) / PIECES as f64);
+        let mut converged = false;
+        for _ in 0..24 {
+            let s = spline(p, v);
+            let q = o + d * t - s.c;
+            let f = q.length_squared() - s.r * s.r;
+            let g = q.dot(s.dc);
+            // Jacobian of (f, g) in (t, v).
+            let (ft, fv) = (2.0 * q.dot(d), -2.0 * g - 2.0 * s.r * s.dr);
+            let (gt, gv) = (d.dot(s.dc), q.dot(s.ddc) - s.dc.length_squared());
+            let det = ft * gv - fv * gt;
+            if det == 0.0 || !det.is_finite() {
+                break;
+            }
+            let dt = (f * gv - fv * g) / det;
+            let dv = (ft * g - gt * f) / det;
+            t -= dt;
+            v -= dv.clamp(-0.5, 0.5);
+            if dt.abs() < 1e-9 * (1.0 + t.abs()) && dv.abs() < 1e-9 {
+                converged = true;
+                break;
+            }
+        }
+        if !converged || !(0.0..=1.0).contains(&v) || t <= 0.0 || t >= t_max || best.is_some_and(|b| b.0 <= t) {
+            continue;
+        }
+        let s = spline(p, v);
+        let q = o + d * t - s.c;
+        let n = (s.dc.length_squared() - q.dot(s.ddc)) * q - (s.dr * s.r) * s.dc;
+        if n.dot(d) < 0.0 {
+            best = Some((t, v));
+        }
+    }
+    best
+}
+
+/// [`enter_segment`] without culling: the entry (t, u) of the line into the
+/// hull of two spheres, also behind the origin or from inside (a start for
+/// Newton's method).
+fn enter_piece(a: Vec4, b: Vec4, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    let back = 4.0 * (a.w.max(b.w) as f64 + (a - b).truncate().length() as f64) / d.length();
+    let (t, u) = enter_segment(a, b, o - d * back, d)?;
+    Some((t - back, u))
 }
 
 /// Mitsuba's `local_frame`: a rotation axis in the plane of `axis` and +z
@@ -200,7 +398,7 @@ mod tests {
     fn curves(points: &[[f32; 4]]) -> Shape {
         let points: Vec<Vec4> = points.iter().map(|p| Vec4::from_array(*p)).collect();
         let segments = (0..points.len() as u32 - 1).collect();
-        Shape::Curves(Curves { points, segments })
+        Shape::Curves(Curves { points, segments, basis: Basis::Linear })
     }
 
     fn closest(s: &Shape, ray: &Ray) -> Option<(f32, usize, Vec2)> {
@@ -268,7 +466,7 @@ mod tests {
         for i in 0..300u64 {
             let a = Vec4::new(rnd(i, 0), rnd(i, 1), rnd(i, 2), 0.05 + 0.3 * rnd(i, 3));
             let b = Vec4::new(rnd(i, 4) + 0.5, rnd(i, 5), rnd(i, 6), 0.05 + 0.3 * rnd(i, 7));
-            let s = Shape::Curves(Curves { points: vec![a, b], segments: vec![0] });
+            let s = Shape::Curves(Curves { points: vec![a, b], segments: vec![0], basis: Basis::Linear });
             for k in 0..10u64 {
                 let target = a.truncate().lerp(b.truncate(), rnd(k, 8 + i));
                 let o = target
@@ -340,5 +538,88 @@ mod tests {
         assert!((t - (2.0 - (0.25f32 - 0.01).sqrt())).abs() < 1e-5 && uv.x == 0.0, "{t} {uv}");
         // Ending before the surface: no hit.
         assert!(s.intersect_prim(0, &Ray::new(Vec3::new(1.2, 0.3, 5.0), Vec3::NEG_Z, 4.5)).is_none());
+    }
+
+    fn bspline(points: &[[f32; 4]]) -> Shape {
+        let points: Vec<Vec4> = points.iter().map(|p| Vec4::from_array(*p)).collect();
+        let segments = (0..points.len() as u32 - 3).collect();
+        Shape::Curves(Curves { points, segments, basis: Basis::BSpline })
+    }
+
+    // Values printed by Mitsuba 3.9.1 (llvm_ad_rgb) for the bsplinecurve file
+    //   0 0 0 0.3 / 1 0.5 0 0.4 / 2 0 0.5 0.2 / 3 1 0 0.3 / 4 0 0 0.3
+    // si = s.ray_intersect(mi.Ray3f(o, d)); si.t, si.n, si.uv, si.prim_index.
+    // The third ray misses, the fourth starts inside (culled), the fifth
+    // enters the open start of the tube (no cap: it sees only back faces).
+    #[test]
+    fn bspline_hits_match_mitsuba() {
+        let s = bspline(&[
+            [0.0, 0.0, 0.0, 0.3],
+            [1.0, 0.5, 0.0, 0.4],
+            [2.0, 0.0, 0.5, 0.2],
+            [3.0, 1.0, 0.0, 0.3],
+            [4.0, 0.0, 0.0, 0.3],
+        ]);
+        let cases = [
+            ([1.5, 0.3, 5.0], [0.0, 0.0, -1.0], 4.46156, [-0.142625, 0.161726, 0.976475], [0.228048, 0.286003], 0),
+            ([2.0, 3.0, 0.2], [0.0, -1.0, 0.0], 2.53155, [-0.285379, 0.798552, -0.529975], [0.911279, 0.539606], 1),
+        ];
+        for (o, d, t, n, uv, prim) in cases {
+            let ray = Ray::new(Vec3::from_array(o), Vec3::from_array(d), f32::INFINITY);
+            let (th, i, puv) = closest(&s, &ray).expect("missed");
+            assert_eq!(i, prim);
+            assert!((th - t).abs() < 2e-5, "t {th} vs {t}");
+            let si = s.interaction(0, i, &ray, th, puv);
+            assert!((si.n - Vec3::from_array(n)).abs().max_element() < 2e-5, "n {} vs {n:?}", si.n);
+            assert!((si.uv - Vec2::from_array(uv)).abs().max_element() < 2e-5, "uv {} vs {uv:?}", si.uv);
+            assert!(si.dpdu.dot(si.n).abs() < 1e-3 * si.dpdu.length(), "dp/du is not tangent");
+        }
+        for (o, d) in [
+            ([2.6, 0.5, -4.0], [0.1, 0.0, 1.0]),
+            ([1.0, 0.35, 0.1], [0.0, 0.0, 1.0]),
+            ([-3.0, 0.2, 0.0], [1.0, 0.0, 0.0]),
+        ] {
+            let ray = Ray::new(Vec3::from_array(o), Vec3::from_array(d).normalize(), f32::INFINITY);
+            assert!(closest(&s, &ray).is_none(), "{o:?} {d:?} hit");
+        }
+    }
+
+    /// Hits lie on the swept circles (|p − c(v)| = r(v), (p − c(v)) · c'(v) = 0)
+    /// and face the ray; a straight tube of constant radius is a cylinder
+    /// (closed-form distance, open ends); rays from just inside are culled.
+    #[test]
+    fn bspline_hits_lie_on_the_sweep() {
+        let tube = bspline(&[[0.0, 0.0, 0.0, 0.5], [1.0, 0.0, 0.0, 0.5], [2.0, 0.0, 0.0, 0.5], [3.0, 0.0, 0.0, 0.5]]);
+        // The segment runs over x in [1, 2] (the B-spline of collinear, evenly spaced points).
+        let ray = Ray::new(Vec3::new(1.4, 0.3, 5.0), Vec3::NEG_Z, f32::INFINITY);
+        let (t, _, uv) = closest(&tube, &ray).unwrap();
+        assert!((t - (5.0 - 0.4)).abs() < 1e-5 && (uv.x - 0.4).abs() < 1e-4, "{t} {uv}");
+        assert!(closest(&tube, &Ray::new(Vec3::new(0.5, 0.3, 5.0), Vec3::NEG_Z, f32::INFINITY)).is_none());
+        assert!(closest(&tube, &Ray::new(Vec3::new(-2.0, 0.1, 0.0), Vec3::X, f32::INFINITY)).is_none());
+        let mut hits = 0;
+        for i in 0..200u64 {
+            let pts: Vec<[f32; 4]> = (0..6)
+                .map(|k| [k as f32 * 0.6, rnd(i, k) - 0.5, rnd(i, 10 + k) - 0.5, 0.05 + 0.15 * rnd(i, 20 + k)])
+                .collect();
+            let s = bspline(&pts);
+            let Shape::Curves(c) = &s else { unreachable!() };
+            for k in 0..10u64 {
+                let target = Vec3::new(0.6 + 1.8 * rnd(k, 30 + i), 0.0, 0.0);
+                let o = target + Vec3::new(rnd(k, 40 + i) - 0.5, 2.0, rnd(k, 50 + i) - 0.5) * 2.0;
+                let ray = Ray::new(o, (target - o).normalize(), f32::INFINITY);
+                let Some((t, seg, uv)) = closest(&s, &ray) else { continue };
+                let sp = spline(&c.controls(seg), uv.x as f64);
+                let q = ray.at(t).as_dvec3() - sp.c;
+                assert!((q.length() - sp.r).abs() < 1e-4, "{i}/{k}: off the circle by {}", q.length() - sp.r);
+                assert!(q.dot(sp.dc).abs() < 1e-4 * sp.dc.length(), "{i}/{k}: not on the perpendicular circle");
+                let si = s.interaction(0, seg, &ray, t, uv);
+                assert!(si.n.dot(ray.d) < 0.0, "{i}/{k}: a back face");
+                let inside = Ray::new(si.p - si.n * 1e-3, ray.d, f32::INFINITY);
+                let again = closest(&s, &inside);
+                assert!(again.is_none_or(|h| h.0 > 1e-2), "{i}/{k}: hit from inside at {again:?}");
+                hits += 1;
+            }
+        }
+        assert!(hits > 300, "{hits}");
     }
 }

@@ -84,8 +84,8 @@ pub enum Shape {
     /// Mitsuba `sdfgrid`: a signed distance grid, one part per voxel the
     /// surface crosses (see [`SdfGrid`]).
     SdfGrid(SdfGrid),
-    /// Mitsuba `linearcurve`: round tubes through control points, one part
-    /// per segment, back faces culled (see [`Curves`]).
+    /// Mitsuba `linearcurve` and `bsplinecurve`: round tubes through
+    /// control points, one part per segment, back faces culled (see [`Curves`]).
     Curves(Curves),
 }
 

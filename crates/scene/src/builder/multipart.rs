@@ -1,6 +1,6 @@
 //! The shapes whose BVH primitives are parts of one plugin: Mitsuba's
 //! `ellipsoids` and `ellipsoidsmesh` (each reading a PLY file of
-//! ellipsoids), `sdfgrid` and `linearcurve`. None of them can carry an
+//! ellipsoids), `sdfgrid`, `linearcurve` and `bsplinecurve`. None of them can carry an
 //! `area` emitter (Mitsuba 3.9.1 cannot sample points on them;
 //! [`Shape::can_emit`]).
 
@@ -11,6 +11,7 @@ use crate::error::{LoadError, Result};
 use crate::ply;
 use glam::Vec4;
 use glam::{DMat3, DMat4, DVec3};
+use penumbra_render::geometry::curves::Basis;
 use penumbra_render::geometry::ellipsoids::quat_to_matrix;
 use penumbra_render::geometry::{Curves, Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shape, Shell};
 
@@ -240,7 +241,29 @@ pub(super) fn linearcurve(node: &Node, to_world: &DMat4, flip: bool) -> Result<G
     for (first, n) in curves {
         segments.extend((first..first + n - 1).map(|k| k as u32));
     }
-    Ok((Shape::Curves(Curves { points, segments }), Vec::new()))
+    Ok((Shape::Curves(Curves { points, segments, basis: Basis::Linear }), Vec::new()))
+}
+
+/// Mitsuba's `bsplinecurve`: tubes along uniform cubic B-splines (Embree's
+/// round B-spline curves: circles of the interpolated radius swept
+/// perpendicular to the curve), open at the ends, back faces culled.
+///
+/// | parameter | type | default | meaning |
+/// |---|---|---|---|
+/// | `filename` | string | required | a text file, one control point per line: `x y z radius`; an empty line starts a new curve; each curve has at least 4 points (n points make n − 3 segments) |
+/// | `to_world` | transform | identity | moves the control points (the radii are not transformed, as in Mitsuba) |
+///
+/// Radii must be finite and not negative; an area emitter is refused.
+pub(super) fn bsplinecurve(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
+    if flip {
+        return Err(LoadError::at(node.loc_of("flip_normals"), "bsplinecurve has no parameter 'flip_normals'"));
+    }
+    let (points, curves) = load_curves(node, to_world, 4)?;
+    let mut segments = Vec::new();
+    for (first, n) in curves {
+        segments.extend((first..first + n - 3).map(|k| k as u32));
+    }
+    Ok((Shape::Curves(Curves { points, segments, basis: Basis::BSpline }), Vec::new()))
 }
 
 /// A curve file's control points (x, y, z, radius) and each curve's

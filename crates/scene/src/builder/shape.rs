@@ -48,6 +48,7 @@ pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("ellipsoidsmesh", ShapeBuilder::Geometry(multipart::ellipsoidsmesh)),
     ("sdfgrid", ShapeBuilder::Geometry(multipart::sdfgrid)),
     ("linearcurve", ShapeBuilder::Geometry(multipart::linearcurve)),
+    ("bsplinecurve", ShapeBuilder::Geometry(multipart::bsplinecurve)),
     ("obj", ShapeBuilder::Geometry(mesh_file)),
     ("ply", ShapeBuilder::Geometry(mesh_file)),
     ("serialized", ShapeBuilder::Geometry(serialized)),
