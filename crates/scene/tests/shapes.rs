@@ -551,3 +551,83 @@ fn bsplinecurve_is_read_and_needs_four_points_per_curve() {
     let m = load(&shape("three.txt"), &dir).err().unwrap().to_string();
     assert!(m.contains("line 1: the curve starting here has 3 control points; a bsplinecurve needs at least 4"), "{m}");
 }
+
+/// The multi-part shapes inside a shapegroup, placed twice by instances,
+/// render as the same shapes written out with the instances' translations.
+#[test]
+fn multi_part_shapes_render_alike_instanced_and_flattened() {
+    let dir = temp_dir().join("multipart_instances");
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = common::root().join("tests/scenes/shapes");
+    let shapes = |to_world: &str| {
+        let f = |name: &str| data.join(name).display().to_string();
+        format!(
+            r#"<shape type="ellipsoids"><string name="filename" value="{}"/>{to_world}
+                 <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.3, 0.2"/></bsdf></shape>
+               <shape type="ellipsoidsmesh"><string name="filename" value="{}"/>
+                 <transform name="to_world"><translate x="1.5"/>{}</transform></shape>
+               <shape type="sdfgrid"><string name="filename" value="{}"/>
+                 <transform name="to_world"><translate x="-1.5" y="-0.2"/>{}</transform></shape>
+               <shape type="linearcurve"><string name="filename" value="{}"/>{to_world}</shape>
+               <shape type="bsplinecurve"><string name="filename" value="{}"/>
+                 <transform name="to_world"><translate z="0.8"/>{}</transform></shape>"#,
+            f("ellipsoids.ply"),
+            f("ellipsoids.ply"),
+            to_world.replace("<transform name=\"to_world\">", "").replace("</transform>", ""),
+            f("torus.sdf.vol"),
+            to_world.replace("<transform name=\"to_world\">", "").replace("</transform>", ""),
+            f("curves.txt"),
+            f("bspline.txt"),
+            to_world.replace("<transform name=\"to_world\">", "").replace("</transform>", ""),
+        )
+    };
+    let scene = |body: String| {
+        format!(
+            r#"<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="3"/></integrator>
+  <sensor type="perspective"><float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 3, 6" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film>
+  </sensor>
+  <emitter type="constant"><rgb name="radiance" value="0.6, 0.7, 0.8"/></emitter>
+  <shape type="rectangle"><transform name="to_world"><scale value="6"/><rotate x="1" angle="-90"/></transform></shape>
+  {body}
+</scene>"#
+        )
+    };
+    let place = ["<translate x=\"-0.5\" z=\"-1\"/>", "<translate x=\"0.6\" y=\"0.1\" z=\"0.7\"/>"];
+    let instanced = scene(format!(
+        r#"<shape type="shapegroup" id="g">{}</shape>
+           <shape type="instance"><ref id="g"/><transform name="to_world">{}</transform></shape>
+           <shape type="instance"><ref id="g"/><transform name="to_world">{}</transform></shape>"#,
+        shapes(""),
+        place[0],
+        place[1]
+    ));
+    let flattened = scene(
+        place.iter().map(|p| shapes(&format!("<transform name=\"to_world\">{p}</transform>"))).collect::<String>(),
+    );
+    std::fs::write(dir.join("instanced.xml"), instanced).unwrap();
+    std::fs::write(dir.join("flattened.xml"), flattened).unwrap();
+    let a = common::render_with_variance(&dir.join("instanced.xml"), 16, 2, None, 5);
+    let b = common::render_with_variance(&dir.join("flattened.xml"), 16, 2, None, 5);
+    let n = a.mean.len();
+    let close =
+        a.mean.iter().zip(&b.mean).filter(|(x, y)| (0..3).all(|c| (x[c] - y[c]).abs() < 1e-3 * (1.0 + y[c]))).count();
+    assert!(close as f64 >= 0.97 * n as f64, "{close} of {n} pixels agree");
+    // The shapes are really there: the image differs from the floor alone.
+    let floor = common::render_with_variance(
+        &{
+            let p = dir.join("floor.xml");
+            std::fs::write(&p, scene(String::new())).unwrap();
+            p
+        },
+        16,
+        2,
+        None,
+        5,
+    );
+    let differ = a.mean.iter().zip(&floor.mean).filter(|(x, y)| (x[0] - y[0]).abs() > 0.02).count();
+    assert!(differ > n / 10, "only {differ} of {n} pixels show the shapes");
+}

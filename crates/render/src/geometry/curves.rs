@@ -9,8 +9,11 @@
 //! p1/r1 is then the cone touching both spheres tangentially, with the
 //! spheres as caps: the convex hull of the two spheres (the larger sphere
 //! alone when it holds the other). A curve is the union of its segments, so
-//! joints are round and the ends are spherical caps. Back faces are culled:
-//! a segment is hit only where a ray enters it, never from inside.
+//! joints are round and the ends are spherical caps. Embree gives each
+//! point of the surface to one segment (from the neighbour flags it derives
+//! from the index buffer): a joint's sphere belongs to the segment ending
+//! there, the start sphere only to a curve's first segment. Back faces are
+//! culled: a segment is hit only where a ray enters it, never from inside.
 //!
 //! Embree reports the hit's curve parameter u (the centre of the sphere
 //! touching the surface there: y / (|Δp|² − Δr²) with y = (h − p0)·Δp +
@@ -153,7 +156,11 @@ impl Curves {
         let (t, u) = match self.basis {
             Basis::Linear => {
                 let (a, b) = self.ends(i);
-                enter_segment(a, b, o, d)?
+                let k = self.segments[i];
+                let left = i > 0 && self.segments[i - 1] + 1 == k;
+                let right = self.segments.get(i + 1).is_some_and(|&n| n == k + 1);
+                let next = right.then(|| self.points[k as usize + 2]);
+                enter_segment(a, b, !left, next, o, d)?
             }
             Basis::BSpline => enter_bspline(&self.controls(i), o, d, ray.t_max as f64)?,
         };
@@ -284,7 +291,7 @@ fn enter_bspline(p: &[Vec4; 4], o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, 
 /// Newton's method).
 fn enter_piece(a: Vec4, b: Vec4, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
     let back = 4.0 * (a.w.max(b.w) as f64 + (a - b).truncate().length() as f64) / d.length();
-    let (t, u) = enter_segment(a, b, o - d * back, d)?;
+    let (t, u) = enter_segment(a, b, true, None, o - d * back, d)?;
     Some((t - back, u))
 }
 
@@ -311,9 +318,15 @@ fn sphere_entry(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
 }
 
 /// The entry (t, u) of the line o + t d into the convex hull of the
-/// spheres a (centre xyz, radius w) and b; t may be negative (an origin
-/// inside) only when the entry lies behind, and then None is returned.
-fn enter_segment(a: Vec4, b: Vec4, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+/// spheres a (centre xyz, radius w) and b, t > 0 (None for an origin inside).
+///
+/// As Embree splits a curve among its segments, so that each point of
+/// the surface belongs to one segment (and the hits at a joint to the
+/// segment that ends there): the start sphere counts only with `start`
+/// (a segment without a left neighbour), and with the right neighbour's
+/// end point `next` the end sphere's hits past the plane where the next
+/// segment's cone starts are left to that segment.
+fn enter_segment(a: Vec4, b: Vec4, start: bool, next: Option<Vec4>, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
     let (p0, r0) = (a.truncate().as_dvec3(), a.w as f64);
     let (p1, r1) = (b.truncate().as_dvec3(), b.w as f64);
     // Work from the point of the line nearest the segment's middle.
@@ -363,13 +376,20 @@ fn enter_segment(a: Vec4, b: Vec4, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
             }
         }
         // The caps: the parts of the spheres beyond the tangent circles.
-        if let Some(t) = sphere_entry(o, d, p0, r0) {
-            if y_of(o + d * t) <= 0.0 {
-                consider(t, Part::Start);
+        if start {
+            if let Some(t) = sphere_entry(o, d, p0, r0) {
+                if y_of(o + d * t) <= 0.0 {
+                    consider(t, Part::Start);
+                }
             }
         }
         if let Some(t) = sphere_entry(o, d, p1, r1) {
-            if y_of(o + d * t) >= g {
+            let h = o + d * t;
+            let past_next = next.is_some_and(|n| {
+                let (p2, r2) = (n.truncate().as_dvec3(), n.w as f64);
+                (h - p1).dot(p2 - p1) + r1 * (r2 - r1) > 0.0
+            });
+            if y_of(h) >= g && !past_next {
                 consider(t, Part::End);
             }
         }
@@ -621,5 +641,38 @@ mod tests {
             }
         }
         assert!(hits > 300, "{hits}");
+    }
+
+    // Mitsuba 3.9.1 (llvm_ad_rgb) on the bent curve 0 0 0 0.3 / 2 0 0 0.3 / 2 2 0 0.3:
+    // rays aimed at the joint from around its outside, (si.t, si.prim_index,
+    // si.uv): the joint's sphere belongs to the segment ending there (u = 1).
+    // (A ninth ray, at angle 0, meets the joint's sphere exactly where the
+    // second segment's cone starts: a tie either segment may report.)
+    #[test]
+    fn joints_belong_to_the_segment_ending_there() {
+        let s = curves(&[[0.0, 0.0, 0.0, 0.3], [2.0, 0.0, 0.0, 0.3], [2.0, 2.0, 0.0, 0.3]]);
+        let want = [
+            (4.77639, 0, 0.61614),
+            (4.74019, 0, 0.584677),
+            (4.71716, 0, 0.558169),
+            (4.7042, 0, 0.53192),
+            (4.7, 0, 0.5),
+            (4.7042, 0, 0.452994),
+            (4.71716, 0, 0.381294),
+            (4.74019, 0, 0.301862),
+        ];
+        for (k, (t, prim, u)) in want.into_iter().enumerate() {
+            let a = (-90.0 + 11.25 * k as f32).to_radians();
+            let o = Vec3::new(2.0 + 5.0 * a.cos(), 5.0 * a.sin(), 0.05 * k as f32 - 0.2);
+            let ray = Ray::new(o, Vec3::new(-a.cos(), -a.sin(), 0.0), f32::INFINITY);
+            let (th, i, uv) = closest(&s, &ray).expect("missed");
+            assert_eq!(i, prim, "ray {k}");
+            assert!((th - t).abs() < 2e-5, "ray {k}: t {th} vs {t}");
+            let si = s.interaction(0, i, &ray, th, uv);
+            assert!((si.uv - Vec2::new(u, 0.5)).abs().max_element() < 2e-5, "ray {k}: uv {}", si.uv);
+            // Only one segment reports a joint hit.
+            let both = (0..2).filter(|&j| s.intersect_prim(j, &ray).is_some_and(|h| h.0 == th)).count();
+            assert_eq!(both, 1, "ray {k}");
+        }
     }
 }
