@@ -34,7 +34,8 @@
 //! |o + t d − c(v)|² = r(v)² and (o + t d − c(v)) · c'(v) = 0 for (t, v):
 //! here by Newton's method, started from the entries of the ray into a
 //! chain of 16 round linear pieces through c and r (the linear curve above),
-//! kept where v lies in [0, 1] and the ray enters the surface. Mitsuba's
+//! each widened to hold the tube, kept where v lies in [0, 1] and the ray
+//! enters the surface. Mitsuba's
 //! normal is ∝ (|c'|² − (p − c)·c'') (p − c) − r r' c', its uv the angle
 //! about c' (from the frame of the linear curves) / 2π and (v + segment) /
 //! segments, its dp/du and dp/dv from the Frenet frame.
@@ -246,10 +247,15 @@ impl Curves {
 /// where the ray enters the surface.
 fn enter_bspline(p: &[Vec4; 4], o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
     let nodes: Vec<Spline> = (0..=PIECES).map(|j| spline(p, j as f64 / PIECES as f64)).collect();
-    let sphere = |s: &Spline| s.c.as_vec3().extend(s.r as f32);
     let mut best: Option<(f64, f64)> = None;
     for j in 0..PIECES {
-        let Some((t0, u0)) = enter_piece(sphere(&nodes[j]), sphere(&nodes[j + 1]), o, d) else { continue };
+        // Widen the piece by 1.5 times how far the curve strays from it at
+        // the piece's middle, so that the chain holds the whole tube.
+        let (a, b) = (&nodes[j], &nodes[j + 1]);
+        let mid = spline(p, (j as f64 + 0.5) / PIECES as f64);
+        let sag = (mid.c - 0.5 * (a.c + b.c)).length() + (mid.r - 0.5 * (a.r + b.r)).abs();
+        let sphere = |s: &Spline| s.c.as_vec3().extend((s.r + 1.5 * sag) as f32 * (1.0 + 1e-5) + 1e-7);
+        let Some((t0, u0)) = enter_piece(sphere(a), sphere(b), o, d) else { continue };
         let (mut t, mut v) = (t0, (j as f64 + u0) / PIECES as f64);
         let mut converged = false;
         for _ in 0..24 {
@@ -674,5 +680,44 @@ mod tests {
             let both = (0..2).filter(|&j| s.intersect_prim(j, &ray).is_some_and(|h| h.0 == th)).count();
             assert_eq!(both, 1, "ray {k}");
         }
+    }
+
+    /// Rays aimed head-on, and at a slant, at points of strongly bent swept
+    /// tubes hit them (the seeding chain holds the whole tube), including
+    /// points near the silhouette seen from the ray.
+    #[test]
+    fn bspline_points_of_the_sweep_are_hit() {
+        let mut slanted = 0;
+        for i in 0..100u64 {
+            let pts: Vec<[f32; 4]> = (0..4)
+                .map(|k| {
+                    [k as f32 * 0.8, 0.6 * (rnd(i, k) - 0.5), 0.6 * (rnd(i, 10 + k) - 0.5), 0.05 + 0.1 * rnd(i, 20 + k)]
+                })
+                .collect();
+            let s = bspline(&pts);
+            let Shape::Curves(c) = &s else { unreachable!() };
+            for k in 0..20u64 {
+                let v = 0.02 + 0.96 * rnd(k, 30 + i) as f64;
+                let sp = spline(&c.controls(0), v);
+                let tan = sp.dc.normalize();
+                let a = tan.any_orthonormal_vector();
+                let b = tan.cross(a);
+                let th = std::f64::consts::TAU * rnd(k, 40 + i) as f64;
+                let q = sp.r * (th.cos() * a + th.sin() * b);
+                let p = sp.c + q;
+                let n = ((sp.dc.length_squared() - q.dot(sp.ddc)) * q - (sp.dr * sp.r) * sp.dc).normalize();
+                // Head-on, and tilted towards the tangent plane (up to 88 degrees off the normal).
+                let tilt = 88f64.to_radians() * rnd(k, 50 + i) as f64;
+                let side = n.cross(tan).normalize();
+                let dir = -(n * tilt.cos() + side * tilt.sin());
+                let o = p - dir * 1.0;
+                let ray = Ray::new(o.as_vec3(), dir.as_vec3(), f32::INFINITY);
+                let got = closest(&s, &ray).map(|h| h.0);
+                // Another part of the tube may come first; the hit is never later.
+                assert!(got.is_some_and(|t| t <= 1.0 + 1e-4), "{i}/{k}: {got:?} for a surface point at 1");
+                slanted += (tilt > 60f64.to_radians() && got.is_some_and(|t| (t - 1.0).abs() < 1e-4)) as usize;
+            }
+        }
+        assert!(slanted > 200, "{slanted}");
     }
 }
