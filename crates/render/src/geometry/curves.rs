@@ -132,19 +132,24 @@ impl Curves {
         [self.points[k], self.points[k + 1], self.points[k + 2], self.points[k + 3]]
     }
 
-    /// The box of segment `i`: the boxes of its control spheres (a
-    /// B-spline stays in their convex hull, its radius below their largest).
+    /// The box of segment `i`: the boxes of its end spheres (linear), or of
+    /// the chain of widened pieces that seeds the B-spline's intersection.
     pub fn bounds(&self, i: usize) -> Aabb {
-        let k = self.segments[i] as usize;
-        let n = if self.basis == Basis::Linear { 2 } else { 4 };
-        let pts = &self.points[k..k + n];
-        let r = if self.basis == Basis::Linear { None } else { Some(pts.iter().map(|p| p.w).fold(0.0, f32::max)) };
-        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for p in pts {
-            let w = Vec3::splat(r.unwrap_or(p.w));
-            lo = lo.min(p.truncate() - w);
-            hi = hi.max(p.truncate() + w);
+        if self.basis == Basis::BSpline {
+            // The seeding chain holds all that can be hit, tighter than the controls.
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for (a, b) in chain(&self.controls(i)) {
+                for s in [a, b] {
+                    lo = lo.min(s.truncate() - Vec3::splat(s.w));
+                    hi = hi.max(s.truncate() + Vec3::splat(s.w));
+                }
+            }
+            let pad = 1e-6 * (lo.abs().max(hi.abs()).max_element());
+            return Aabb { min: lo - Vec3::splat(pad), max: hi + Vec3::splat(pad) };
         }
+        let (a, b) = self.ends(i);
+        let lo = (a.truncate() - Vec3::splat(a.w)).min(b.truncate() - Vec3::splat(b.w));
+        let hi = (a.truncate() + Vec3::splat(a.w)).max(b.truncate() + Vec3::splat(b.w));
         let pad = 1e-6 * (lo.abs().max(hi.abs()).max_element());
         Aabb { min: lo - Vec3::splat(pad), max: hi + Vec3::splat(pad) }
     }
@@ -246,16 +251,18 @@ impl Curves {
 /// the module docs); the closest solution with v in [0, 1], 0 < t < t_max,
 /// where the ray enters the surface.
 fn enter_bspline(p: &[Vec4; 4], o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
-    let nodes: Vec<Spline> = (0..=PIECES).map(|j| spline(p, j as f64 / PIECES as f64)).collect();
+    let pieces = chain(p);
     let mut best: Option<(f64, f64)> = None;
-    for j in 0..PIECES {
-        // Widen the piece by 1.5 times how far the curve strays from it at
-        // the piece's middle, so that the chain holds the whole tube.
-        let (a, b) = (&nodes[j], &nodes[j + 1]);
-        let mid = spline(p, (j as f64 + 0.5) / PIECES as f64);
-        let sag = (mid.c - 0.5 * (a.c + b.c)).length() + (mid.r - 0.5 * (a.r + b.r)).abs();
-        let sphere = |s: &Spline| s.c.as_vec3().extend((s.r + 1.5 * sag) as f32 * (1.0 + 1e-5) + 1e-7);
-        let Some((t0, u0)) = enter_piece(sphere(a), sphere(b), o, d) else { continue };
+    for (j, &(a, b)) in pieces.iter().enumerate() {
+        // Skip pieces whose bounding sphere the line misses (most of them).
+        let (ac, bc) = (a.truncate().as_dvec3(), b.truncate().as_dvec3());
+        let reach = 0.5 * (ac - bc).length() + a.w.max(b.w) as f64;
+        let m = 0.5 * (ac + bc) - o;
+        let off = m - d * (m.dot(d) / d.length_squared());
+        if off.length_squared() > 1.0001 * reach * reach + 1e-12 {
+            continue;
+        }
+        let Some((t0, u0)) = enter_piece(a, b, o, d) else { continue };
         let (mut t, mut v) = (t0, (j as f64 + u0) / PIECES as f64);
         let mut converged = false;
         for _ in 0..24 {
@@ -290,6 +297,24 @@ fn enter_bspline(p: &[Vec4; 4], o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, 
         }
     }
     best
+}
+
+/// The chain of round linear pieces that seeds Newton's method on B-spline
+/// segment `p`: the spheres (centre, radius) at v = j / PIECES, each piece
+/// widened by 1.5 times how far the curve strays from it at its middle (and
+/// a little), so that the chain holds the whole tube.
+fn chain(p: &[Vec4; 4]) -> [(Vec4, Vec4); PIECES] {
+    let node = |j: usize| spline(p, j as f64 / PIECES as f64);
+    let mut a = node(0);
+    std::array::from_fn(|j| {
+        let b = node(j + 1);
+        let mid = spline(p, (j as f64 + 0.5) / PIECES as f64);
+        let sag = (mid.c - 0.5 * (a.c + b.c)).length() + (mid.r - 0.5 * (a.r + b.r)).abs();
+        let sphere = |s: &Spline| s.c.as_vec3().extend((s.r + 1.5 * sag) as f32 * (1.0 + 1e-5) + 1e-7);
+        let piece = (sphere(&a), sphere(&b));
+        a = b;
+        piece
+    })
 }
 
 /// [`enter_segment`] without culling: the entry (t, u) of the line into the
