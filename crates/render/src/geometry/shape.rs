@@ -124,9 +124,10 @@ impl Shape {
     }
 
     /// Whether Mitsuba 3.9.1 can sample points on this shape, which an
-    /// `area` emitter needs (it cannot on ellipsoids, SDF grids and curves).
+    /// `area` emitter needs (it cannot on analytic ellipsoids, SDF grids and
+    /// curves; it can on `ellipsoidsmesh`, a mesh).
     pub fn can_emit(&self) -> bool {
-        matches!(self, Shape::Mesh(_) | Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_))
+        matches!(self, Shape::Mesh(_) | Shape::CulledMesh(_) | Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_))
     }
 
     /// Bounds of primitive `i` in the shape's space.
@@ -145,11 +146,11 @@ impl Shape {
     /// Total surface area (0 for the shapes that cannot emit, see [`Shape::can_emit`]).
     pub fn area(&self) -> f32 {
         match self {
-            Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
+            Shape::Mesh(m) | Shape::CulledMesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
             Shape::Sphere(s) => s.area(),
             Shape::Disk(d) => d.area(),
             Shape::Cylinder(c) => c.area(),
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_) => 0.0,
+            Shape::Ellipsoids(_) | Shape::SdfGrid(_) | Shape::Curves(_) => 0.0,
         }
     }
 
@@ -289,7 +290,7 @@ impl Shape {
     /// Uniform point on the surface: (point, front normal, density per unit area).
     pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3, f32) {
         match self {
-            Shape::Mesh(m) => {
+            Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let d = m.area_distrib.as_ref().expect("sampling a mesh without area");
                 let (i, _, ux) = d.sample_discrete(u.x);
                 let b = warp::sample_uniform_triangle(Vec2::new(ux, u.y));
@@ -302,9 +303,7 @@ impl Shape {
             Shape::Disk(d) => d.sample_area(u),
             Shape::Cylinder(c) => c.sample_area(u),
             // Never emitters (the scene builder refuses them): a zero density.
-            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_) => {
-                (Vec3::ZERO, Vec3::Z, 0.0)
-            }
+            Shape::Ellipsoids(_) | Shape::SdfGrid(_) | Shape::Curves(_) => (Vec3::ZERO, Vec3::Z, 0.0),
         }
     }
 

@@ -1,8 +1,8 @@
 //! The shapes whose BVH primitives are parts of one plugin: Mitsuba's
 //! `ellipsoids` and `ellipsoidsmesh` (each reading a PLY file of
-//! ellipsoids), `sdfgrid`, `linearcurve` and `bsplinecurve`. None of them can carry an
-//! `area` emitter (Mitsuba 3.9.1 cannot sample points on them;
-//! [`Shape::can_emit`]).
+//! ellipsoids), `sdfgrid`, `linearcurve` and `bsplinecurve`. Only
+//! `ellipsoidsmesh` (a mesh in Mitsuba) can carry an `area` emitter: Mitsuba
+//! 3.9.1 cannot sample points on the others ([`Shape::can_emit`]).
 
 use super::resolve;
 use super::shape::Geometry;
@@ -39,9 +39,10 @@ pub(super) fn ellipsoids(node: &Node, to_world: &DMat4, flip: bool) -> Result<Ge
 /// | parameter | type | default | meaning |
 /// |---|---|---|---|
 /// | `filename`, `scale_factor`, `extent`, `extent_adaptive_clamping`, `to_world` | | | as for `ellipsoids` |
-/// | `shell` | string | `ico_sphere` | the shell per ellipsoid: `ico_sphere` (or `default`, 20 triangles), `box` (12), `uv_sphere` (72), each scaled to enclose the ellipsoid |
+/// | `shell` | string | `ico_sphere` | the shell per ellipsoid: `ico_sphere` (or `default`, 20 triangles), `box` (12), `uv_sphere` (72), scaled so that its vertices and face centres lie on or outside the ellipsoid |
 ///
-/// A nested mesh as the shell is not supported (an error).
+/// An `area` emitter emits from the shells' front faces, sampled by area as
+/// on any mesh. A nested mesh as the shell is not supported (an error).
 pub(super) fn ellipsoidsmesh(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
     let shell = match node.get_string("shell")? {
         None => Shell::IcoSphere,
