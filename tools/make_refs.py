@@ -80,6 +80,10 @@ SPP = {
     "area_texture": 16384,
     "projector": 16384,
     "directionalarea": 8192,
+    "ellipsoids": 16384,
+    "sdfgrid": 32768,
+    "linearcurve": 16384,
+    "bsplinecurve": 16384,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

@@ -635,6 +635,107 @@ fn other_fields(kind: &str, el: &Element, reserved: &[&str]) -> (Vec<MeshAttribu
     (specs, slots)
 }
 
+/// The first element of a PLY file read as a table of float32 columns
+/// (Mitsuba's `ellipsoids` reads its file so: every property a `float`).
+#[derive(Debug, Clone)]
+pub struct PlyTable {
+    /// The column (property) names, in file order.
+    pub names: Vec<String>,
+    /// Row-major values, `names.len()` per row.
+    pub values: Vec<f32>,
+}
+
+impl PlyTable {
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.values.len().checked_div(self.names.len()).unwrap_or(0)
+    }
+}
+
+/// Reads the first element of the PLY file at `path` as a [`PlyTable`]:
+/// every property must be a scalar `float` (Mitsuba reads the rows as raw
+/// float32). A count that the data cannot hold is refused before anything
+/// is allocated; bad values name their line (ASCII) or byte (binary).
+pub fn load_ply_table(path: &Path) -> Result<PlyTable> {
+    let bytes = std::fs::read(path).map_err(|e| {
+        let msg = match e.kind() {
+            std::io::ErrorKind::NotFound => "PLY file not found".to_string(),
+            _ => format!("cannot read PLY file: {e}"),
+        };
+        LoadError::in_file(path, msg)
+    })?;
+    parse_ply_table(&bytes, path)
+}
+
+/// [`load_ply_table`] of data in memory; `path` names the file in messages.
+pub fn parse_ply_table(bytes: &[u8], path: &Path) -> Result<PlyTable> {
+    let file = Arc::new(path.to_path_buf());
+    let header = parse_header(bytes, &file)?;
+    let el = header.elements.first().ok_or_else(|| LoadError::in_file(path, "the PLY file has no element"))?;
+    for p in &el.props {
+        if !matches!(p.ty, PropType::Scalar(Scalar::F32)) {
+            return Err(LoadError::in_file(
+                path,
+                format!("property '{}' of element '{}' must be a float (float32)", p.name, el.name),
+            ));
+        }
+    }
+    let data = &bytes[header.body..];
+    let columns = el.props.len();
+    // A binary value takes 4 bytes, an ASCII one at least 2 (digit and separator).
+    let min_bytes = if header.format == Format::Ascii { 2 } else { 4 };
+    let needed = el.count.checked_mul(columns).and_then(|n| n.checked_mul(min_bytes));
+    if needed.is_none_or(|n| n > data.len() + 1) {
+        return Err(LoadError::in_file(
+            path,
+            format!(
+                "truncated: element '{}' claims {} rows of {columns} floats, which need {}{} bytes; \
+                 the data after the header (byte {}) has {}",
+                el.name,
+                el.count,
+                if header.format == Format::Ascii { "at least " } else { "" },
+                needed.map_or("more than 2^64".to_string(), |n| n.to_string()),
+                header.body,
+                data.len()
+            ),
+        ));
+    }
+    let at = Cell::new(At::Byte(header.body));
+    let header_lines = 1 + bytes[..header.body].iter().filter(|&&b| b == b'\n').count();
+    let mut body = match header.format {
+        Format::Ascii => Body::Ascii {
+            text: std::str::from_utf8(data).map_err(|e| {
+                let bad = header.body + e.valid_up_to();
+                let line = header_lines + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+                LoadError::in_file(path, format!("ASCII PLY data is not text: line {line} (byte {bad}) is not UTF-8"))
+            })?,
+            pos: 0,
+            line: header_lines,
+            at: &at,
+        },
+        f => Body::Binary { data, pos: 0, base: header.body, big_endian: f == Format::BinaryBe, at: &at },
+    };
+    let mut values = Vec::with_capacity(el.count * columns);
+    for i in 0..el.count {
+        for p in &el.props {
+            let v = body.read(Scalar::F32).ok_or_else(|| {
+                LoadError::in_file(
+                    path,
+                    format!(
+                        "{} {i} of {}, property '{}', at {}: unexpected end of data or invalid number",
+                        el.name,
+                        el.count,
+                        p.name,
+                        at.get()
+                    ),
+                )
+            })?;
+            values.push(v as f32);
+        }
+    }
+    Ok(PlyTable { names: el.props.iter().map(|p| p.name.clone()).collect(), values })
+}
+
 fn read_count(body: &mut Body, ty: Scalar) -> Option<usize> {
     let n = body.read(ty)?;
     (n >= 0.0 && n.fract() == 0.0).then_some(n as usize)

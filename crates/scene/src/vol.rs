@@ -52,9 +52,10 @@ pub fn parse(bytes: &[u8]) -> Result<VolFile, String> {
     if b.iter().any(|v| !v.is_finite()) {
         return Err("byte 24: the bounding box holds a NaN or infinite value".to_string());
     }
-    let count = res.iter().map(|&r| r as u64).product::<u64>() * channels as u64;
-    let expected = HEADER as u64 + 4 * count;
-    if (bytes.len() as u64) < expected {
+    // In u128: three i32 sizes and the channels cannot overflow it.
+    let count = res.iter().map(|&r| r as u128).product::<u128>() * channels as u128;
+    let expected = HEADER as u128 + 4 * count;
+    if (bytes.len() as u128) < expected {
         return Err(format!(
             "the header claims {}x{}x{} voxels of {channels} channel(s), {expected} bytes in all, but the file has {} bytes (truncated?)",
             res[0],

@@ -69,11 +69,12 @@ fn every_listed_plugin_is_built_and_any_other_is_refused_with_the_list() {
 
 #[test]
 fn unsupported_plugin_message_format() {
-    let e = build_error(Kind::Shape, r#"<shape type="ellipsoids"/>"#).unwrap();
+    let e = build_error(Kind::Shape, r#"<shape type="blender"/>"#).unwrap();
     assert!(
         e.ends_with(
-            "shape plugin 'ellipsoids' is not supported by Penumbra; supported shape plugins: \
-             rectangle, cube, sphere, disk, cylinder, obj, ply, serialized, shapegroup, instance, merge"
+            "shape plugin 'blender' is not supported by Penumbra; supported shape plugins: \
+             rectangle, cube, sphere, disk, cylinder, ellipsoids, ellipsoidsmesh, sdfgrid, linearcurve, \
+             bsplinecurve, obj, ply, serialized, shapegroup, instance, merge"
         ),
         "{e}"
     );
@@ -195,7 +196,7 @@ fn readme_plugin_table_matches_the_code() {
 #[test]
 fn readme_check_names_each_difference() {
     let readme = readme();
-    let changed = readme.replacen("disk, cylinder, shapegroup", "disk, shapegroup", 1).replacen(
+    let changed = readme.replacen("disk, cylinder, ellipsoids", "disk, ellipsoids", 1).replacen(
         "catmullrom, lanczos",
         "catmullrom, lanczos, bessel",
         1,

@@ -229,3 +229,33 @@ fn directionalarea_emitters_match_mitsuba() {
     // `directionalarea` shapes: their BSDF (or a black one), no emission.
     compare("directionalarea", 256);
 }
+
+/// Mitsuba's `ellipsoids` (analytic) and `ellipsoidsmesh` (icosahedral
+/// shells) from one PLY file, two of the ellipsoids overlapping (back faces culled).
+#[test]
+fn ellipsoids_match_mitsuba() {
+    compare("ellipsoids", 256);
+}
+
+/// Mitsuba's `sdfgrid`: a 20³ signed distance grid with smooth shading
+/// normals (diffuse) and with analytic ones (rough copper), one scaled unevenly.
+#[test]
+fn sdfgrid_matches_mitsuba() {
+    compare("sdfgrid", 256);
+}
+
+/// Mitsuba's `linearcurve` (Embree's round linear curves): a tapering
+/// helix, a zigzag with jumping radii and a single segment, textured on the
+/// curves' uv by a checkerboard.
+#[test]
+fn linearcurve_matches_mitsuba() {
+    compare("linearcurve", 256);
+}
+
+/// Mitsuba's `bsplinecurve` (Embree's round B-spline curves, open ends): the
+/// helix and zigzag of linearcurve.xml as B-splines, and a curve whose end
+/// radii are zero, textured on the curves' uv.
+#[test]
+fn bsplinecurve_matches_mitsuba() {
+    compare("bsplinecurve", 256);
+}

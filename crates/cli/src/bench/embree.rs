@@ -63,6 +63,7 @@ pub fn with_embree_shapes<R>(
         let shape = match *prim {
             Primitive::Shape(id) => &shapes[id as usize],
             Primitive::Instance(_) => return Err("an instance has no Embree counterpart here".into()),
+            Primitive::Part(..) => return Err("a multi-part shape has no Embree counterpart here".into()),
         };
         let base = positions.len() as u32;
         match shape {
@@ -82,6 +83,9 @@ pub fn with_embree_shapes<R>(
                 }
             }
             Shape::Cylinder(_) => return Err("a cylinder has no Embree counterpart here".into()),
+            Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_) => {
+                return Err("ellipsoids, SDF grids and curves have no Embree counterpart here".into())
+            }
         }
     }
     with_geometry(&positions, &indices, &spheres, |t, _| f(t)).ok_or_else(|| "Embree's device failed".into())

@@ -23,6 +23,9 @@ use std::mem::MaybeUninit;
 pub enum Primitive {
     /// `shapes[id]`; in a leaf, a sphere, disk or cylinder, intersected through its shape.
     Shape(u32),
+    /// In a leaf: part `index` of the multi-part shape `shapes[id]` (one
+    /// ellipsoid, one culled triangle; see [`Shape::is_multi_part`]).
+    Part(u32, u32),
     /// `instances[i]`: a shape group (a BVH of its own, in object space) placed by a transform.
     Instance(u32),
 }
@@ -126,6 +129,9 @@ pub(super) fn prim_hit<const ANY: bool>(
             index: 0,
             instance: Hit::NOT_INSTANCED,
         }),
+        Primitive::Part(shape, index) => shapes[shape as usize]
+            .intersect_prim(index as usize, ray)
+            .map(|(t, uv)| Hit { t, uv, shape, index, instance: Hit::NOT_INSTANCED }),
         Primitive::Instance(i) => {
             let inst = &instances[i as usize];
             if ANY {
@@ -282,6 +288,7 @@ impl Emitter {
                     for p in leaf {
                         self.prims.push(match p.kind {
                             ItemKind::Instance => Primitive::Instance(p.id),
+                            ItemKind::Shape if shapes[p.id as usize].is_multi_part() => Primitive::Part(p.id, p.index),
                             ItemKind::Shape | ItemKind::Triangle => Primitive::Shape(p.id),
                         });
                     }
@@ -336,8 +343,19 @@ impl Accel {
                             items.push(Item { bounds: b, kind: ItemKind::Triangle, id, index: i as u32 });
                         }
                     }
+                    shape if shape.is_multi_part() => {
+                        items.reserve(shape.prim_count());
+                        for i in 0..shape.prim_count() {
+                            let b = shape.prim_bounds(i);
+                            // Empty parts (degenerate triangles) can never be hit.
+                            if b.min.x <= b.max.x {
+                                items.push(Item { bounds: b, kind: ItemKind::Shape, id, index: i as u32 });
+                            }
+                        }
+                    }
                     shape => items.push(Item { bounds: shape.prim_bounds(0), kind: ItemKind::Shape, id, index: 0 }),
                 },
+                Primitive::Part(..) => unreachable!("parts are placed by their shape"),
                 Primitive::Instance(id) => {
                     let b = instances[id as usize].bounds();
                     if b.min.x <= b.max.x {
@@ -731,6 +749,73 @@ mod tests {
             assert_eq!(hit.map(|h| h.t), brute.is_finite().then_some(brute), "ray {i}");
             assert_eq!(accel.occluded(&ray, &shapes, &[]), brute.is_finite(), "ray {i}");
         }
+    }
+
+    /// Multi-part shapes (an ellipsoid cloud, culled shells, an SDF grid,
+    /// curves): each part is
+    /// a primitive of its own, and the BVH finds the closest part a brute
+    /// force over all parts finds (culled back faces included).
+    #[test]
+    fn multi_part_shapes_agree_with_brute_force() {
+        use crate::geometry::ellipsoids::quat_to_matrix;
+        use crate::geometry::{Ellipsoid, Ellipsoids, Shell};
+        let ellipsoid = |i: u64| {
+            let q = glam::DVec4::new(rnd(i, 7) as f64, rnd(i, 8) as f64 - 0.5, 0.3, 0.8).normalize();
+            Ellipsoid {
+                center: Vec3::new(rnd(i, 1), rnd(i, 2), rnd(i, 3)) * 10.0,
+                scale: Vec3::new(0.2 + rnd(i, 4), 0.2 + rnd(i, 5), 0.2 + rnd(i, 6)),
+                rot: quat_to_matrix(q.to_array()).as_mat3(),
+            }
+        };
+        let cloud: Vec<Ellipsoid> = (0..300).map(ellipsoid).collect();
+        let shells: Vec<Ellipsoid> = (300..500).map(ellipsoid).collect();
+        // 200 random control points; every fifth segment left out.
+        let curves = |basis| {
+            let points = (0..200)
+                .map(|k| glam::Vec4::new(rnd(k, 60) * 10.0, rnd(k, 61) * 10.0, rnd(k, 62) * 10.0, 0.3 * rnd(k, 63)));
+            Shape::Curves(crate::geometry::Curves {
+                points: points.collect(),
+                segments: (0..196).filter(|k| k % 5 != 4).collect(),
+                basis,
+            })
+        };
+        let sdf = crate::accel::packet::tests::sdf_blob(glam::DMat4::from_translation(glam::DVec3::new(4.0, 4.0, 4.0)));
+        let voxels = sdf.voxel_count();
+        let shapes = vec![
+            Shape::Ellipsoids(Ellipsoids { items: cloud }),
+            Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
+            Shape::SdfGrid(sdf),
+            curves(crate::geometry::curves::Basis::Linear),
+            curves(crate::geometry::curves::Basis::BSpline),
+        ];
+        let accel = Accel::build_shapes(&shapes);
+        accel.validate().unwrap();
+        assert_eq!(accel.prims.len(), 300 + 200 * 20 + voxels + 2 * 157);
+        let mut hits = 0;
+        for i in 0..3000u64 {
+            let o = Vec3::new(rnd(i, 100), rnd(i, 101), rnd(i, 102)) * 12.0 - 1.0;
+            let d = (Vec3::new(rnd(i, 103), rnd(i, 104), rnd(i, 105)) - 0.5).normalize();
+            let ray = Ray::new(o, d, if i % 3 == 0 { 4.0 } else { f32::INFINITY });
+            let mut brute: Option<(f32, u32, u32)> = None;
+            for (id, s) in shapes.iter().enumerate() {
+                for k in 0..s.prim_count() {
+                    if let Some((t, _)) = s.intersect_prim(k, &ray) {
+                        if brute.is_none_or(|b| t < b.0) {
+                            brute = Some((t, id as u32, k as u32));
+                        }
+                    }
+                }
+            }
+            let hit = accel.intersect(&ray, &shapes, &[]);
+            assert_eq!(hit.map(|h| h.t), brute.map(|b| b.0), "ray {i}");
+            if let (Some(h), Some(b)) = (hit, brute) {
+                let again = shapes[h.shape as usize].intersect_prim(h.index as usize, &ray).map(|x| x.0);
+                assert_eq!(again, Some(b.0), "ray {i}: the hit's part does not give its t");
+                hits += 1;
+            }
+            assert_eq!(accel.occluded(&ray, &shapes, &[]), brute.is_some(), "ray {i}");
+        }
+        assert!(hits > 800, "{hits}");
     }
 
     /// Separate spheres each get a leaf (a slot) of their own, so a ray

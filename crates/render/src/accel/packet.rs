@@ -516,7 +516,7 @@ pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Optio
                         &m.vertices(p.index as usize),
                     )
                     .map(|(t, b1, b2)| (t, Vec2::new(b1, b2))),
-                    shape => shape.intersect_analytic(ray),
+                    shape => shape.intersect_prim(p.index as usize, ray),
                 }
             };
             // An instance reports its own closest hit, which ties too.
@@ -531,9 +531,11 @@ pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Optio
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::geometry::{Mesh, TriangleMesh};
+    use crate::geometry::curves::Basis;
+    use crate::geometry::ellipsoids::quat_to_matrix;
+    use crate::geometry::{Curves, Ellipsoid, Ellipsoids, Mesh, SdfGrid, Shell, TriangleMesh};
     use crate::sampling::rng::{hash_words, to_unit_f32};
     use glam::Vec3;
 
@@ -542,7 +544,9 @@ mod tests {
     }
 
     /// A triangle soup, a grid of quads (shared edges and vertices, hit
-    /// exactly by axis-aligned rays through them), and spheres.
+    /// exactly by axis-aligned rays through them), spheres, and the
+    /// multi-part shapes: a cloud of ellipsoids, culled ellipsoid shells,
+    /// curves and a signed distance grid.
     fn scene() -> Vec<Shape> {
         let mut m = TriangleMesh::default();
         for i in 0..3000u64 {
@@ -567,12 +571,71 @@ mod tests {
                 g.indices.push([v, v + n + 2, v + n + 1]);
             }
         }
+        let ellipsoid = |i: u64| {
+            let q = glam::DQuat::from_xyzw(
+                rnd(i, 40) as f64 - 0.5,
+                rnd(i, 41) as f64 - 0.5,
+                rnd(i, 42) as f64 - 0.5,
+                rnd(i, 43) as f64 - 0.5,
+            )
+            .normalize();
+            Ellipsoid {
+                center: Vec3::new(rnd(i, 44), rnd(i, 45), rnd(i, 46)) * 10.0,
+                scale: Vec3::new(0.1 + rnd(i, 47), 0.1 + rnd(i, 48), 0.1 + rnd(i, 49)) * 0.6,
+                rot: quat_to_matrix([q.x, q.y, q.z, q.w]).as_mat3(),
+            }
+        };
+        let cloud: Vec<Ellipsoid> = (0..60).map(ellipsoid).collect();
+        let shells: Vec<Ellipsoid> = (60..100).map(ellipsoid).collect();
         vec![
             Shape::Mesh(Mesh::new(m, false)),
             Shape::Mesh(Mesh::new(g, false)),
             Shape::sphere(Vec3::splat(5.0), 1.0, false),
             Shape::sphere(Vec3::new(2.0, 7.0, 3.0), 0.7, false),
+            Shape::Ellipsoids(Ellipsoids { items: cloud }),
+            Shape::CulledMesh(Mesh::new(Shell::IcoSphere.mesh(&shells), true)),
+            helix(Basis::Linear, 0.0),
+            helix(Basis::BSpline, 2.5),
+            Shape::SdfGrid(sdf_blob(glam::DMat4::from_scale_rotation_translation(
+                glam::DVec3::splat(3.0),
+                glam::DQuat::IDENTITY,
+                glam::DVec3::new(6.0, 1.0, 5.0),
+            ))),
         ]
+    }
+
+    /// Curves along a helix (every tenth segment left out), lifted by `lift`.
+    fn helix(basis: Basis, lift: f32) -> Shape {
+        let points = (0..40)
+            .map(|k| {
+                let a = k as f32 * 0.5;
+                glam::Vec4::new(
+                    3.0 + 2.0 * a.cos(),
+                    lift + 0.2 * k as f32,
+                    6.0 + 2.0 * a.sin(),
+                    0.05 + 0.1 * rnd(k, 50),
+                )
+            })
+            .collect();
+        let last = if basis == Basis::Linear { 39 } else { 37 };
+        Shape::Curves(Curves { points, segments: (0..last).filter(|k| k % 10 != 9).collect(), basis })
+    }
+
+    /// A 9³ signed distance grid of two overlapping spheres, placed by `to_world`.
+    pub(crate) fn sdf_blob(to_world: glam::DMat4) -> SdfGrid {
+        let n = 9;
+        let mut data = Vec::new();
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let p = glam::DVec3::new(i as f64, j as f64, k as f64) / (n - 1) as f64;
+                    let a = (p - glam::DVec3::new(0.4, 0.5, 0.5)).length() - 0.3;
+                    let b = (p - glam::DVec3::new(0.7, 0.6, 0.4)).length() - 0.2;
+                    data.push(a.min(b) as f32);
+                }
+            }
+        }
+        SdfGrid::new([n; 3], data, to_world, true).unwrap()
     }
 
     /// Coherent bundles (a pinhole's rays over a small patch, some aimed
@@ -609,7 +672,7 @@ mod tests {
         let shapes = scene();
         let accel = Accel::build_shapes(&shapes);
         let rays = rays();
-        let (mut hits, mut ties) = (0, 0);
+        let (mut hits, mut ties, mut parts) = (0, 0, 0);
         for n in [F::WIDTH, 3.min(F::WIDTH)] {
             for (c, chunk) in rays.chunks(n).enumerate() {
                 let mut out = [None; MAX_PACKET];
@@ -625,6 +688,7 @@ mod tests {
                         single
                     );
                     hits += single.is_some() as usize;
+                    parts += single.is_some_and(|h| shapes[h.shape as usize].is_multi_part()) as usize;
                     ties += (out[r].map(|h| (h.shape, h.index)) != single.map(|h| (h.shape, h.index))) as usize;
                     assert_eq!(
                         blocked & (1 << r) != 0,
@@ -637,7 +701,8 @@ mod tests {
             }
         }
         assert!(hits > 3000, "{hits}");
-        eprintln!("{}: {hits} hits, {ties} resolved by the tie rule", F::NAME);
+        assert!(parts > 300, "{parts} hits on ellipsoids and shells");
+        eprintln!("{}: {hits} hits ({parts} on multi-part shapes), {ties} resolved by the tie rule", F::NAME);
     }
 
     #[test]

@@ -1,9 +1,10 @@
-//! Shapes: triangle meshes and the analytic sphere, disk and cylinder (each
-//! in its own module). A shape answers the geometric questions (bounds of
-//! its primitives, the interaction at a hit, area and direction sampling);
-//! the BVH intersects its primitives.
+//! Shapes: triangle meshes, the analytic sphere, disk and cylinder, and the
+//! multi-part shapes (ellipsoid clouds, culled shell meshes) whose parts the
+//! BVH bounds one by one (each in its own module). A shape answers the
+//! geometric questions (bounds of its primitives, the interaction at a hit,
+//! area and direction sampling); the BVH intersects its primitives.
 
-use super::{Aabb, Cylinder, Disk, Ray, Sphere, SurfaceInteraction, TriangleMesh};
+use super::{Aabb, Curves, Cylinder, Disk, Ellipsoids, Ray, SdfGrid, Sphere, SurfaceInteraction, TriangleMesh};
 use crate::math::{Frame, Mat3, Mat4};
 use crate::sampling::{warp, Distribution1D};
 use glam::{Vec2, Vec3};
@@ -97,6 +98,18 @@ pub enum Shape {
     Disk(Disk),
     /// Mitsuba `cylinder`: an open tube (see [`Cylinder`]).
     Cylinder(Cylinder),
+    /// Mitsuba `ellipsoids`: analytic ellipsoids, back faces culled (see [`Ellipsoids`]).
+    Ellipsoids(Ellipsoids),
+    /// A triangle mesh whose back faces are culled (d · N_g > 0 never hits),
+    /// intersected triangle by triangle: Mitsuba `ellipsoidsmesh` (see
+    /// [`super::ellipsoids`]). Hits are completed as a [`Shape::Mesh`]'s.
+    CulledMesh(Mesh),
+    /// Mitsuba `sdfgrid`: a signed distance grid, one part per voxel the
+    /// surface crosses (see [`SdfGrid`]).
+    SdfGrid(SdfGrid),
+    /// Mitsuba `linearcurve` and `bsplinecurve`: round tubes through
+    /// control points, one part per segment, back faces culled (see [`Curves`]).
+    Curves(Curves),
 }
 
 impl Shape {
@@ -118,44 +131,86 @@ impl Shape {
     /// Number of primitives the BVH sees.
     pub fn prim_count(&self) -> usize {
         match self {
-            Shape::Mesh(m) => m.mesh.indices.len(),
-            _ => 1,
+            Shape::Mesh(m) | Shape::CulledMesh(m) => m.mesh.indices.len(),
+            Shape::Ellipsoids(e) => e.items.len(),
+            Shape::SdfGrid(g) => g.voxel_count(),
+            Shape::Curves(c) => c.segment_count(),
+            Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_) => 1,
         }
+    }
+
+    /// Whether the BVH bounds and intersects this shape part by part
+    /// ([`Shape::intersect_prim`]), rather than as one analytic primitive
+    /// or as triangles of the shared 4-wide blocks.
+    pub fn is_multi_part(&self) -> bool {
+        matches!(self, Shape::Ellipsoids(_) | Shape::CulledMesh(_) | Shape::SdfGrid(_) | Shape::Curves(_))
+    }
+
+    /// Whether Mitsuba 3.9.1 can sample points on this shape, which an
+    /// `area` emitter needs (it cannot on analytic ellipsoids, SDF grids and
+    /// curves; it can on `ellipsoidsmesh`, a mesh).
+    pub fn can_emit(&self) -> bool {
+        matches!(self, Shape::Mesh(_) | Shape::CulledMesh(_) | Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_))
     }
 
     /// Bounds of primitive `i` in the shape's space.
     pub fn prim_bounds(&self, i: usize) -> Aabb {
         match self {
-            Shape::Mesh(m) => Aabb::from_points(&m.vertices(i)),
+            Shape::Mesh(m) | Shape::CulledMesh(m) => Aabb::from_points(&m.vertices(i)),
             Shape::Sphere(s) => s.bounds(),
             Shape::Disk(d) => d.bounds(),
             Shape::Cylinder(c) => c.bounds(),
+            Shape::Ellipsoids(e) => e.items[i].bounds(),
+            Shape::SdfGrid(g) => g.bounds(i),
+            Shape::Curves(c) => c.bounds(i),
         }
     }
 
-    /// Total surface area.
+    /// Total surface area (0 for the shapes that cannot emit, see [`Shape::can_emit`]).
     pub fn area(&self) -> f32 {
         match self {
-            Shape::Mesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
+            Shape::Mesh(m) | Shape::CulledMesh(m) => m.area_distrib.as_ref().map_or(0.0, |d| d.total as f32),
             Shape::Sphere(s) => s.area(),
             Shape::Disk(d) => d.area(),
             Shape::Cylinder(c) => c.area(),
+            Shape::Ellipsoids(_) | Shape::SdfGrid(_) | Shape::Curves(_) => 0.0,
         }
     }
 
-    /// Intersects an analytic shape (meshes are intersected per triangle by the BVH).
+    /// Intersects an analytic shape (meshes are intersected per triangle by
+    /// the BVH); a multi-part shape's part 0.
     #[inline]
     pub fn intersect_analytic(&self, ray: &Ray) -> Option<(f32, Vec2)> {
+        self.intersect_prim(0, ray)
+    }
+
+    /// Intersects primitive `i` of an analytic or multi-part shape (None for
+    /// a [`Shape::Mesh`], whose triangles the BVH tests in blocks). `uv` as
+    /// in [`Shape::interaction`].
+    #[inline]
+    pub fn intersect_prim(&self, i: usize, ray: &Ray) -> Option<(f32, Vec2)> {
         match self {
             Shape::Sphere(s) => s.intersect(ray).map(|t| (t, Vec2::ZERO)),
             Shape::Disk(d) => d.intersect(ray),
             Shape::Cylinder(c) => c.intersect(ray).map(|t| (t, Vec2::ZERO)),
+            Shape::Ellipsoids(e) => e.items[i].intersect(ray).map(|t| (t, Vec2::ZERO)),
+            Shape::SdfGrid(g) => g.intersect(i, ray).map(|t| (t, Vec2::ZERO)),
+            Shape::Curves(c) => c.intersect(i, ray),
+            Shape::CulledMesh(m) => {
+                let v = m.vertices(i);
+                if ray.d.dot((v[1] - v[0]).cross(v[2] - v[0])) > 0.0 {
+                    return None;
+                }
+                let sh = super::triangle::RayShear::new(ray.d);
+                super::triangle::intersect_triangle(ray, &sh, &v).map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
+            }
             Shape::Mesh(_) => None,
         }
     }
 
     /// Completes a hit on primitive `prim` at distance `t`; `uv` holds the
-    /// triangle barycentrics (b1, b2), or the disk's local (x, y). Fills in
+    /// triangle barycentrics (b1, b2), the disk's local (x, y), or a curve's
+    /// parameter along its segment (x). Fills in
     /// Mitsuba's uv, dp/du, dp/dv and a shading frame aligned with dp/du;
     /// `shape_id` becomes the result's `shape`.
     pub fn interaction(&self, shape_id: u32, prim: usize, ray: &Ray, t: f32, uv: Vec2) -> SurfaceInteraction {
@@ -179,7 +234,7 @@ impl Shape {
     ) -> SurfaceInteraction {
         let wo = -ray.d.normalize();
         let (p, n, sh_n, tex, dpdu, dpdv) = match self {
-            Shape::Mesh(m) => {
+            Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let t_idx = m.mesh.indices[prim];
                 let [p0, p1, p2] = m.vertices(prim);
                 let (b1, b2) = (uv.x, uv.y);
@@ -227,6 +282,18 @@ impl Shape {
                 let (p, n, tex, dpdu, dpdv) = c.interaction(ray, t);
                 (p, n, n, tex, dpdu, dpdv)
             }
+            Shape::Ellipsoids(e) => {
+                let (p, n) = e.items[prim].interaction(ray, t);
+                (p, n, n, Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+            }
+            Shape::SdfGrid(g) => {
+                let (p, n, sh_n) = g.interaction(ray, t);
+                (p, n, sh_n, Vec2::ZERO, Vec3::ZERO, Vec3::ZERO)
+            }
+            Shape::Curves(c) => {
+                let (p, n, tex, dpdu, dpdv) = c.interaction(prim, ray, t, uv.x);
+                (p, n, n, tex, dpdu, dpdv)
+            }
         };
         SurfaceInteraction {
             p,
@@ -238,7 +305,7 @@ impl Shape {
             dpdv,
             shape: shape_id,
             prim: prim as u32,
-            bary: if matches!(self, Shape::Mesh(_)) { uv } else { Vec2::ZERO },
+            bary: if matches!(self, Shape::Mesh(_) | Shape::CulledMesh(_)) { uv } else { Vec2::ZERO },
             wo,
         }
     }
@@ -253,7 +320,7 @@ impl Shape {
     pub fn sample_point(&self, u: Vec2) -> AreaSample {
         let (prim, param) = (0, Vec2::ZERO);
         let ((p, n, pdf), prim, param) = match self {
-            Shape::Mesh(m) => {
+            Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let d = m.area_distrib.as_ref().expect("sampling a mesh without area");
                 let (i, _, ux) = d.sample_discrete(u.x);
                 let b = warp::sample_uniform_triangle(Vec2::new(ux, u.y));
@@ -268,6 +335,8 @@ impl Shape {
                 (d.sample_area(u), prim, q)
             }
             Shape::Cylinder(c) => (c.sample_area(u), prim, param),
+            // Never emitters (the scene builder refuses them): a zero density.
+            Shape::Ellipsoids(_) | Shape::SdfGrid(_) | Shape::Curves(_) => ((Vec3::ZERO, Vec3::Z, 0.0), prim, param),
         };
         AreaSample { p, n, pdf, prim, param }
     }

@@ -117,9 +117,13 @@ fn shape_bounds(shape: &Shape) -> Aabb {
 /// normals when they shade, since emission follows the shading normal).
 fn normal_cone(shape: &Shape) -> DirectionCone {
     match shape {
-        Shape::Sphere(_) | Shape::Cylinder(_) => DirectionCone::ENTIRE_SPHERE,
+        // The shapes that cannot emit (the builder refuses them) get the
+        // whole sphere too.
+        Shape::Sphere(_) | Shape::Cylinder(_) | Shape::Ellipsoids(_) | Shape::SdfGrid(_) | Shape::Curves(_) => {
+            DirectionCone::ENTIRE_SPHERE
+        }
         Shape::Disk(d) => DirectionCone { w: d.n, cos_theta: 1.0 },
-        Shape::Mesh(m) => mesh_normal_cone(m),
+        Shape::Mesh(m) | Shape::CulledMesh(m) => mesh_normal_cone(m),
     }
 }
 

@@ -8,6 +8,7 @@ mod bsdf;
 mod emitter;
 mod integrator;
 mod medium;
+mod multipart;
 mod sensor;
 mod shape;
 mod texture;

@@ -2,7 +2,7 @@
 //! meshes read from OBJ, PLY and Mitsuba `.serialized` files), each with its
 //! BSDF and optional area emitter, and Mitsuba's `shapegroup` / `instance`.
 
-use super::{emitter, find_plugin, plugin, resolve, Builder, Plugins};
+use super::{emitter, find_plugin, multipart, plugin, resolve, Builder, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::{obj, ply};
@@ -44,6 +44,11 @@ pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("sphere", ShapeBuilder::Geometry(sphere)),
     ("disk", ShapeBuilder::Geometry(disk)),
     ("cylinder", ShapeBuilder::Geometry(cylinder)),
+    ("ellipsoids", ShapeBuilder::Geometry(multipart::ellipsoids)),
+    ("ellipsoidsmesh", ShapeBuilder::Geometry(multipart::ellipsoidsmesh)),
+    ("sdfgrid", ShapeBuilder::Geometry(multipart::sdfgrid)),
+    ("linearcurve", ShapeBuilder::Geometry(multipart::linearcurve)),
+    ("bsplinecurve", ShapeBuilder::Geometry(multipart::bsplinecurve)),
     ("obj", ShapeBuilder::Geometry(mesh_file)),
     ("ply", ShapeBuilder::Geometry(mesh_file)),
     ("serialized", ShapeBuilder::Geometry(serialized)),
@@ -173,6 +178,12 @@ impl Builder {
             self.textures.bind_mesh_attributes(bn, shape_id, node, &attributes, indices)?;
         }
         let light = match emitter {
+            Some(en) if !shape.can_emit() => {
+                return Err(LoadError::at(
+                    &en.loc,
+                    format!("{} cannot carry an area emitter (Mitsuba 3.9.1 cannot sample points on it)", node.plugin),
+                ))
+            }
             Some(en) => {
                 self.lights.push(emitter::area(&en, node, &shape, shape_id, &mut self.textures)?);
                 Some((self.lights.len() - 1) as u32)
