@@ -52,12 +52,18 @@ fn reference(name: &str) -> Channels {
 /// Renders `batches` batches of `batch_spp` samples (seeds apart from the
 /// reference's), the beauty as channels R, G, B beside the integrator's.
 fn render(name: &str, batch_spp: u32, batches: u32, seed: u64) -> Channels {
+    render_films(name, batch_spp, batches, seed).0
+}
+
+/// [`render`], with the batches' films.
+fn render_films(name: &str, batch_spp: u32, batches: u32, seed: u64) -> (Channels, Vec<Film>) {
     let scene = root().join("tests/scenes").join(format!("{name}.xml"));
     let ov = Overrides { spp: Some(batch_spp), ..Default::default() };
     let mut job = load_scene(&scene, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
     let names = job.integrator.channel_names();
     let layers = FilmLayers { channels: names.clone(), ..Default::default() };
     let mut all: HashMap<String, Vec<Vec<f64>>> = HashMap::new();
+    let mut films = Vec::new();
     for b in 0..batches {
         job.sampler = Sampler::new(job.sampler.kind, seed * 1000 + b as u64, job.sampler.spp);
         let mut film = Film::with_layers(job.width, job.height, &layers);
@@ -69,6 +75,7 @@ fn render(name: &str, batch_spp: u32, batches: u32, seed: u64) -> Channels {
         for (c, n) in names.iter().enumerate() {
             all.entry(n.clone()).or_default().push(film.develop_channel(c).into_iter().map(f64::from).collect());
         }
+        films.push(film);
     }
     let (mut mean, mut var) = (HashMap::new(), HashMap::new());
     let k = batches as f64;
@@ -79,7 +86,7 @@ fn render(name: &str, batch_spp: u32, batches: u32, seed: u64) -> Channels {
         mean.insert(n.clone(), m);
         var.insert(n, v);
     }
-    Channels { width: job.width, height: job.height, mean, var, batches }
+    (Channels { width: job.width, height: job.height, mean, var, batches }, films)
 }
 
 /// Channel names compared, and the z statistics beyond the Bonferroni bound.
@@ -252,4 +259,74 @@ fn unnamed_nested_integrators_get_mitsubas_names() {
     assert_eq!(first, ["_arg_0.X", "_arg_0.Y", "_arg_0.Z", "d.X", "d.Y", "d.Z", "_arg_1.X", "_arg_1.Y", "_arg_1.Z"]);
     assert_eq!(names[9], "m2__arg_0.X");
     assert_eq!(names.len(), 18);
+}
+
+/// `moment` around `path` and `direct` against Mitsuba, every channel by
+/// name; and its second moments against the relation m2 = mean² + σ²: with
+/// the box filter a pixel's n samples weigh alike, so (m2 − mean²)/(n − 1)
+/// estimates σ²/n, the variance of the pixel mean, which the spread of the
+/// independent batches' means measures too. Summed over pixels the two must
+/// agree within 4.5 standard errors (from the per-pixel differences; pixels
+/// are independent under the box filter); m2 − mean² 10 % too large must not.
+#[test]
+fn moment_channels_match_mitsuba_and_second_moments_hold() {
+    let name = "moment_cbox";
+    let reference = reference(name);
+    let spp = manifest_field(name, "spp_per_batch");
+    let batches = 64;
+    let (ours, films) = render_films(name, spp, batches, 11);
+    let scene = root().join("tests/scenes").join(format!("{name}.xml"));
+    let names = load_scene(&scene, &[], &Overrides::default()).unwrap().integrator.channel_names();
+    let expect = "p.X p.Y p.Z d.X d.Y d.Z m2_p.X m2_p.Y m2_p.Z m2_d.X m2_d.Y m2_d.Z";
+    assert_eq!(names, expect.split_whitespace().collect::<Vec<_>>());
+    let mut compared = names.clone();
+    compared.extend(["R", "G", "B"].map(String::from));
+    report(&ours, &reference, &compared);
+    let failures = compare(&ours, &reference, &compared);
+    assert!(failures.is_empty(), "{name} differs from Mitsuba:\n{}", failures.join("\n"));
+    // Power: a second moment 5 % off must fail.
+    let mut mean = ours.mean.clone();
+    mean.get_mut("m2_d.Y").unwrap().iter_mut().for_each(|v| *v *= 1.05);
+    let bad = Channels { mean, var: ours.var.clone(), ..ours };
+    assert!(!compare(&bad, &reference, &compared).is_empty(), "m2_d.Y × 1.05 was not caught");
+
+    // The relation, from the batches themselves.
+    let relation = |scale: f64| -> Vec<(String, f64)> {
+        let mut out = Vec::new();
+        for c in ["p.X", "p.Y", "p.Z", "d.X", "d.Y", "d.Z"] {
+            let (i, j) = (
+                names.iter().position(|n| n == c).unwrap(),
+                names.iter().position(|n| *n == format!("m2_{c}")).unwrap(),
+            );
+            let mean: Vec<Vec<f64>> =
+                films.iter().map(|f| f.develop_channel(i).into_iter().map(f64::from).collect()).collect();
+            let m2: Vec<Vec<f64>> =
+                films.iter().map(|f| f.develop_channel(j).into_iter().map(f64::from).collect()).collect();
+            let (k, n) = (batches as f64, spp as f64);
+            // Per pixel: from the moments, and from the batch spread.
+            let d: Vec<f64> = (0..mean[0].len())
+                .map(|p| {
+                    let from_moments =
+                        (0..batches as usize).map(|b| scale * (m2[b][p] - mean[b][p].powi(2)) / (n - 1.0)).sum::<f64>()
+                            / k;
+                    let mu = (0..batches as usize).map(|b| mean[b][p]).sum::<f64>() / k;
+                    let spread = (0..batches as usize).map(|b| (mean[b][p] - mu).powi(2)).sum::<f64>() / (k - 1.0);
+                    from_moments - spread
+                })
+                .collect();
+            let np = d.len() as f64;
+            let md = d.iter().sum::<f64>() / np;
+            let se = (d.iter().map(|x| (x - md).powi(2)).sum::<f64>() / (np - 1.0) / np).sqrt();
+            out.push((c.to_string(), md / se));
+        }
+        out
+    };
+    for (c, z) in relation(1.0) {
+        eprintln!("{c}: (m2 − mean²)/(n − 1) against the batch variance of the mean: z {z:+.2}");
+        assert!(z.abs() < 4.5, "{c}: second moment and batch spread disagree, z {z}");
+    }
+    for (c, z) in relation(1.1) {
+        eprintln!("{c} with m2 − mean² 10 % too large: z {z:+.2}");
+        assert!(z.abs() >= 4.5, "{c}: a 10 % error in the second moment's variance went unnoticed");
+    }
 }
