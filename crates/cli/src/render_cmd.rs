@@ -102,6 +102,14 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
     job.stream = !a.no_stream;
     // The integrator's own output channels (`aov`, `moment`): EXR layers.
     layers.channels = job.integrator.channel_names();
+    if matches!(job.integrator, penumbra_render::integrator::Integrator::PTracer(_))
+        && (layers.variance || !layers.aovs.is_empty() || a.adaptive)
+    {
+        bail!(
+            "ptracer: --aov, --noise-threshold, --adaptive and --denoise need per-pixel samples, \
+             which a particle tracer's splats are not (as Mitsuba's ptracer, which refuses AOVs)"
+        );
+    }
     if !job.scene.media.is_empty() && !matches!(job.integrator, penumbra_render::integrator::Integrator::VolPath(_)) {
         eprintln!(
             "note: the scene's participating media are ignored by its integrator (as in Mitsuba); \

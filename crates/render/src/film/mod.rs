@@ -359,6 +359,39 @@ impl Film {
         }
     }
 
+    /// Splats `l` as Mitsuba's normalised `ImageBlock` does (the particle
+    /// tracer's splats): the filter's weights around pixel (`px`, `py`) +
+    /// `u` scaled to sum to 1 over the whole footprint, added to Σ w·L only
+    /// (the weight sum counts samples per pixel instead). Pixels outside
+    /// the film are dropped; `px`, `py` may lie outside it.
+    pub fn splat_normalized(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
+        let m = filter.margin().min(MAX_MARGIN) as i32;
+        let taps = (2 * m + 1) as usize;
+        let (mut wx, mut wy) = ([0.0f32; 2 * MAX_MARGIN as usize + 1], [0.0f32; 2 * MAX_MARGIN as usize + 1]);
+        for k in 0..taps {
+            let d = (m - k as i32) as f32;
+            wx[k] = filter.weight(u.x + d - 0.5);
+            wy[k] = filter.weight(u.y + d - 0.5);
+        }
+        let norm = wx[..taps].iter().sum::<f32>() * wy[..taps].iter().sum::<f32>();
+        if norm == 0.0 || !norm.is_finite() {
+            return;
+        }
+        let xs = nonzero_taps(&wx[..taps], px - m, self.width);
+        let ys = nonzero_taps(&wy[..taps], py - m, self.height);
+        for ky in ys {
+            let y = (py - m + ky as i32) as u32;
+            for kx in xs.clone() {
+                let x = (px - m + kx as i32) as u32;
+                let w = wx[kx] * wy[ky] / norm;
+                let a = &mut self.acc[(y * self.width + x) as usize];
+                for (c, v) in l.to_array().into_iter().enumerate() {
+                    a[c] += (v * w) as f64;
+                }
+            }
+        }
+    }
+
     /// Adds another film's sums (e.g. from another machine or pass).
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));

@@ -11,6 +11,7 @@
 //! | `depth`      | the distance to the first surface (Mitsuba `depth`) |
 //! | `volpath`    | `path` through participating media: free-flight sampling, transmittance on shadow rays (Mitsuba `volpath`, `volpathmis`) |
 //! | `aov`        | surface quantities of the first hit beside nested integrators' images, as output channels (Mitsuba `aov`) |
+//! | `ptracer`    | particle tracing: light paths from the emitters, each vertex connected to the camera and splatted where it lands (Mitsuba `ptracer`; rendered by `RenderJob` itself) |
 //! | `moment`     | nested integrators' images and their second moments, as output channels (Mitsuba `moment`) |
 
 pub mod aov;
@@ -20,6 +21,7 @@ pub mod depth;
 pub mod direct;
 pub mod moment;
 pub mod path;
+pub mod ptracer;
 pub mod volpath;
 
 pub use aovs::{AovIntegrator, AovType};
@@ -28,6 +30,7 @@ pub use depth::DepthIntegrator;
 pub use direct::DirectIntegrator;
 pub use moment::MomentIntegrator;
 pub use path::PathIntegrator;
+pub use ptracer::ParticleTracer;
 pub use volpath::VolPathIntegrator;
 
 use crate::geometry::Ray;
@@ -156,6 +159,9 @@ pub enum Integrator {
     Aov(Box<AovIntegrator>),
     /// `moment`: nested integrators' images and second moments.
     Moment(Box<MomentIntegrator>),
+    /// `ptracer`: the particle tracer (no estimate per camera ray: the
+    /// render driver traces its light paths and splats them).
+    PTracer(ParticleTracer),
 }
 
 impl Integrator {
@@ -176,6 +182,7 @@ impl Integrator {
             Integrator::BruteForce(b) => b.li(scene, ray, rng, stats, scratch),
             Integrator::VolPath(v) => v.li(scene, ray, rng, stats, scratch),
             Integrator::Depth(d) => d.li(scene, ray, stats),
+            Integrator::PTracer(_) => Spectrum::ZERO,
             Integrator::Aov(_) | Integrator::Moment(_) => {
                 let mut out = vec![0.0; self.channel_names().len()];
                 self.sample(scene, ray, None, rng, stats, scratch, &mut out)
@@ -224,6 +231,7 @@ impl Integrator {
             Integrator::BruteForce(b) => b.hide_emitters,
             Integrator::VolPath(v) => v.hide_emitters,
             Integrator::Direct(_) | Integrator::Depth(_) => true,
+            Integrator::PTracer(p) => p.hide_emitters,
             Integrator::Aov(a) => return a.integrators.first().map_or(0.0, |(_, i)| i.alpha(scene, ray, stats)),
             Integrator::Moment(m) => return m.integrators.first().map_or(0.0, |(_, i)| i.alpha(scene, ray, stats)),
         };

@@ -3,6 +3,7 @@
 //! own with the filter's margin, and the tile films are added in tile order,
 //! so the film is bitwise identical for any thread count or scheduling.
 
+mod particles;
 mod stream;
 pub use stream::LANE_WIDTHS;
 
@@ -117,6 +118,9 @@ impl RenderJob {
         assert_eq!((film.width, film.height), (self.width, self.height));
         if let Some(a) = active {
             assert_eq!(a.len(), film.acc.len());
+        }
+        if let Integrator::PTracer(pt) = &self.integrator {
+            return self.render_particles(pt, film, samples, progress, cancel);
         }
         assert!(
             film.channels.is_empty() || film.channels == self.integrator.channel_names(),

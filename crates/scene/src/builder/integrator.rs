@@ -6,7 +6,7 @@ use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
     AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, HemisphereSampling, Integrator,
-    MomentIntegrator, PathIntegrator, Termination, VolPathIntegrator,
+    MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -24,6 +24,7 @@ pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> = &[
     ("depth", |_| Ok((Integrator::Depth(DepthIntegrator), LightSelection::Uniform))),
     ("aov", aov),
     ("moment", moment),
+    ("ptracer", ptracer),
 ];
 
 /// Termination parameters shared by `path` and `bruteforce`.
@@ -124,6 +125,35 @@ fn aov(node: &Node) -> Result<(Integrator, LightSelection)> {
     }
     let (integrators, selection) = nested(node)?;
     Ok((Integrator::Aov(Box::new(AovIntegrator { integrators, aovs })), selection))
+}
+
+/// Mitsuba `ptracer` (its `samples_per_pass` is checked against the sample
+/// count where the scene is assembled).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn ptracer(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let max_depth = node.int("max_depth", -1)?;
+    let rr_depth = node.int("rr_depth", 5)?;
+    if max_depth < -1 {
+        return Err(LoadError::at(node.loc_of("max_depth"), "max_depth must be -1 (unbounded) or >= 0"));
+    }
+    if rr_depth <= 0 {
+        return Err(LoadError::at(node.loc_of("rr_depth"), "rr_depth must be positive"));
+    }
+    let spp_pass = node.int("samples_per_pass", -1)?;
+    if spp_pass == 0 || spp_pass < -1 || spp_pass > u32::MAX as i64 {
+        return Err(LoadError::at(node.loc_of("samples_per_pass"), "samples_per_pass must be -1 (all) or positive"));
+    }
+    let term = Termination {
+        max_depth: if max_depth < 0 { u32::MAX } else { max_depth.min(u32::MAX as i64 - 1) as u32 },
+        rr_depth: rr_depth.min(u32::MAX as i64) as u32,
+        throughput_threshold: 0.0,
+    };
+    let pt = ParticleTracer {
+        term,
+        hide_emitters: node.bool("hide_emitters", false)?,
+        samples_per_pass: (spp_pass > 0).then_some(spp_pass as u32),
+    };
+    Ok((Integrator::PTracer(pt), LightSelection::Uniform))
 }
 
 /// Mitsuba `moment`: nested integrators only.

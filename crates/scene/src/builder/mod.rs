@@ -200,6 +200,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         Some(m) => Some(b.media.get(&m)?),
         None => None,
     };
+    let integrator_loc = integrator.as_ref().map_or_else(|| sensor.loc.clone(), |n| n.loc.clone());
     let (integrator, selection) = match (&ov.integrator, &integrator) {
         (Some(spec), scene_node) => build_integrator(&integrator_from_spec(spec, scene_node.as_deref())?)?,
         (None, Some(node)) => build_integrator(node)?,
@@ -223,6 +224,9 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     let radius = accel.bounds.bounding_radius();
     let lights = b.lights.into_iter().map(|light| light(radius)).collect();
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
+    if let Integrator::PTracer(pt) = &integrator {
+        check_ptracer(pt, &camera, &scene.lights, sampler.spp, &integrator_loc)?;
+    }
     scene.set_light_selection(selection);
     if !b.media.media.is_empty() {
         let shape_media = if b.shape_media.iter().any(ShapeMedia::is_transition) { b.shape_media } else { Vec::new() };
@@ -241,6 +245,39 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         stream: true,
         packet_lanes: 0,
     })
+}
+
+/// What Penumbra's `ptracer` needs: a perspective camera, emitters it can
+/// start paths from, and (as Mitsuba) a sample count that is a multiple of
+/// `samples_per_pass`.
+fn check_ptracer(
+    pt: &penumbra_render::integrator::ParticleTracer,
+    camera: &penumbra_render::camera::Camera,
+    lights: &[penumbra_render::light::Light],
+    spp: u32,
+    at: &crate::error::FileLoc,
+) -> Result<()> {
+    if camera.projection != penumbra_render::camera::Projection::Pinhole {
+        return Err(LoadError::at(at, "ptracer connects to the camera through a pinhole: use a perspective sensor"));
+    }
+    if let Some(l) = lights.iter().find(|l| !matches!(l.name(), "area" | "point" | "spot")) {
+        return Err(LoadError::at(
+            at,
+            format!(
+                "ptracer starts light paths from area, point and spot emitters; this scene has a '{}' emitter",
+                l.name()
+            ),
+        ));
+    }
+    if let Some(n) = pt.samples_per_pass {
+        if !spp.is_multiple_of(n) {
+            return Err(LoadError::at(
+                at,
+                format!("ptracer: sample_count ({spp}) must be a multiple of samples_per_pass ({n}), as in Mitsuba"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[derive(Default)]

@@ -1,0 +1,266 @@
+//! Mitsuba `ptracer`: the particle tracer. Paths start at the emitters and
+//! every surface vertex is connected to the camera; the contribution lands
+//! wherever on the film the connection does, not in the pixel the path was
+//! started for.
+//!
+//! | parameter        | type    | default |
+//! |------------------|---------|---------|
+//! | max_depth        | integer | -1 (unbounded; Mitsuba's count, 1 = emitters seen directly) |
+//! | rr_depth         | integer | 5 (Russian roulette once a path has more segments than this) |
+//! | hide_emitters    | boolean | false (no direct connections of emitters to the camera) |
+//! | samples_per_pass | integer | -1 (accepted as Mitsuba's; Penumbra's passes come from the render schedule, and the image does not depend on them) |
+//!
+//! Light paths per render: one per full-film pixel and sample index (as
+//! Mitsuba: width × height × spp particles), the path of pixel (x, y) and
+//! sample s drawing its random numbers from that pixel sample's stream, so
+//! every random number stays a function of (seed, pixel, sample index,
+//! dimension). Each sample first connects a point sampled on one
+//! (uniformly chosen) non-delta emitter to the camera (Mitsuba's
+//! `sample_visible_emitters`, unless `hide_emitters` or `max_depth` = 0),
+//! then traces one light path from a uniformly chosen emitter with BSDF
+//! sampling in importance transport (refraction's 1/η² radiance scale
+//! undone; the adjoint shading-normal correction of Veach, p. 155),
+//! connecting each vertex to the camera through the BSDF. Splats go into
+//! the film with the filter's weights normalised to sum to 1 (Mitsuba's
+//! normalised `ImageBlock`); each pixel's weight sum counts the samples per
+//! pixel instead, so the developed image is Σ splats / spp as Mitsuba's.
+//!
+//! Supported: the perspective camera (Mitsuba's `sample_direction` exists
+//! for pinholes only among Penumbra's sensors), `area`, `point` and `spot`
+//! emitters; other cameras and emitters at infinity are refused when the
+//! scene is loaded. Connections through rough refraction towards the camera
+//! are weighted as in radiance transport (their η² factor is not undone).
+
+use super::{RayStats, Termination};
+use crate::camera::{Camera, Projection};
+use crate::geometry::ray::offset_origin;
+use crate::geometry::Ray;
+use crate::light::Light;
+use crate::material::Scratch;
+use crate::math::{Spectrum, PI};
+use crate::sampling::{warp, SampleStream};
+use crate::scene::Scene;
+use glam::{Mat4, Vec2, Vec3};
+
+/// The `ptracer` integrator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParticleTracer {
+    /// Longest path (Mitsuba's count) and the roulette depth.
+    pub term: Termination,
+    /// No direct connections of emitters to the camera.
+    pub hide_emitters: bool,
+    /// Mitsuba's `samples_per_pass` (None: -1, all); must divide the
+    /// sample count, as Mitsuba requires. The image does not depend on it.
+    pub samples_per_pass: Option<u32>,
+}
+
+/// One contribution to the film: where on the full film it lands (in
+/// pixels, continuous) and its value (already divided by nothing: the
+/// film's weight sum holds the sample count).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Splat {
+    /// Full-film position in pixels (x right, y down).
+    pub pos: Vec2,
+    /// The contribution.
+    pub value: Spectrum,
+}
+
+/// The camera as a point the light paths connect to (Mitsuba's
+/// `PerspectiveCamera::sample_direction`).
+#[derive(Debug, Clone)]
+pub struct CameraConnection {
+    camera_from_world: Mat4,
+    eye: Vec3,
+    tan_half: Vec2,
+    near: f32,
+    far: f32,
+    /// 1 / the area of the film's rectangle on the plane z = 1.
+    normalization: f32,
+    full_size: Vec2,
+}
+
+impl CameraConnection {
+    /// The connection of a pinhole camera with a film of `full_size`
+    /// pixels; None for other projections.
+    pub fn new(camera: &Camera, full_size: (u32, u32)) -> Option<CameraConnection> {
+        if camera.projection != Projection::Pinhole {
+            return None;
+        }
+        Some(CameraConnection {
+            camera_from_world: camera.world_from_camera.inverse(),
+            eye: camera.world_from_camera.transform_point3(Vec3::ZERO),
+            tan_half: camera.tan_half,
+            near: camera.near_clip,
+            far: camera.far_clip,
+            normalization: 1.0 / (4.0 * camera.tan_half.x * camera.tan_half.y),
+            full_size: Vec2::new(full_size.0 as f32, full_size.1 as f32),
+        })
+    }
+
+    /// Where `p` lands on the film (pixels) and the importance W_e / d² of
+    /// the connection; None outside the view or the clip range.
+    #[inline]
+    pub fn connect(&self, p: Vec3) -> Option<(Vec2, f32)> {
+        let local = self.camera_from_world.transform_point3(p);
+        if !(local.z >= self.near && local.z <= self.far) {
+            return None;
+        }
+        let s = Vec2::new(
+            0.5 * (1.0 - local.x / (local.z * self.tan_half.x)),
+            0.5 * (1.0 - local.y / (local.z * self.tan_half.y)),
+        );
+        if !(s.x >= 0.0 && s.x <= 1.0 && s.y >= 0.0 && s.y <= 1.0) {
+            return None;
+        }
+        let dist2 = local.length_squared();
+        let cos = local.z / dist2.sqrt();
+        let importance = self.normalization / (cos * cos * cos);
+        Some((s * self.full_size, importance / dist2))
+    }
+}
+
+impl ParticleTracer {
+    /// Traces the particle of one pixel sample, appending its splats to `out`.
+    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+    pub fn trace(
+        &self,
+        scene: &Scene,
+        cam: &CameraConnection,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+        scratch: &mut Scratch,
+        out: &mut Vec<Splat>,
+    ) {
+        let n_lights = scene.lights.len();
+        if n_lights == 0 || self.term.max_depth == 0 {
+            return;
+        }
+        let pick = |u: f32| ((u * n_lights as f32) as usize).min(n_lights - 1);
+        // Emitters seen directly: a point on one, connected to the camera.
+        let (u_sel, u_pos) = (rng.next_1d(), rng.next_2d());
+        if !self.hide_emitters {
+            if let Light::Area(a) = &scene.lights[pick(u_sel)] {
+                let (p, n, pdf) = scene.shapes[a.shape as usize].sample_area(u_pos);
+                if let Some((pos, w)) = cam.connect(p) {
+                    let to_cam = cam.eye - p;
+                    let dist = to_cam.length();
+                    let d = to_cam / dist;
+                    let cos = n.dot(d);
+                    if cos > 0.0 && pdf > 0.0 && self.visible(scene, p, n, cam.eye, stats) {
+                        let value = a.radiance * (n_lights as f32 * w * cos / pdf);
+                        out.push(Splat { pos, value });
+                    }
+                }
+            }
+        }
+
+        // One light path.
+        let (u_sel, u_pos, u_dir) = (rng.next_1d(), rng.next_2d(), rng.next_2d());
+        let Some((ray, mut beta)) = emit(scene, &scene.lights[pick(u_sel)], u_pos, u_dir) else { return };
+        beta *= n_lights as f32;
+        let mut eta = 1.0f32;
+        let mut depth = 1u32;
+        stats.rays += 1;
+        let mut hit = scene.intersect(&ray);
+        while let Some(mut si) = hit {
+            if depth >= self.term.max_depth {
+                break;
+            }
+            scratch.reset();
+            let bsdf = scene.bsdf(&mut si, scratch);
+            let wi = si.to_local(si.wo);
+            let wi_geo = si.n.dot(si.wo);
+            // Connect this vertex to the camera.
+            if let Some((pos, w)) = cam.connect(si.p) {
+                let to_cam = cam.eye - si.p;
+                let dist = to_cam.length();
+                let d = to_cam / dist;
+                let local = si.to_local(d);
+                let d_geo = si.n.dot(d);
+                if wi_geo * wi.z > 0.0 && d_geo * local.z > 0.0 {
+                    stats.shadow_rays += 1;
+                    if !scene.occluded(&si, d, dist) {
+                        let correction = ((wi.z * d_geo) / (local.z * wi_geo)).abs();
+                        let f = bsdf.eval(local, wi) * local.z.abs();
+                        let value = beta * f * (w * correction);
+                        if value != Spectrum::ZERO {
+                            out.push(Splat { pos, value });
+                        }
+                    }
+                }
+            }
+            // Continue by sampling the BSDF from the light's side.
+            let (u, u2) = (rng.next_1d(), rng.next_2d());
+            let Some(bs) = bsdf.sample(wi, u, u2) else { break };
+            let d = si.to_world(bs.wi);
+            let d_geo = si.n.dot(d);
+            if !(wi_geo * wi.z > 0.0 && d_geo * bs.wi.z > 0.0) {
+                break;
+            }
+            let correction = ((wi.z * d_geo) / (bs.wi.z * wi_geo)).abs();
+            // Importance transport: undo refraction's radiance scale.
+            beta *= bs.weight * (bs.eta * bs.eta * correction);
+            eta *= bs.eta;
+            if !(beta.max_element() > 0.0) || !beta.is_finite() {
+                break;
+            }
+            depth += 1;
+            if depth >= self.term.max_depth {
+                break;
+            }
+            if depth > self.term.rr_depth {
+                let q = (beta.max_element() * eta * eta).min(0.95);
+                if !(rng.next_1d() < q) {
+                    break;
+                }
+                beta /= q;
+            }
+            stats.rays += 1;
+            hit = scene.intersect(&scene.spawn_ray(&si, d));
+        }
+    }
+
+    /// Whether the camera at `eye` sees the emitter point `p` (normal `n`).
+    fn visible(&self, scene: &Scene, p: Vec3, n: Vec3, eye: Vec3, stats: &mut RayStats) -> bool {
+        stats.shadow_rays += 1;
+        let o = offset_origin(p, n, eye - p);
+        let d = eye - o;
+        let len = d.length();
+        !scene.occluded_ray(&Ray::new(o, d / len, len * (1.0 - crate::math::SHADOW_EPSILON)))
+    }
+}
+
+/// A ray leaving `light` and its weight (emitted power over the density of
+/// the ray, light selection excluded); None for lights it cannot start
+/// (those at infinity, refused at load time) or a zero-weight ray.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn emit(scene: &Scene, light: &Light, u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, Spectrum)> {
+    match light {
+        Light::Area(a) => {
+            let (p, n, pdf) = scene.shapes[a.shape as usize].sample_area(u_pos);
+            if !(pdf > 0.0) {
+                return None;
+            }
+            let local = warp::sample_cosine_hemisphere(u_dir);
+            let frame = crate::math::Frame::from_normal(n);
+            let d = frame.to_world(local);
+            Some((Ray::new(offset_origin(p, n, d), d, f32::INFINITY), a.radiance * (PI / pdf)))
+        }
+        Light::Point(l) => {
+            let d = warp::sample_uniform_sphere(u_dir);
+            Some((Ray::new(l.position, d, f32::INFINITY), l.intensity * (4.0 * PI)))
+        }
+        Light::Spot(s) => {
+            let local = warp::sample_uniform_cone(u_dir, s.cos_cutoff);
+            let pdf = warp::uniform_cone_pdf(s.cos_cutoff);
+            let world_from_light = s.light_from_world.inverse();
+            let d = world_from_light.transform_vector3(local).normalize();
+            // The intensity towards d, as the spot's own sample_li evaluates it.
+            let ls = s.sample_li(s.position + d)?;
+            let intensity = ls.li; // at distance 1
+            Some((Ray::new(s.position, d, f32::INFINITY), intensity / pdf))
+        }
+        _ => None,
+    }
+}
