@@ -251,7 +251,7 @@ pub fn integrator_from_spec(spec: &str, scene_integrator: Option<&Node>) -> Resu
     }
     let accepts = |param: &str| match name {
         "direct" => param == "hide_emitters",
-        "depth" => false,
+        "depth" | "aov" | "moment" => false,
         _ => true,
     };
     if let Some(scene) = scene_integrator {
