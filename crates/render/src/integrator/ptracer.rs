@@ -25,11 +25,14 @@
 //! normalised `ImageBlock`); each pixel's weight sum counts the samples per
 //! pixel instead, so the developed image is Σ splats / spp as Mitsuba's.
 //!
-//! Supported: the perspective camera (Mitsuba's `sample_direction` exists
-//! for pinholes only among Penumbra's sensors), `area`, `point` and `spot`
-//! emitters; other cameras and emitters at infinity are refused when the
-//! scene is loaded. Connections through rough refraction towards the camera
-//! are weighted as in radiance transport (their η² factor is not undone).
+//! Emitters at infinity (`constant`, `envmap`, `directional`) start their
+//! paths on the disk of the scene's bounding sphere that faces the sampled
+//! direction, and the non-delta ones are seen directly through a direction
+//! sampled from the camera (Mitsuba's `sample_ray` and `sample_direction`).
+//! Supported: the perspective camera (other sensors are refused when the
+//! scene is loaded). Connections through rough refraction towards the
+//! camera are weighted as in radiance transport (their η² factor is not
+//! undone).
 
 use super::{RayStats, Termination};
 use crate::camera::{Camera, Projection};
@@ -97,6 +100,26 @@ impl CameraConnection {
         })
     }
 
+    /// Where the direction `d` (world space, from the camera) lands on the
+    /// film and the importance W_e there: the connection to a point at
+    /// infinity. None outside the view.
+    #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+    pub fn connect_direction(&self, d: Vec3) -> Option<(Vec2, f32)> {
+        let local = self.camera_from_world.transform_vector3(d).normalize();
+        if !(local.z > 0.0) {
+            return None;
+        }
+        let s = Vec2::new(
+            0.5 * (1.0 - local.x / (local.z * self.tan_half.x)),
+            0.5 * (1.0 - local.y / (local.z * self.tan_half.y)),
+        );
+        if !(s.x >= 0.0 && s.x <= 1.0 && s.y >= 0.0 && s.y <= 1.0) {
+            return None;
+        }
+        Some((s * self.full_size, self.normalization / (local.z * local.z * local.z)))
+    }
+
     /// Where `p` lands on the film (pixels) and the importance W_e / d² of
     /// the connection; None outside the view or the clip range.
     #[inline]
@@ -140,18 +163,33 @@ impl ParticleTracer {
         // Emitters seen directly: a point on one, connected to the camera.
         let (u_sel, u_pos) = (rng.next_1d(), rng.next_2d());
         if !self.hide_emitters {
-            if let Light::Area(a) = &scene.lights[pick(u_sel)] {
-                let (p, n, pdf) = scene.shapes[a.shape as usize].sample_area(u_pos);
-                if let Some((pos, w)) = cam.connect(p) {
-                    let to_cam = cam.eye - p;
-                    let dist = to_cam.length();
-                    let d = to_cam / dist;
-                    let cos = n.dot(d);
-                    if cos > 0.0 && pdf > 0.0 && self.visible(scene, p, n, cam.eye, stats) {
-                        let value = a.radiance * (n_lights as f32 * w * cos / pdf);
-                        out.push(Splat { pos, value });
+            match &scene.lights[pick(u_sel)] {
+                Light::Area(a) => {
+                    let (p, n, pdf) = scene.shapes[a.shape as usize].sample_area(u_pos);
+                    if let Some((pos, w)) = cam.connect(p) {
+                        let to_cam = cam.eye - p;
+                        let dist = to_cam.length();
+                        let d = to_cam / dist;
+                        let cos = n.dot(d);
+                        if cos > 0.0 && pdf > 0.0 && self.visible(scene, p, n, cam.eye, stats) {
+                            let value = a.radiance * (n_lights as f32 * w * cos / pdf);
+                            out.push(Splat { pos, value });
+                        }
                     }
                 }
+                // Emitters at infinity: a direction sampled from the camera.
+                l if l.is_environment() => {
+                    if let Some(ls) = l.sample_li(cam.eye, u_pos, &scene.shapes) {
+                        if let Some((pos, w)) = cam.connect_direction(ls.wi) {
+                            stats.shadow_rays += 1;
+                            if ls.pdf > 0.0 && !scene.occluded_ray(&Ray::new(cam.eye, ls.wi, f32::INFINITY)) {
+                                out.push(Splat { pos, value: ls.li * (n_lights as f32 * w / ls.pdf) });
+                            }
+                        }
+                    }
+                }
+                // Delta emitters are never seen directly.
+                _ => {}
             }
         }
 
@@ -232,8 +270,7 @@ impl ParticleTracer {
 }
 
 /// A ray leaving `light` and its weight (emitted power over the density of
-/// the ray, light selection excluded); None for lights it cannot start
-/// (those at infinity, refused at load time) or a zero-weight ray.
+/// the ray, light selection excluded); None for a zero-weight ray.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn emit(scene: &Scene, light: &Light, u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, Spectrum)> {
     match light {
@@ -261,6 +298,23 @@ fn emit(scene: &Scene, light: &Light, u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, 
             let intensity = ls.li; // at distance 1
             Some((Ray::new(s.position, d, f32::INFINITY), intensity / pdf))
         }
-        _ => None,
+        // Emitters at infinity (constant, envmap, directional): a direction
+        // towards the scene, from a point of the disk of the scene's bounding
+        // sphere facing it (Mitsuba's `sample_ray` of envmap and directional).
+        l => {
+            let b = scene.bounds();
+            if b.is_empty() {
+                return None;
+            }
+            let (c, r) = (b.center(), b.bounding_radius().max(1e-4) * (1.0 + 1e-4));
+            let ls = l.sample_li(c, u_dir, &scene.shapes)?;
+            if !(ls.pdf > 0.0) {
+                return None;
+            }
+            let disk = warp::sample_concentric_disk(u_pos);
+            let perp = crate::math::Frame::from_normal(ls.wi).to_world(Vec3::new(disk.x, disk.y, 0.0));
+            let o = c + (perp + ls.wi) * r;
+            Some((Ray::new(o, -ls.wi, f32::INFINITY), ls.li * (PI * r * r / ls.pdf)))
+        }
     }
 }

@@ -225,7 +225,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     let lights = b.lights.into_iter().map(|light| light(radius)).collect();
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
     if let Integrator::PTracer(pt) = &integrator {
-        check_ptracer(pt, &camera, &scene.lights, sampler.spp, &integrator_loc)?;
+        check_ptracer(pt, &camera, sampler.spp, &integrator_loc)?;
     }
     scene.set_light_selection(selection);
     if !b.media.media.is_empty() {
@@ -247,27 +247,16 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     })
 }
 
-/// What Penumbra's `ptracer` needs: a perspective camera, emitters it can
-/// start paths from, and (as Mitsuba) a sample count that is a multiple of
-/// `samples_per_pass`.
+/// What Penumbra's `ptracer` needs: a perspective camera and (as Mitsuba)
+/// a sample count that is a multiple of `samples_per_pass`.
 fn check_ptracer(
     pt: &penumbra_render::integrator::ParticleTracer,
     camera: &penumbra_render::camera::Camera,
-    lights: &[penumbra_render::light::Light],
     spp: u32,
     at: &crate::error::FileLoc,
 ) -> Result<()> {
     if camera.projection != penumbra_render::camera::Projection::Pinhole {
         return Err(LoadError::at(at, "ptracer connects to the camera through a pinhole: use a perspective sensor"));
-    }
-    if let Some(l) = lights.iter().find(|l| !matches!(l.name(), "area" | "point" | "spot")) {
-        return Err(LoadError::at(
-            at,
-            format!(
-                "ptracer starts light paths from area, point and spot emitters; this scene has a '{}' emitter",
-                l.name()
-            ),
-        ));
     }
     if let Some(n) = pt.samples_per_pass {
         if !spp.is_multiple_of(n) {
