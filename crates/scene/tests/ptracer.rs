@@ -56,6 +56,19 @@ fn estimate_inside(
     common::estimate(w - 2 * ring, h - 2 * ring, &imgs)
 }
 
+/// The thin-lens camera (sensors_samplers.xml: aperture 0.12, focused at
+/// 5, under a constant sky and a directional sun): `ptracer`, which samples
+/// the aperture per connection, against `path`, inside the Gaussian
+/// filter's two-pixel ring.
+#[test]
+fn particle_tracer_through_a_thin_lens_matches_path() {
+    let scene = named("sensors_samplers");
+    let pt = estimate_inside(&scene, 2, 2048, Some("ptracer"), 7);
+    let path = estimate_inside(&scene, 2, 2048, None, 8);
+    let v = assert_agree("thin lens: ptracer against path", &pt, &path, 0.02);
+    eprintln!("block χ² {:?}, largest block z {:?}", v.block_chi2, v.block_max);
+}
+
 /// Emitters at infinity and delta emitters: an envmap with a bright sun
 /// (tests/scenes/ptracer_env.xml), and spot_light.xml's spot and
 /// directional lights, rendered by `ptracer` and by `path` (box filters:

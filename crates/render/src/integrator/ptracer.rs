@@ -29,8 +29,9 @@
 //! paths on the disk of the scene's bounding sphere that faces the sampled
 //! direction, and the non-delta ones are seen directly through a direction
 //! sampled from the camera (Mitsuba's `sample_ray` and `sample_direction`).
-//! Supported: the perspective camera (other sensors are refused when the
-//! scene is loaded). Connections through rough refraction towards the
+//! Supported: the perspective and thin-lens cameras (a connection samples
+//! the aperture, as Mitsuba's `thinlens` does); other sensors are refused
+//! when the scene is loaded. Connections through rough refraction towards the
 //! camera are weighted as in radiance transport (their η² factor is not
 //! undone).
 
@@ -68,77 +69,91 @@ pub struct Splat {
     pub value: Spectrum,
 }
 
-/// The camera as a point the light paths connect to (Mitsuba's
-/// `PerspectiveCamera::sample_direction`).
+/// The camera as the light paths connect to it (Mitsuba's
+/// `sample_direction` of `perspective` and `thinlens`).
 #[derive(Debug, Clone)]
 pub struct CameraConnection {
     camera_from_world: Mat4,
-    eye: Vec3,
+    world_from_camera: Mat4,
+    /// The camera's position (the lens centre).
+    pub eye: Vec3,
     tan_half: Vec2,
     near: f32,
     far: f32,
     /// 1 / the area of the film's rectangle on the plane z = 1.
     normalization: f32,
     full_size: Vec2,
+    /// The thin lens: aperture radius and focus distance.
+    lens: Option<(f32, f32)>,
+}
+
+/// A connection to the camera: where it lands on the film, its weight
+/// (the importance W_e over the squared distance: the aperture's density
+/// cancels the lens area in W_e), and the point on the lens it reaches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraPoint {
+    /// Full-film position in pixels.
+    pub pos: Vec2,
+    /// W_e / d².
+    pub weight: f32,
+    /// The lens point (the pinhole, or the sampled aperture point).
+    pub at: Vec3,
 }
 
 impl CameraConnection {
-    /// The connection of a pinhole camera with a film of `full_size`
-    /// pixels; None for other projections.
+    /// The connection of a perspective or thin-lens camera with a film of
+    /// `full_size` pixels; None for other projections.
     pub fn new(camera: &Camera, full_size: (u32, u32)) -> Option<CameraConnection> {
-        if camera.projection != Projection::Pinhole {
-            return None;
-        }
+        let lens = match camera.projection {
+            Projection::Pinhole => None,
+            Projection::ThinLens { aperture_radius, focus_distance } => Some((aperture_radius, focus_distance)),
+            _ => return None,
+        };
         Some(CameraConnection {
             camera_from_world: camera.world_from_camera.inverse(),
+            world_from_camera: camera.world_from_camera,
             eye: camera.world_from_camera.transform_point3(Vec3::ZERO),
             tan_half: camera.tan_half,
             near: camera.near_clip,
             far: camera.far_clip,
             normalization: 1.0 / (4.0 * camera.tan_half.x * camera.tan_half.y),
             full_size: Vec2::new(full_size.0 as f32, full_size.1 as f32),
+            lens,
         })
     }
 
-    /// Where the direction `d` (world space, from the camera) lands on the
-    /// film and the importance W_e there: the connection to a point at
-    /// infinity. None outside the view.
+    /// Connects the world point `p` to the camera, with `u` sampling the
+    /// aperture of a thin lens; None outside the view or the clip range.
     #[inline]
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
-    pub fn connect_direction(&self, d: Vec3) -> Option<(Vec2, f32)> {
-        let local = self.camera_from_world.transform_vector3(d).normalize();
-        if !(local.z > 0.0) {
-            return None;
-        }
-        let s = Vec2::new(
-            0.5 * (1.0 - local.x / (local.z * self.tan_half.x)),
-            0.5 * (1.0 - local.y / (local.z * self.tan_half.y)),
-        );
-        if !(s.x >= 0.0 && s.x <= 1.0 && s.y >= 0.0 && s.y <= 1.0) {
-            return None;
-        }
-        Some((s * self.full_size, self.normalization / (local.z * local.z * local.z)))
-    }
-
-    /// Where `p` lands on the film (pixels) and the importance W_e / d² of
-    /// the connection; None outside the view or the clip range.
-    #[inline]
-    pub fn connect(&self, p: Vec3) -> Option<(Vec2, f32)> {
+    pub fn connect(&self, p: Vec3, u: Vec2) -> Option<CameraPoint> {
         let local = self.camera_from_world.transform_point3(p);
         if !(local.z >= self.near && local.z <= self.far) {
             return None;
         }
-        let s = Vec2::new(
-            0.5 * (1.0 - local.x / (local.z * self.tan_half.x)),
-            0.5 * (1.0 - local.y / (local.z * self.tan_half.y)),
-        );
+        let a = match self.lens {
+            Some((radius, _)) => (warp::sample_concentric_disk(u) * radius).extend(0.0),
+            None => Vec3::ZERO,
+        };
+        let to = local - a;
+        let dist2 = to.length_squared();
+        let d = to / dist2.sqrt();
+        if !(d.z > 0.0) {
+            return None;
+        }
+        // The film position of the direction: through the pinhole, or
+        // through the point of the focal plane the lens sends it to.
+        let f = match self.lens {
+            Some((_, focus)) => (a + d * (focus / d.z)) / focus,
+            None => d / d.z,
+        };
+        let s = Vec2::new(0.5 * (1.0 - f.x / self.tan_half.x), 0.5 * (1.0 - f.y / self.tan_half.y));
         if !(s.x >= 0.0 && s.x <= 1.0 && s.y >= 0.0 && s.y <= 1.0) {
             return None;
         }
-        let dist2 = local.length_squared();
-        let cos = local.z / dist2.sqrt();
-        let importance = self.normalization / (cos * cos * cos);
-        Some((s * self.full_size, importance / dist2))
+        let importance = self.normalization / (d.z * d.z * d.z);
+        let at = if self.lens.is_some() { self.world_from_camera.transform_point3(a) } else { self.eye };
+        Some(CameraPoint { pos: s * self.full_size, weight: importance / dist2, at })
     }
 }
 
@@ -162,28 +177,34 @@ impl ParticleTracer {
         let pick = |u: f32| ((u * n_lights as f32) as usize).min(n_lights - 1);
         // Emitters seen directly: a point on one, connected to the camera.
         let (u_sel, u_pos) = (rng.next_1d(), rng.next_2d());
+        let u_lens = rng.next_2d();
         if !self.hide_emitters {
             match &scene.lights[pick(u_sel)] {
                 Light::Area(a) => {
                     let (p, n, pdf) = scene.shapes[a.shape as usize].sample_area(u_pos);
-                    if let Some((pos, w)) = cam.connect(p) {
-                        let to_cam = cam.eye - p;
-                        let dist = to_cam.length();
-                        let d = to_cam / dist;
-                        let cos = n.dot(d);
-                        if cos > 0.0 && pdf > 0.0 && self.visible(scene, p, n, cam.eye, stats) {
-                            let value = a.radiance * (n_lights as f32 * w * cos / pdf);
-                            out.push(Splat { pos, value });
+                    if let Some(c) = cam.connect(p, u_lens) {
+                        let to_cam = c.at - p;
+                        let cos = n.dot(to_cam.normalize());
+                        if cos > 0.0 && pdf > 0.0 && self.visible(scene, p, n, c.at, stats) {
+                            let value = a.radiance * (n_lights as f32 * c.weight * cos / pdf);
+                            out.push(Splat { pos: c.pos, value });
                         }
                     }
                 }
-                // Emitters at infinity: a direction sampled from the camera.
+                // Emitters at infinity: a direction sampled from the camera,
+                // its point at twice the scene's radius (as Mitsuba's).
                 l if l.is_environment() => {
                     if let Some(ls) = l.sample_li(cam.eye, u_pos, &scene.shapes) {
-                        if let Some((pos, w)) = cam.connect_direction(ls.wi) {
+                        let b = scene.bounds();
+                        let r = b.bounding_radius().max((cam.eye - b.center()).length()).max(1e-4);
+                        let far = 2.0 * r;
+                        let p = cam.eye + ls.wi * far;
+                        if let Some(c) = cam.connect(p, u_lens) {
                             stats.shadow_rays += 1;
-                            if ls.pdf > 0.0 && !scene.occluded_ray(&Ray::new(cam.eye, ls.wi, f32::INFINITY)) {
-                                out.push(Splat { pos, value: ls.li * (n_lights as f32 * w / ls.pdf) });
+                            let d = (p - c.at).normalize();
+                            if ls.pdf > 0.0 && !scene.occluded_ray(&Ray::new(c.at, d, f32::INFINITY)) {
+                                let value = ls.li * (n_lights as f32 * c.weight * (p - c.at).length_squared() / ls.pdf);
+                                out.push(Splat { pos: c.pos, value });
                             }
                         }
                     }
@@ -210,8 +231,9 @@ impl ParticleTracer {
             let wi = si.to_local(si.wo);
             let wi_geo = si.n.dot(si.wo);
             // Connect this vertex to the camera.
-            if let Some((pos, w)) = cam.connect(si.p) {
-                let to_cam = cam.eye - si.p;
+            let u_lens = rng.next_2d();
+            if let Some(c) = cam.connect(si.p, u_lens) {
+                let to_cam = c.at - si.p;
                 let dist = to_cam.length();
                 let d = to_cam / dist;
                 let local = si.to_local(d);
@@ -221,9 +243,9 @@ impl ParticleTracer {
                     if !scene.occluded(&si, d, dist) {
                         let correction = ((wi.z * d_geo) / (local.z * wi_geo)).abs();
                         let f = bsdf.eval(local, wi) * local.z.abs();
-                        let value = beta * f * (w * correction);
+                        let value = beta * f * (c.weight * correction);
                         if value != Spectrum::ZERO {
-                            out.push(Splat { pos, value });
+                            out.push(Splat { pos: c.pos, value });
                         }
                     }
                 }

@@ -35,7 +35,7 @@ impl RenderJob {
         cancel: &AtomicBool,
     ) -> Option<RenderStats> {
         let cam = CameraConnection::new(&self.camera, self.full_size)
-            .expect("ptracer needs a perspective camera (checked when the scene is loaded)");
+            .expect("ptracer needs a perspective or thin-lens camera (checked when the scene is loaded)");
         let (fw, fh) = self.full_size;
         let mut pass = Film::with_layers(film.width, film.height, &film.layers());
         let mut stats = RenderStats::default();

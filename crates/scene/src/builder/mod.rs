@@ -247,7 +247,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     })
 }
 
-/// What Penumbra's `ptracer` needs: a perspective camera and (as Mitsuba)
+/// What Penumbra's `ptracer` needs: a perspective or thin-lens camera and (as Mitsuba)
 /// a sample count that is a multiple of `samples_per_pass`.
 fn check_ptracer(
     pt: &penumbra_render::integrator::ParticleTracer,
@@ -255,8 +255,9 @@ fn check_ptracer(
     spp: u32,
     at: &crate::error::FileLoc,
 ) -> Result<()> {
-    if camera.projection != penumbra_render::camera::Projection::Pinhole {
-        return Err(LoadError::at(at, "ptracer connects to the camera through a pinhole: use a perspective sensor"));
+    use penumbra_render::camera::Projection;
+    if !matches!(camera.projection, Projection::Pinhole | Projection::ThinLens { .. }) {
+        return Err(LoadError::at(at, "ptracer connects light paths to perspective and thinlens sensors only"));
     }
     if let Some(n) = pt.samples_per_pass {
         if !spp.is_multiple_of(n) {
