@@ -20,7 +20,10 @@
 //! then traces one light path from a uniformly chosen emitter with BSDF
 //! sampling in importance transport (refraction's 1/η² radiance scale
 //! undone; the adjoint shading-normal correction of Veach, p. 155),
-//! connecting each vertex to the camera through the BSDF. Splats go into
+//! connecting each vertex to the camera through the BSDF evaluated as
+//! f(towards the camera ← from the light): in Penumbra's radiance-mode
+//! convention that is already the adjoint the connection needs, refraction
+//! included. Splats go into
 //! the film with the filter's weights normalised to sum to 1 (Mitsuba's
 //! normalised `ImageBlock`); each pixel's weight sum counts the samples per
 //! pixel instead, so the developed image is Σ splats / spp as Mitsuba's.
@@ -31,9 +34,7 @@
 //! sampled from the camera (Mitsuba's `sample_ray` and `sample_direction`).
 //! Supported: the perspective and thin-lens cameras (a connection samples
 //! the aperture, as Mitsuba's `thinlens` does); other sensors are refused
-//! when the scene is loaded. Connections through rough refraction towards the
-//! camera are weighted as in radiance transport (their η² factor is not
-//! undone).
+//! when the scene is loaded.
 
 use super::{RayStats, Termination};
 use crate::camera::{Camera, Projection};
