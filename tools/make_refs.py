@@ -52,6 +52,7 @@ LLVM19 = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 # Default total samples per pixel per scene (override with --spp).
 SPP = {
     "cbox_diffuse": 32768,
+    "ptracer_box": 16384,
     "spheres_env": 16384,
     "mesh_ply_obj": 16384,
     "glass_caustic": 65536,

@@ -67,7 +67,7 @@ mod tests {
 
     #[test]
     fn mask_marks_noisy_pixels_and_their_neighbours() {
-        let layers = FilmLayers { aovs: vec![], variance: true };
+        let layers = FilmLayers { aovs: vec![], variance: true, ..Default::default() };
         let mut f = Film::with_layers(5, 4, &layers);
         for s in 0..16 {
             for y in 0..4 {

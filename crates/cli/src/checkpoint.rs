@@ -8,11 +8,12 @@
 //! length-prefixed (u32) UTF-8 strings penumbra version and settings, seed
 //! u64, passes u32, spp reached u32, render seconds f64, width u32, height
 //! u32, the film's layers (string: AOV names, comma-separated; u8: 1 when
-//! variance moments follow), per pixel R, G, B sums and the weight sum as
+//! variance moments follow; string: the integrator's output channels,
+//! newline-separated), per pixel R, G, B sums and the weight sum as
 //! f64, then the AOV sums (f64, the AOVs' channels per pixel), then the
 //! moments (`film::MOMENTS` = 8 f64 per pixel), and a CRC-32 of everything
-//! before it. Formats 1 (no layers) and 2 (7 moments, no Σ w³) are refused
-//! with a message.
+//! before it. Formats 1 (no layers), 2 (7 moments, no Σ w³) and 3 (no
+//! integrator channels) are refused with a message.
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
@@ -24,7 +25,7 @@ use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
-const FORMAT: u32 = 3;
+const FORMAT: u32 = 4;
 
 /// A render's state after `passes` whole passes.
 #[derive(Debug, Clone)]
@@ -60,6 +61,7 @@ impl Checkpoint {
         let names: Vec<&str> = self.film.aov_kinds.iter().map(|k| k.name()).collect();
         put_str(&mut out, &names.join(","));
         out.push(self.film.has_variance() as u8);
+        put_str(&mut out, &self.film.channels.join("\n"));
         for a in &self.film.acc {
             for v in a {
                 out.extend_from_slice(&v.to_le_bytes());
@@ -98,7 +100,9 @@ impl Checkpoint {
         let (width, height) = (r.u32()?, r.u32()?);
         let n = width as usize * height as usize;
         let names = r.string()?;
-        let mut layers = FilmLayers { aovs: Vec::new(), variance: r.u8()? != 0 };
+        let variance = r.u8()? != 0;
+        let channels = r.string()?.split('\n').filter(|s| !s.is_empty()).map(str::to_string).collect();
+        let mut layers = FilmLayers { aovs: Vec::new(), variance, channels };
         for name in names.split(',').filter(|s| !s.is_empty()) {
             layers.aovs.push(AovKind::from_name(name).ok_or_else(|| corrupt(&format!("unknown AOV '{name}'")))?);
         }
@@ -190,7 +194,11 @@ mod tests {
 
     #[test]
     fn round_trips_and_detects_damage() {
-        let layers = FilmLayers { aovs: vec![AovKind::Depth, AovKind::Albedo], variance: true };
+        let layers = FilmLayers {
+            aovs: vec![AovKind::Depth, AovKind::Albedo],
+            variance: true,
+            channels: vec!["dd.y.T".into(), "m2_a.X".into()],
+        };
         let mut film = Film::with_layers(3, 2, &layers);
         film.acc[4] = [1.5, 0.1 + 0.2, -0.0, 7.25];
         film.aov[4 * 4 + 1] = 0.375;

@@ -2,7 +2,9 @@
 //!
 //! Every image gets its AOVs as layers of the one EXR part (`albedo.R/G/B`,
 //! `normal.X/Y/Z`, `depth.Z`, `position.X/Y/Z`: weighted means, like the
-//! beauty) and, with variance tracked, `variance.R/G/B` (the variance of the
+//! beauty), the integrator's own output channels under Mitsuba's names
+//! (the `aov` and `moment` integrators': `my_image.R`, `dd.y.T`,
+//! `m2_my_image.X`, ...; weighted means too) and, with variance tracked, `variance.R/G/B` (the variance of the
 //! pixel's mean). Parts (`--part`) also carry what `merge` needs to add the
 //! second moments (`Film::moments`) without cancellation: Σ w² as
 //! `penumbra.m0`, and per channel, centred on the stored pixel value r,
@@ -69,6 +71,9 @@ pub fn channels(film: &Film, part: bool) -> Vec<(String, Vec<f32>)> {
             out.push((format!("{}.{suffix}", k.name()), v.iter().skip(c).step_by(m).copied().collect()));
         }
     }
+    for (c, name) in film.channels.iter().enumerate() {
+        out.push((name.clone(), film.develop_channel(c)));
+    }
     if let Some(v) = film.develop_variance() {
         for (c, suffix) in ["R", "G", "B"].iter().enumerate() {
             out.push((format!("{VARIANCE}.{suffix}"), v.iter().map(|p| p[c]).collect()));
@@ -109,7 +114,16 @@ pub fn film_of_part(img: &ExrImage, what: &str) -> Result<Film> {
         .filter(|k| img.layer(&format!("{}.{}", k.name(), k.channels()[0])).is_some())
         .collect();
     let variance = img.layer(&moment_name(0)).is_some();
-    let mut film = Film::with_layers(img.width, img.height, &FilmLayers { aovs: aovs.clone(), variance });
+    // The integrator's channels: every layer that is none of the above, in
+    // the file's order.
+    let known = |name: &str| {
+        name.starts_with("penumbra.")
+            || name.starts_with(&format!("{VARIANCE}."))
+            || aovs.iter().any(|k| k.channels().iter().any(|c| name == format!("{}.{c}", k.name())))
+    };
+    let channels: Vec<String> = img.layers.iter().map(|(n, _)| n.clone()).filter(|n| !known(n)).collect();
+    let layers = FilmLayers { aovs: aovs.clone(), variance, channels: channels.clone() };
+    let mut film = Film::with_layers(img.width, img.height, &layers);
     let n = film.aov_channels();
     for (i, &w) in weight.iter().enumerate() {
         let w = w as f64;
@@ -126,6 +140,13 @@ pub fn film_of_part(img: &ExrImage, what: &str) -> Result<Film> {
             }
             off += 1;
         }
+    }
+    for name in &channels {
+        let v = img.layer(name).expect("listed above");
+        for (i, &a) in v.iter().enumerate() {
+            film.aov[i * n + off] = a as f64 * film.acc[i][3];
+        }
+        off += 1;
     }
     if variance {
         for k in 0..MOMENTS {
@@ -157,13 +178,14 @@ mod tests {
 
     #[test]
     fn parts_round_trip_their_film() {
-        let layers = parse("depth,variance,albedo").unwrap();
+        let mut layers = parse("depth,variance,albedo").unwrap();
         assert_eq!(describe(&layers), "albedo,depth,variance");
+        layers.channels = vec!["m2_a.X".into()];
         assert!(parse("albedo,velocity").unwrap_err().to_string().contains("velocity"));
         let mut f = Film::with_layers(2, 1, &layers);
         for s in 0..5 {
             f.add(1, 0, Spectrum::new(0.1 * s as f32, 0.3, 1.0 / 3.0), 0.7 + 0.01 * s as f32);
-            f.add_aov(1, 0, &[0.5, 0.25, 0.125, 2.5], 0.7 + 0.01 * s as f32);
+            f.add_aov(1, 0, &[0.5, 0.25, 0.125, 2.5, 4.0 + s as f32], 0.7 + 0.01 * s as f32);
         }
         let img = ExrImage {
             width: 2,
@@ -182,5 +204,6 @@ mod tests {
             assert!((a[c] - b[c]).abs() <= 1e-5 * a[c].abs() + 1e-15, "{a:?} {b:?}");
         }
         assert!((back.develop_aov(AovKind::Depth).unwrap()[1] - 2.5).abs() < 1e-6);
+        assert_eq!(back.develop_channel(0), f.develop_channel(0));
     }
 }

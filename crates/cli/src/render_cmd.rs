@@ -82,7 +82,7 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
     if !(a.checkpoint_every >= 0.0 && a.checkpoint_every.is_finite()) {
         bail!("--checkpoint-every needs a number of seconds >= 0");
     }
-    let layers = film_layers(a)?;
+    let mut layers = film_layers(a)?;
     if a.part.is_some() {
         for (on, name, why) in [
             (a.noise_threshold.is_some(), "--noise-threshold", "each part would stop on its own noise"),
@@ -103,6 +103,16 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         apply_crop(&mut job, c)?;
     }
     job.stream = !a.no_stream;
+    // The integrator's own output channels (`aov`, `moment`): EXR layers.
+    layers.channels = job.integrator.channel_names();
+    if matches!(job.integrator, penumbra_render::integrator::Integrator::PTracer(_))
+        && (layers.variance || !layers.aovs.is_empty() || a.adaptive)
+    {
+        bail!(
+            "ptracer: --aov, --noise-threshold, --adaptive and --denoise need per-pixel samples, \
+             which a particle tracer's splats are not (as Mitsuba's ptracer, which refuses AOVs)"
+        );
+    }
     if !job.scene.media.is_empty() && !matches!(job.integrator, penumbra_render::integrator::Integrator::VolPath(_)) {
         eprintln!(
             "note: the scene's participating media are ignored by its integrator (as in Mitsuba); \

@@ -61,6 +61,9 @@ pub fn render<'py>(
     let ov = Overrides { spp, seed: Some(seed), integrator: integrator.clone(), sampler: None };
     let job = scene.job(&ov).map_err(|e| load_error(py, &e))?;
     let layers = penumbra::layers::parse(&aovs.join(",")).map_err(anyhow_error)?;
+    if matches!(job.integrator, penumbra_render::integrator::Integrator::PTracer(_)) && layers != Default::default() {
+        return Err(error("ptracer: aovs need per-pixel samples, which a particle tracer's splats are not"));
+    }
     let pool = penumbra::thread_pool(threads).map_err(anyhow_error)?;
     let schedule = Schedule { samples: 0..job.sampler.spp, max_pass_spp: max_pass_spp.max(1) };
     let bytes = scene.source_bytes();

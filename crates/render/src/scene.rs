@@ -199,6 +199,22 @@ impl Scene {
         Some(self.interaction(ray, &hit))
     }
 
+    /// Closest surface hit with its full surface parameterisation (`uv`,
+    /// `dpdu`, `dpdv`) whatever the material reads (the `aov` integrator's).
+    pub fn intersect_full(&self, ray: &Ray) -> Option<SurfaceInteraction> {
+        if let Some(log) = &self.ray_log {
+            log_ray(log, *ray, false);
+        }
+        let hit = self.accel.intersect(ray, &self.shapes, &self.instances)?;
+        let (id, i, t, uv) = (hit.shape, hit.index as usize, hit.t, hit.uv);
+        let shape = &self.shapes[id as usize];
+        Some(if hit.instance == Hit::NOT_INSTANCED {
+            shape.interaction_with(id, i, ray, t, uv, true)
+        } else {
+            self.instances[hit.instance as usize].interaction_with(shape, id, i, ray, t, uv, true)
+        })
+    }
+
     /// The surface interaction of `ray`'s closest hit `hit` (from
     /// [`Scene::intersect`] or a packet traversal of [`Scene::accel`]).
     #[inline]

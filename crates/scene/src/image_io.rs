@@ -152,6 +152,32 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, String> {
     Ok(RgbImage { width: w as u32, height: h as u32, pixels })
 }
 
+/// An EXR's channels by name, each row-major.
+pub type Channels = Vec<(String, Vec<f32>)>;
+
+/// Every channel of an EXR's first layer, by name, row-major (a multichannel
+/// image such as the `aov` integrator's): width, height, channels.
+pub fn read_exr_channels(path: &Path) -> Result<(u32, u32, Channels), String> {
+    use exr::prelude::*;
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+    for header in &meta.headers {
+        check_size(path, header.layer_size.width() as u64, header.layer_size.height() as u64)?;
+    }
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+    let layer = &image.layer_data;
+    let channels =
+        layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect();
+    Ok((layer.size.0 as u32, layer.size.1 as u32, channels))
+}
+
 /// Inverse of [`linear_to_srgb`] (IEC 61966-2-1).
 pub fn srgb_to_linear(v: f32) -> f32 {
     if v <= 0.04045 {

@@ -43,7 +43,7 @@ const RESOLUTION: f64 = 0.02;
 
 /// Scenes whose noise could hide a local error from a weaker comparison:
 /// here each injected error must be caught.
-const NOISY: &[&str] = &["envmap_sun", "many_lights", "rough_spheres", "spot_light"];
+const NOISY: &[&str] = &["envmap_sun", "many_lights", "rough_spheres", "spot_light", "ptracer_box"];
 
 fn compare(name: &str, spp: u32) {
     let scene = root().join("tests/scenes").join(format!("{name}.xml"));
@@ -258,4 +258,11 @@ fn linearcurve_matches_mitsuba() {
 #[test]
 fn bsplinecurve_matches_mitsuba() {
     compare("bsplinecurve", 256);
+}
+
+#[test]
+fn particle_tracer_matches_mitsuba() {
+    // The diffuse Cornell box rendered by `ptracer` (light paths splatted
+    // through the tent filter) against Mitsuba's `ptracer`.
+    compare("ptracer_box", 256);
 }

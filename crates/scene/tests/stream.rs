@@ -22,7 +22,7 @@ fn bits(v: impl IntoIterator<Item = f32>) -> Vec<u32> {
 fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> bool {
     let ov = Overrides { spp: Some(spp), ..Default::default() };
     let mut job = load_scene(scene, defines, &ov).unwrap_or_else(|e| panic!("{e}"));
-    let layers = FilmLayers { aovs: AovKind::ALL.to_vec(), variance: true };
+    let layers = FilmLayers { aovs: AovKind::ALL.to_vec(), variance: true, ..Default::default() };
     let name = scene.file_name().unwrap().to_string_lossy();
     let is_path = matches!(job.integrator, penumbra_render::integrator::Integrator::Path(_));
     for range in [0..spp, 3..spp] {

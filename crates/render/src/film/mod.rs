@@ -194,6 +194,9 @@ pub struct Film {
     pub acc: Vec<[f64; 4]>,
     /// The AOVs accumulated, in channel order (empty: none).
     pub aov_kinds: Vec<AovKind>,
+    /// The integrator's own output channels (Mitsuba's `aov_names()`, e.g.
+    /// `dd.y.T` of the `aov` integrator), stored after the AOV kinds' channels.
+    pub channels: Vec<String>,
     /// Σ w·a per pixel, `aov_channels()` values per pixel.
     pub aov: Vec<f64>,
     /// Per pixel [Σ w², Σ w²·L (R, G, B), Σ w²·L² (R, G, B), Σ w³] when
@@ -208,6 +211,8 @@ pub struct FilmLayers {
     pub aovs: Vec<AovKind>,
     /// Whether the second moments for the variance estimate are tracked.
     pub variance: bool,
+    /// The integrator's output channels (see [`Film::channels`]).
+    pub channels: Vec<String>,
 }
 
 /// Moments per pixel of [`Film::moments`].
@@ -229,21 +234,22 @@ impl Film {
             width,
             height,
             acc: vec![[0.0; 4]; n],
-            aov: vec![0.0; n * channel_count(&layers.aovs)],
+            aov: vec![0.0; n * (channel_count(&layers.aovs) + layers.channels.len())],
             aov_kinds: layers.aovs.clone(),
+            channels: layers.channels.clone(),
             moments: if layers.variance { vec![[0.0; MOMENTS]; n] } else { Vec::new() },
         }
     }
 
     /// The layers this film accumulates.
     pub fn layers(&self) -> FilmLayers {
-        FilmLayers { aovs: self.aov_kinds.clone(), variance: self.has_variance() }
+        FilmLayers { aovs: self.aov_kinds.clone(), variance: self.has_variance(), channels: self.channels.clone() }
     }
 
-    /// AOV values per pixel.
+    /// AOV values per pixel: the AOV kinds' channels, then the integrator's.
     #[inline]
     pub fn aov_channels(&self) -> usize {
-        channel_count(&self.aov_kinds)
+        channel_count(&self.aov_kinds) + self.channels.len()
     }
 
     /// Whether the second moments are tracked.
@@ -353,6 +359,39 @@ impl Film {
         }
     }
 
+    /// Splats `l` as Mitsuba's normalised `ImageBlock` does (the particle
+    /// tracer's splats): the filter's weights around pixel (`px`, `py`) +
+    /// `u` scaled to sum to 1 over the whole footprint, added to Σ w·L only
+    /// (the weight sum counts samples per pixel instead). Pixels outside
+    /// the film are dropped; `px`, `py` may lie outside it.
+    pub fn splat_normalized(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
+        let m = filter.margin().min(MAX_MARGIN) as i32;
+        let taps = (2 * m + 1) as usize;
+        let (mut wx, mut wy) = ([0.0f32; 2 * MAX_MARGIN as usize + 1], [0.0f32; 2 * MAX_MARGIN as usize + 1]);
+        for k in 0..taps {
+            let d = (m - k as i32) as f32;
+            wx[k] = filter.weight(u.x + d - 0.5);
+            wy[k] = filter.weight(u.y + d - 0.5);
+        }
+        let norm = wx[..taps].iter().sum::<f32>() * wy[..taps].iter().sum::<f32>();
+        if norm == 0.0 || !norm.is_finite() {
+            return;
+        }
+        let xs = nonzero_taps(&wx[..taps], px - m, self.width);
+        let ys = nonzero_taps(&wy[..taps], py - m, self.height);
+        for ky in ys {
+            let y = (py - m + ky as i32) as u32;
+            for kx in xs.clone() {
+                let x = (px - m + kx as i32) as u32;
+                let w = wx[kx] * wy[ky] / norm;
+                let a = &mut self.acc[(y * self.width + x) as usize];
+                for (c, v) in l.to_array().into_iter().enumerate() {
+                    a[c] += (v * w) as f64;
+                }
+            }
+        }
+    }
+
     /// Adds another film's sums (e.g. from another machine or pass).
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
@@ -391,6 +430,18 @@ impl Film {
             }
         }
         Some(out)
+    }
+
+    /// The weighted means of the integrator's output channel `c` (an index
+    /// into [`Film::channels`]), one value per pixel.
+    pub fn develop_channel(&self, c: usize) -> Vec<f32> {
+        let n = self.aov_channels();
+        let off = channel_count(&self.aov_kinds) + c;
+        self.acc
+            .iter()
+            .enumerate()
+            .map(|(i, &[.., w])| if w > 0.0 { (self.aov[i * n + off] / w) as f32 } else { 0.0 })
+            .collect()
     }
 
     /// Variance of pixel `i`'s mean, per channel (None without moments).
@@ -470,7 +521,7 @@ mod tests {
     /// Equal weights: the layer is s²/n, the unbiased variance of a mean.
     #[test]
     fn equal_weights_give_s2_over_n() {
-        let mut f = Film::with_layers(1, 1, &FilmLayers { aovs: vec![], variance: true });
+        let mut f = Film::with_layers(1, 1, &FilmLayers { aovs: vec![], variance: true, ..Default::default() });
         for v in [1.0, 2.0, 3.0, 4.0] {
             f.add(0, 0, Spectrum::splat(v), 0.5);
         }
@@ -489,7 +540,7 @@ mod tests {
         let (pixels, n) = (40_000, 6);
         let (mut est, mut truth, mut sq, mut kish) = (0.0, 0.0, 0.0, 0.0);
         for _ in 0..pixels {
-            let mut f = Film::with_layers(1, 1, &FilmLayers { aovs: vec![], variance: true });
+            let mut f = Film::with_layers(1, 1, &FilmLayers { aovs: vec![], variance: true, ..Default::default() });
             let (mut w1, mut w2, mut w3) = (0.0f64, 0.0f64, 0.0f64);
             for _ in 0..n {
                 // Weights spread as a filter's are; values uniform, σ² = 1/12.

@@ -52,6 +52,10 @@ pub struct Mesh {
     /// when the vertex normals are the face normals, e.g. `rectangle` and
     /// `cube`: the same shading without interpolating them per hit).
     pub face_normals: bool,
+    /// Mitsuba's `rectangle` (two triangles there too, split along the
+    /// other diagonal): hits report Mitsuba's primitive index, 0 where
+    /// u + v ≤ 1, else 1 (the aov integrator's `prim_index`).
+    pub rectangle: bool,
     area_distrib: Option<Distribution1D>,
 }
 
@@ -60,7 +64,7 @@ impl Mesh {
     pub fn new(mesh: TriangleMesh, face_normals: bool) -> Mesh {
         let areas: Vec<f32> = (0..mesh.indices.len()).map(|i| tri_area(&mesh, i)).collect();
         let face_normals = face_normals || normals_are_flat(&mesh);
-        Mesh { area_distrib: Distribution1D::new(&areas), mesh, face_normals }
+        Mesh { area_distrib: Distribution1D::new(&areas), mesh, face_normals, rectangle: false }
     }
     /// Corner positions of triangle `i`.
     #[inline]

@@ -40,6 +40,9 @@ fn hide_emitters(integrator: &Integrator) -> bool {
         Integrator::BruteForce(b) => b.hide_emitters,
         Integrator::VolPath(v) => v.hide_emitters,
         Integrator::Depth(_) => false,
+        Integrator::PTracer(p) => p.hide_emitters,
+        Integrator::Aov(a) => a.integrators.first().is_some_and(|(_, i)| hide_emitters(i)),
+        Integrator::Moment(m) => m.integrators.first().is_some_and(|(_, i)| hide_emitters(i)),
     }
 }
 

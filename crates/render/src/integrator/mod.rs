@@ -10,18 +10,27 @@
 //! | `bruteforce` | hemisphere form only: one sampled direction per vertex, emission only when hit |
 //! | `depth`      | the distance to the first surface (Mitsuba `depth`) |
 //! | `volpath`    | `path` through participating media: free-flight sampling, transmittance on shadow rays (Mitsuba `volpath`, `volpathmis`) |
+//! | `aov`        | surface quantities of the first hit beside nested integrators' images, as output channels (Mitsuba `aov`) |
+//! | `ptracer`    | particle tracing: light paths from the emitters, each vertex connected to the camera and splatted where it lands (Mitsuba `ptracer`; rendered by `RenderJob` itself) |
+//! | `moment`     | nested integrators' images and their second moments, as output channels (Mitsuba `moment`) |
 
 pub mod aov;
+pub mod aovs;
 pub mod bruteforce;
 pub mod depth;
 pub mod direct;
+pub mod moment;
 pub mod path;
+pub mod ptracer;
 pub mod volpath;
 
+pub use aovs::{AovIntegrator, AovType};
 pub use bruteforce::{BruteForceIntegrator, HemisphereSampling};
 pub use depth::DepthIntegrator;
 pub use direct::DirectIntegrator;
+pub use moment::MomentIntegrator;
 pub use path::PathIntegrator;
+pub use ptracer::ParticleTracer;
 pub use volpath::VolPathIntegrator;
 
 use crate::geometry::Ray;
@@ -29,6 +38,22 @@ use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
+use glam::Vec3;
+
+/// A camera ray's differentials (Mitsuba's `RayDifferential`): the rays
+/// through the film positions one pixel over in x and in y, already scaled
+/// by 1/√spp as Mitsuba's sampling integrators scale them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RayDiff {
+    /// Origin of the x offset ray.
+    pub o_x: Vec3,
+    /// Direction of the x offset ray.
+    pub d_x: Vec3,
+    /// Origin of the y offset ray.
+    pub o_y: Vec3,
+    /// Direction of the y offset ray.
+    pub d_y: Vec3,
+}
 
 /// Counters an integrator keeps per thread.
 #[derive(Debug, Clone, Copy, Default)]
@@ -130,6 +155,13 @@ pub enum Integrator {
     VolPath(VolPathIntegrator),
     /// `depth`: the distance to the first surface.
     Depth(DepthIntegrator),
+    /// `aov`: surface quantities and nested integrators' images.
+    Aov(Box<AovIntegrator>),
+    /// `moment`: nested integrators' images and second moments.
+    Moment(Box<MomentIntegrator>),
+    /// `ptracer`: the particle tracer (no estimate per camera ray: the
+    /// render driver traces its light paths and splats them).
+    PTracer(ParticleTracer),
 }
 
 impl Integrator {
@@ -150,6 +182,76 @@ impl Integrator {
             Integrator::BruteForce(b) => b.li(scene, ray, rng, stats, scratch),
             Integrator::VolPath(v) => v.li(scene, ray, rng, stats, scratch),
             Integrator::Depth(d) => d.li(scene, ray, stats),
+            Integrator::PTracer(_) => Spectrum::ZERO,
+            Integrator::Aov(_) | Integrator::Moment(_) => {
+                let mut out = vec![0.0; self.channel_names().len()];
+                self.sample(scene, ray, None, rng, stats, scratch, &mut out)
+            }
+        }
+    }
+
+    /// The integrator's own output channels (Mitsuba's `aov_names()`),
+    /// which the film stores beside the beauty; empty for most.
+    pub fn channel_names(&self) -> Vec<String> {
+        match self {
+            Integrator::Aov(a) => a.channel_names(),
+            Integrator::Moment(m) => m.channel_names(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// As [`li`](Self::li), writing the output channels of
+    /// [`channel_names`](Self::channel_names) to `out`; `diff`: the camera
+    /// ray's differentials, where the camera has them.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        diff: Option<&RayDiff>,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+        scratch: &Scratch,
+        out: &mut [f32],
+    ) -> Spectrum {
+        match self {
+            Integrator::Aov(a) => a.sample(scene, ray, diff, rng, stats, scratch, out),
+            Integrator::Moment(m) => m.sample(scene, ray, diff, rng, stats, scratch, out),
+            _ => self.li(scene, ray, rng, stats, scratch),
+        }
+    }
+
+    /// Whether the camera ray counts as covered (Mitsuba's `valid` mask,
+    /// the image's alpha): `aov` reports its first nested integrator's
+    /// (0 without one), `moment` its first's.
+    pub fn alpha(&self, scene: &Scene, ray: &Ray, stats: &mut RayStats) -> f32 {
+        let hide = match self {
+            Integrator::Path(p) => p.hide_emitters,
+            Integrator::BruteForce(b) => b.hide_emitters,
+            Integrator::VolPath(v) => v.hide_emitters,
+            Integrator::Direct(_) | Integrator::Depth(_) => true,
+            Integrator::PTracer(p) => p.hide_emitters,
+            Integrator::Aov(a) => return a.integrators.first().map_or(0.0, |(_, i)| i.alpha(scene, ray, stats)),
+            Integrator::Moment(m) => return m.integrators.first().map_or(0.0, |(_, i)| i.alpha(scene, ray, stats)),
+        };
+        // `depth` and `direct`: any surface; the path tracers look through
+        // pass-through surfaces, and count the environment unless hidden.
+        let through = !matches!(self, Integrator::Direct(_) | Integrator::Depth(_));
+        let mut r = *ray;
+        for _ in 0..64 {
+            stats.rays += 1;
+            let Some(si) = scene.intersect(&r) else { break };
+            let m = &scene.materials[scene.shape_info[si.shape as usize].material as usize];
+            if !(through && m.has_null_lobe()) {
+                return 1.0;
+            }
+            r = scene.spawn_ray(&si, ray.d);
+        }
+        if !hide && !scene.env_lights.is_empty() {
+            1.0
+        } else {
+            0.0
         }
     }
 }

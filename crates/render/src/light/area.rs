@@ -20,7 +20,7 @@
 
 use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
-use crate::geometry::{Aabb, Mesh, Ray, Shape, SurfaceInteraction};
+use crate::geometry::{Aabb, AreaSample, Mesh, Ray, Shape, SurfaceInteraction};
 use crate::math::{luminance, Spectrum, PI};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
@@ -80,6 +80,20 @@ impl AreaLight {
             return None;
         }
         Some(LightSample { wi, dist, pdf: s.pdf, li, delta: false })
+    }
+
+    /// The radiance leaving the point `s`, sampled on `shape` (this light's
+    /// shape) by area: the texture there, found as a ray along the normal
+    /// finds it.
+    pub fn radiance_at(&self, shape: &Shape, s: &AreaSample) -> Spectrum {
+        match self.radiance.constant() {
+            Some(c) => c,
+            None => {
+                let ray = Ray::new(s.p + s.n, -s.n, f32::INFINITY);
+                let si = shape.interaction(self.shape, s.prim as usize, &ray, 1.0, s.param);
+                self.radiance.eval(&si)
+            }
+        }
     }
 
     /// Solid-angle density at `p_ref` with which `sample_li` reaches the

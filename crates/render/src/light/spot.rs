@@ -32,7 +32,8 @@ pub struct SpotLight {
     /// Mitsuba's `texture`: an image projected through the cone, looked up
     /// at uv = ½ + ½ (x, y) / (z tan(cutoff)) of the local direction.
     pub texture: Option<Arc<Bitmap>>,
-    cos_cutoff: f32,
+    /// cos of the cutoff angle: the cone outside which it emits nothing.
+    pub cos_cutoff: f32,
     cos_beam: f32,
     inv_transition: f32,
 }

@@ -220,6 +220,76 @@ impl Material {
         }
     }
 
+    /// Mitsuba's `eval_diffuse_reflectance` (what its `aov` integrator's
+    /// `albedo` reports): the diffuse reflectance texture of `diffuse`,
+    /// `plastic`, `roughplastic`, the base colour of `principled` and
+    /// `principledthin`; the side's material of `twosided`; the wrapped
+    /// material of `mask`, `normalmap`, `bumpmap` (unperturbed); the blend of
+    /// `blendbsdf`'s two; for every other BSDF π f(wo, n), the BSDF evaluated
+    /// towards the shading normal (0 for smooth conductors and dielectrics).
+    pub fn diffuse_reflectance(&self, si: &SurfaceInteraction, scratch: &Scratch) -> crate::math::Spectrum {
+        match self {
+            Material::Diffuse(p) => p.reflectance.eval(si),
+            Material::Plastic(p) => p.diffuse_reflectance.eval(si),
+            Material::RoughPlastic(p) => p.diffuse_reflectance.eval(si),
+            Material::Principled(p) => p.base_color.eval(si),
+            Material::PrincipledThin(p) => p.base_color.eval(si),
+            Material::TwoSided(front, back) => {
+                if si.to_local(si.wo).z >= 0.0 {
+                    front.diffuse_reflectance(si, scratch)
+                } else {
+                    let mut b = *si;
+                    b.sh_frame = Frame { s: si.sh_frame.s, t: si.sh_frame.t, n: -si.sh_frame.n };
+                    back.diffuse_reflectance(&b, scratch)
+                }
+            }
+            Material::Mask { inner, .. } | Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => {
+                inner.diffuse_reflectance(si, scratch)
+            }
+            Material::Blend { weight, first, second } => {
+                let w = weight.eval_1(si).clamp(0.0, 1.0);
+                first.diffuse_reflectance(si, scratch) * (1.0 - w) + second.diffuse_reflectance(si, scratch) * w
+            }
+            _ => {
+                let mut s = *si;
+                let bsdf = self.bsdf(&mut s, scratch);
+                bsdf.eval(s.to_local(s.wo), Vec3::Z) * crate::math::PI
+            }
+        }
+    }
+
+    /// The shading frame Mitsuba's `BSDF::sh_frame` reports (its `aov`
+    /// integrator's `sh_normal`): perturbed by a `normalmap` or `bumpmap`
+    /// at the top of the material, else the hit's own (no `twosided` flip).
+    pub fn sh_frame(&self, si: &SurfaceInteraction) -> Frame {
+        let mut s = *si;
+        match self {
+            Material::NormalMap { normals, .. } => {
+                let rel = normalmap::relative_frame(si, normals.eval(si));
+                perturb(&mut s, rel);
+            }
+            Material::BumpMap { height, scale, .. } => {
+                if let Some(rel) = bumpmap::relative_frame(si, height, *scale) {
+                    perturb(&mut s, rel);
+                }
+            }
+            _ => {}
+        }
+        s.sh_frame
+    }
+
+    /// Whether the BSDF has a pass-through lobe (Mitsuba's `BSDFFlags::Null`):
+    /// `null`, `mask`, `thindielectric`, or a wrapper or blend of one.
+    pub fn has_null_lobe(&self) -> bool {
+        match self {
+            Material::Null | Material::Mask { .. } | Material::ThinDielectric(_) => true,
+            Material::TwoSided(front, back) => front.has_null_lobe() || back.has_null_lobe(),
+            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.has_null_lobe(),
+            Material::Blend { first, second, .. } => first.has_null_lobe() || second.has_null_lobe(),
+            _ => false,
+        }
+    }
+
     /// Whether a hit on this material can scatter light at all (false for
     /// `null`, which rays pass through).
     pub fn is_null(&self) -> bool {

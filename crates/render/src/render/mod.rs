@@ -3,6 +3,7 @@
 //! own with the filter's margin, and the tile films are added in tile order,
 //! so the film is bitwise identical for any thread count or scheduling.
 
+mod particles;
 mod stream;
 pub use stream::LANE_WIDTHS;
 
@@ -118,6 +119,13 @@ impl RenderJob {
         if let Some(a) = active {
             assert_eq!(a.len(), film.acc.len());
         }
+        if let Integrator::PTracer(pt) = &self.integrator {
+            return self.render_particles(pt, film, samples, progress, cancel);
+        }
+        assert!(
+            film.channels.is_empty() || film.channels == self.integrator.channel_names(),
+            "the film's channels are not the integrator's"
+        );
         let layers = film.layers();
         // Samples are taken in the image and, for a crop window, in the ring
         // of pixels around it whose splats reach into it (so a crop holds
@@ -224,13 +232,21 @@ impl RenderJob {
         match (&self.integrator, self.stream && self.scene.ray_log.is_none()) {
             (Integrator::Path(path), true) => stream::render(self, path, &pixels, samples, &mut tile),
             _ => {
+                // The integrator's own output channels (the `aov` and `moment` integrators').
+                let mut ch = vec![0f32; self.integrator.channel_names().len()];
                 for p in &pixels {
                     for s in samples.clone() {
                         let mut rng = self.sampler.stream(p.global, s);
                         let (u, ray) = self.camera_sample(p.global, &mut rng);
                         tile.scratch.reset();
-                        let l = self.integrator.li(&self.scene, &ray, &mut rng, &mut tile.stats.rays, &tile.scratch);
-                        self.add_sample(&mut tile, p, s, u, &ray, l);
+                        let (scene, stats, scratch) = (&self.scene, &mut tile.stats.rays, &tile.scratch);
+                        let l = if ch.is_empty() {
+                            self.integrator.li(scene, &ray, &mut rng, stats, scratch)
+                        } else {
+                            let diff = self.ray_diff(p.global, u, &ray);
+                            self.integrator.sample(scene, &ray, diff.as_ref(), &mut rng, stats, scratch, &mut ch)
+                        };
+                        self.add_sample(&mut tile, p, s, u, &ray, l, &ch);
                     }
                 }
             }
@@ -272,11 +288,52 @@ impl RenderJob {
         (u, self.camera.sample_ray((Vec2::new(gx as f32, gy as f32) + u) * inv, rng))
     }
 
+    /// The differentials of camera ray `ray` through `u` in full-film pixel
+    /// `global`, as Mitsuba's sensors give them and its sampling integrators
+    /// scale them (by 1/√spp); None for the radiance meter, which has none.
+    pub(crate) fn ray_diff(&self, (gx, gy): (u32, u32), u: Vec2, ray: &Ray) -> Option<crate::integrator::RayDiff> {
+        use crate::camera::Projection;
+        let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
+        let pos = (Vec2::new(gx as f32, gy as f32) + u) * inv;
+        let scale = 1.0 / (self.sampler.spp as f32).sqrt();
+        let c = &self.camera;
+        let (rx, ry) = match c.projection {
+            Projection::RadianceMeter => return None,
+            _ => (c.generate_ray(pos + Vec2::new(inv.x, 0.0)), c.generate_ray(pos + Vec2::new(0.0, inv.y))),
+        };
+        // Pinhole and thin lens: the offset rays share the ray's origin;
+        // orthographic: parallel rays from shifted origins.
+        let ortho = matches!(c.projection, Projection::Orthographic { .. });
+        let (o_x, d_x, o_y, d_y) = if ortho {
+            (rx.o, ray.d, ry.o, ray.d)
+        } else {
+            let centre = c.generate_ray(pos);
+            (ray.o, ray.d + (rx.d - centre.d), ray.o, ray.d + (ry.d - centre.d))
+        };
+        Some(crate::integrator::RayDiff {
+            o_x: ray.o + (o_x - ray.o) * scale,
+            d_x: ray.d + (d_x - ray.d) * scale,
+            o_y: ray.o + (o_y - ray.o) * scale,
+            d_y: ray.d + (d_y - ray.d) * scale,
+        })
+    }
+
     /// Splats sample `s` of pixel `p` (taken at `u` in the pixel, along
-    /// `ray`, with radiance `l`) into the tile's film with its AOVs.
+    /// `ray`, with radiance `l` and the integrator's output channels `ch`)
+    /// into the tile's film with its AOVs.
     /// Samples must come in pixel and sample-index order: the film's sums
     /// are then the same however the radiance was computed.
-    pub(crate) fn add_sample(&self, tile: &mut Tile, p: &TilePixel, s: u32, u: Vec2, ray: &Ray, l: Spectrum) {
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn add_sample(
+        &self,
+        tile: &mut Tile,
+        p: &TilePixel,
+        s: u32,
+        u: Vec2,
+        ray: &Ray,
+        l: Spectrum,
+        ch: &[f32],
+    ) {
         tile.stats.samples += 1;
         let l = l * self.camera.ray_weight();
         if !l.is_finite() {
@@ -284,8 +341,14 @@ impl RenderJob {
             return;
         }
         let (gx, gy) = p.global;
+        let kinds = tile.aov_values.len() - tile.film.channels.len();
+        if kinds < tile.aov_values.len() {
+            tile.aov_values[kinds..].copy_from_slice(ch);
+        }
         let aov = if tile.aov_values.is_empty() {
             None
+        } else if kinds == 0 {
+            Some(&tile.aov_values[..])
         } else {
             // Its own random numbers (a stream of a pixel no image has), so
             // the beauty is the same with or without AOVs.
@@ -298,7 +361,7 @@ impl RenderJob {
                 &mut aov_rng,
                 &tile.scratch,
             );
-            a.write(&tile.film.aov_kinds, &mut tile.aov_values);
+            a.write(&tile.film.aov_kinds, &mut tile.aov_values[..kinds]);
             Some(&tile.aov_values[..])
         };
         // The pixel's place in the tile film (margin included).

@@ -159,7 +159,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     // Splat in canonical order.
     for (k, r) in results.iter().enumerate() {
         let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
-        job.add_sample(tile, p, s, r.u, &r.ray, r.l);
+        job.add_sample(tile, p, s, r.u, &r.ray, r.l, &[]);
     }
 }
 

@@ -5,8 +5,8 @@ use super::{plugin, Plugins};
 use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
-    BruteForceIntegrator, DepthIntegrator, DirectIntegrator, HemisphereSampling, Integrator, PathIntegrator,
-    Termination, VolPathIntegrator,
+    AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, HemisphereSampling, Integrator,
+    MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -22,6 +22,9 @@ pub(super) const INTEGRATORS: &Plugins<BuildIntegrator> = &[
     ("volpath", volpath),
     ("volpathmis", volpath),
     ("depth", |_| Ok((Integrator::Depth(DepthIntegrator), LightSelection::Uniform))),
+    ("aov", aov),
+    ("moment", moment),
+    ("ptracer", ptracer),
 ];
 
 /// Termination parameters shared by `path` and `bruteforce`.
@@ -69,8 +72,97 @@ fn count(node: &Node, name: &str, default: i64) -> Result<u32> {
 /// Builds an integrator and the light-selection strategy it asks for.
 pub(super) fn build_integrator(node: &Node) -> Result<(Integrator, LightSelection)> {
     let result = plugin(INTEGRATORS, node)?(node)?;
-    node.check_all_used(&[])?;
+    let nests = matches!(result.0, Integrator::Aov(_) | Integrator::Moment(_));
+    node.check_all_used(if nests { &[Kind::Integrator] } else { &[] })?;
     Ok(result)
+}
+
+/// The nested integrators of `aov` and `moment`, named as Mitsuba names
+/// them (the `name` attribute, else `_arg_N` counting the unnamed ones),
+/// and the light selection the first one asks for.
+fn nested(node: &Node) -> Result<(Vec<(String, Integrator)>, LightSelection)> {
+    let mut out = Vec::new();
+    let mut selection = LightSelection::Uniform;
+    let mut unnamed = 0;
+    for c in node.children.iter().filter(|c| c.node.kind == Kind::Integrator) {
+        let name = c.name.clone().unwrap_or_else(|| {
+            unnamed += 1;
+            format!("_arg_{}", unnamed - 1)
+        });
+        let (integrator, sel) = build_integrator(&c.node)?;
+        if out.is_empty() {
+            selection = sel;
+        }
+        out.push((name, integrator));
+    }
+    Ok((out, selection))
+}
+
+/// Mitsuba `aov`: `aovs` (required) and nested integrators.
+fn aov(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let Some((spec, loc)) = node.get_string("aovs")? else {
+        return Err(LoadError::at(
+            &node.loc,
+            "aov: the parameter 'aovs' is required (e.g. \"dd.y:depth,nn:sh_normal\")",
+        ));
+    };
+    let loc = &loc;
+    let mut aovs = Vec::new();
+    // Mitsuba's string::tokenize: separated by commas and spaces.
+    for token in spec.split([',', ' ']).filter(|t| !t.is_empty()) {
+        let item: Vec<&str> = token.split(':').collect();
+        if item.len() != 2 || item[0].is_empty() || item[1].is_empty() {
+            return Err(LoadError::at(loc, format!("aovs: '{token}' is not a <name>:<type> pair")));
+        }
+        let Some(t) = AovType::from_name(item[1]) else {
+            let names: Vec<&str> = AovType::ALL.iter().map(|(n, _)| *n).collect();
+            return Err(LoadError::at(
+                loc,
+                format!("aovs: invalid AOV type '{}' in '{token}'; the types are {}", item[1], names.join(", ")),
+            ));
+        };
+        aovs.push((item[0].to_string(), t));
+    }
+    let (integrators, selection) = nested(node)?;
+    Ok((Integrator::Aov(Box::new(AovIntegrator { integrators, aovs })), selection))
+}
+
+/// Mitsuba `ptracer` (its `samples_per_pass` is checked against the sample
+/// count where the scene is assembled).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn ptracer(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let max_depth = node.int("max_depth", -1)?;
+    let rr_depth = node.int("rr_depth", 5)?;
+    if max_depth < -1 {
+        return Err(LoadError::at(node.loc_of("max_depth"), "max_depth must be -1 (unbounded) or >= 0"));
+    }
+    if rr_depth <= 0 {
+        return Err(LoadError::at(node.loc_of("rr_depth"), "rr_depth must be positive"));
+    }
+    let spp_pass = node.int("samples_per_pass", -1)?;
+    if spp_pass == 0 || spp_pass < -1 || spp_pass > u32::MAX as i64 {
+        return Err(LoadError::at(node.loc_of("samples_per_pass"), "samples_per_pass must be -1 (all) or positive"));
+    }
+    let term = Termination {
+        max_depth: if max_depth < 0 { u32::MAX } else { max_depth.min(u32::MAX as i64 - 1) as u32 },
+        rr_depth: rr_depth.min(u32::MAX as i64) as u32,
+        throughput_threshold: 0.0,
+    };
+    let pt = ParticleTracer {
+        term,
+        hide_emitters: node.bool("hide_emitters", false)?,
+        samples_per_pass: (spp_pass > 0).then_some(spp_pass as u32),
+    };
+    Ok((Integrator::PTracer(pt), LightSelection::Uniform))
+}
+
+/// Mitsuba `moment`: nested integrators only.
+fn moment(node: &Node) -> Result<(Integrator, LightSelection)> {
+    let (integrators, selection) = nested(node)?;
+    if integrators.is_empty() {
+        return Err(LoadError::at(&node.loc, "moment needs at least one nested integrator"));
+    }
+    Ok((Integrator::Moment(Box::new(MomentIntegrator { integrators })), selection))
 }
 
 fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
@@ -159,7 +251,7 @@ pub fn integrator_from_spec(spec: &str, scene_integrator: Option<&Node>) -> Resu
     }
     let accepts = |param: &str| match name {
         "direct" => param == "hide_emitters",
-        "depth" => false,
+        "depth" | "aov" | "moment" => false,
         _ => true,
     };
     if let Some(scene) = scene_integrator {

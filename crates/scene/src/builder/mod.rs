@@ -215,6 +215,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         Some(m) => Some(b.media.get(&m)?),
         None => None,
     };
+    let integrator_loc = integrator.as_ref().map_or_else(|| sensor.loc.clone(), |n| n.loc.clone());
     let (integrator, selection) = match (&ov.integrator, &integrator) {
         (Some(spec), scene_node) => build_integrator(&integrator_from_spec(spec, scene_node.as_deref())?)?,
         (None, Some(node)) => build_integrator(node)?,
@@ -239,6 +240,9 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     camera.set_scene_bounds(accel.bounds.min, accel.bounds.max);
     let lights = b.lights.into_iter().map(|light| light(radius)).collect();
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
+    if let Integrator::PTracer(pt) = &integrator {
+        check_ptracer(pt, &camera, sampler.spp, &integrator_loc)?;
+    }
     scene.set_light_selection(selection);
     if !b.media.media.is_empty() {
         let shape_media = if b.shape_media.iter().any(ShapeMedia::is_transition) { b.shape_media } else { Vec::new() };
@@ -257,6 +261,29 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         stream: true,
         packet_lanes: 0,
     })
+}
+
+/// What Penumbra's `ptracer` needs: a perspective or thin-lens camera and (as Mitsuba)
+/// a sample count that is a multiple of `samples_per_pass`.
+fn check_ptracer(
+    pt: &penumbra_render::integrator::ParticleTracer,
+    camera: &penumbra_render::camera::Camera,
+    spp: u32,
+    at: &crate::error::FileLoc,
+) -> Result<()> {
+    use penumbra_render::camera::Projection;
+    if !matches!(camera.projection, Projection::Pinhole | Projection::ThinLens { .. }) {
+        return Err(LoadError::at(at, "ptracer connects light paths to perspective and thinlens sensors only"));
+    }
+    if let Some(n) = pt.samples_per_pass {
+        if !spp.is_multiple_of(n) {
+            return Err(LoadError::at(
+                at,
+                format!("ptracer: sample_count ({spp}) must be a multiple of samples_per_pass ({n}), as in Mitsuba"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[derive(Default)]

@@ -286,7 +286,11 @@ fn placed_mesh(mut m: TriangleMesh, to_world: &DMat4, flip: bool) -> Result<Geom
 }
 
 fn rectangle(_: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
-    placed_mesh(TriangleMesh::rectangle(), to_world, flip)
+    let (mut shape, attributes) = placed_mesh(TriangleMesh::rectangle(), to_world, flip)?;
+    if let Shape::Mesh(m) = &mut shape {
+        m.rectangle = true;
+    }
+    Ok((shape, attributes))
 }
 
 fn cube(_: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {

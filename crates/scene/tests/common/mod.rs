@@ -170,7 +170,7 @@ pub fn estimate(width: u32, height: u32, imgs: &[Vec<[f32; 3]>]) -> Estimate {
 /// variances `va` and `vb` with `dfa` and `dfb` degrees of freedom: the
 /// standard normal deviate with the same tail probability as the Welch t
 /// statistic d / √(va + vb) under Welch–Satterthwaite's degrees of freedom.
-fn welch_z2(d: f64, va: f64, dfa: f64, vb: f64, dfb: f64) -> f64 {
+pub fn welch_z2(d: f64, va: f64, dfa: f64, vb: f64, dfb: f64) -> f64 {
     let v = va + vb;
     let df = (v * v / (va * va / dfa + vb * vb / dfb)).clamp(1.0, 1e6);
     let tail = StudentsT::new(0.0, 1.0, df).unwrap().sf(d.abs() / v.sqrt());

@@ -1,0 +1,87 @@
+//! The particle tracer's pass (Mitsuba `ptracer`): light paths splat
+//! anywhere on the film, so the pass is not split into image tiles but into
+//! rows of the full film, the row of pixel (x, y) tracing the particles of
+//! that pixel's samples (their random numbers come from its streams). Each
+//! row collects its splats in a list of its own; the lists are added to a
+//! pass film in row order, so the image is bitwise the same for any thread
+//! count, and the pass film joins the render's film whole (or, when
+//! cancelled, not at all). Every pixel's weight sum grows by the pass's
+//! sample count: the developed image is Σ splats / spp, additive over
+//! passes, checkpoints and parts like any other. A crop window traces the
+//! particles of the full film and keeps the splats that reach it, so it is
+//! exactly its part of the full image.
+
+use super::{RenderJob, RenderStats};
+use crate::film::Film;
+use crate::integrator::ptracer::{CameraConnection, ParticleTracer, Splat};
+use crate::material::Scratch;
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Rows of the full film traced in parallel before their splats are added
+/// (bounds the memory the splat lists take).
+const ROWS_PER_BATCH: u32 = 64;
+
+impl RenderJob {
+    /// Traces the particles of sample indices `samples` of every full-film
+    /// pixel and adds them to `film`; None when cancelled (film untouched).
+    pub(super) fn render_particles(
+        &self,
+        pt: &ParticleTracer,
+        film: &mut Film,
+        samples: Range<u32>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Option<RenderStats> {
+        let cam = CameraConnection::new(&self.camera, self.full_size)
+            .expect("ptracer needs a perspective or thin-lens camera (checked when the scene is loaded)");
+        let (fw, fh) = self.full_size;
+        let mut pass = Film::with_layers(film.width, film.height, &film.layers());
+        let mut stats = RenderStats::default();
+        let (ox, oy) = (self.crop_offset.0 as f32, self.crop_offset.1 as f32);
+        for first in (0..fh).step_by(ROWS_PER_BATCH as usize) {
+            let rows: Option<Vec<(Vec<Splat>, RenderStats)>> = (first..(first + ROWS_PER_BATCH).min(fh))
+                .into_par_iter()
+                .map(|gy| {
+                    if cancel.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                    let (mut out, mut st, mut scratch) = (Vec::new(), RenderStats::default(), Scratch::new());
+                    for gx in 0..fw {
+                        for s in samples.clone() {
+                            let mut rng = self.sampler.stream((gx, gy), s);
+                            pt.trace(&self.scene, &cam, &mut rng, &mut st.rays, &mut scratch, &mut out);
+                            st.samples += 1;
+                        }
+                    }
+                    progress(st.samples);
+                    Some((out, st))
+                })
+                .collect();
+            for (splats, st) in rows? {
+                for sp in splats {
+                    if !sp.value.is_finite() || !sp.pos.is_finite() {
+                        stats.non_finite += 1;
+                        continue;
+                    }
+                    // The pixel in the film (crop) and the offset in it.
+                    let (x, y) = (sp.pos.x - ox, sp.pos.y - oy);
+                    let (px, py) = (x.floor(), y.floor());
+                    let u = glam::Vec2::new(x - px, y - py);
+                    pass.splat_normalized(px as i32, py as i32, u, sp.value, &self.filter);
+                }
+                stats.add(&st);
+            }
+        }
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
+        let n = samples.len() as f64;
+        for a in &mut pass.acc {
+            a[3] += n;
+        }
+        film.merge(&pass);
+        Some(stats)
+    }
+}
