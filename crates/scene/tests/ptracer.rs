@@ -70,14 +70,16 @@ fn particle_tracer_through_a_thin_lens_matches_path() {
 }
 
 /// Emitters at infinity and delta emitters: an envmap with a bright sun
-/// (tests/scenes/ptracer_env.xml), and spot_light.xml's spot and
-/// directional lights, rendered by `ptracer` and by `path` (box filters:
+/// (tests/scenes/ptracer_env.xml), spot_light.xml's spot and directional
+/// lights, and area_texture.xml's textured area emitters, rendered by `ptracer` and by `path` (box filters:
 /// the whole images agree). Mitsuba 3.9.1's own `ptracer` is about 17 %
 /// brighter than its `path` on the envmap scene's ground, so the reference
 /// here is the path tracer, which matches Mitsuba's (references.rs).
 #[test]
-fn particle_tracer_with_emitters_at_infinity_and_delta_emitters_matches_path() {
-    for (name, integrator) in [("ptracer_env", None), ("spot_light", Some("ptracer"))] {
+fn particle_tracer_with_emitters_at_infinity_delta_and_textured_emitters_matches_path() {
+    for (name, integrator) in
+        [("ptracer_env", None), ("spot_light", Some("ptracer")), ("area_texture", Some("ptracer"))]
+    {
         let path_spec = if integrator.is_some() { None } else { Some("path") };
         let pt = estimate_inside(&named(name), 0, 4096, integrator, 5);
         let path = estimate_inside(&named(name), 0, 4096, path_spec, 6);
