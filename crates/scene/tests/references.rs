@@ -266,3 +266,11 @@ fn particle_tracer_matches_mitsuba() {
     // through the tent filter) against Mitsuba's `ptracer`.
     compare("ptracer_box", 256);
 }
+
+/// A Mitsuba 0.6 file (version 0.6.0: camelCase names, diffuseReflectance,
+/// a checkerboard's uoffset/voffset/uscale/vscale), upgraded in memory by
+/// both renderers: Mitsuba 3 renders the same old file for the reference.
+#[test]
+fn old_format_scene_matches_mitsuba() {
+    compare("old_format", 256);
+}
