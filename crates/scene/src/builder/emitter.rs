@@ -233,7 +233,7 @@ fn projector(node: &Node) -> Result<PendingLight> {
         _ => (1, 1),
     };
     let aspect = w as f32 / h as f32;
-    let (fov, axis) = super::sensor::fov_and_axis(node)?;
+    let (fov, axis) = super::fov::fov_and_axis(node)?;
     let tan_x = tan_half_x(fov as f32, axis, aspect);
     let tan_half = glam::Vec2::new(tan_x, tan_x / aspect);
     let light = ProjectorLight::new(to_world.as_mat4(), irradiance, scale as f32, tan_half);

@@ -6,6 +6,7 @@
 
 mod bsdf;
 mod emitter;
+mod fov;
 mod integrator;
 mod medium;
 mod multipart;
@@ -19,7 +20,6 @@ use integrator::build_integrator;
 pub use integrator::integrator_from_spec;
 use sensor::build_sensor;
 pub use sensor::SAMPLER_OVERRIDES;
-use shape::Geometry;
 use texture::Textures;
 
 use crate::desc::{Kind, Node, SceneDesc};
@@ -354,6 +354,10 @@ pub(crate) fn resolve(loc: &FileLoc, name: &str, what: &str) -> Result<PathBuf> 
     let searched: Vec<String> = dirs.iter().map(|d| format!("'{}'", d.display())).collect();
     Err(LoadError::at(loc, format!("{what} '{name}' not found (searched {})", searched.join(", "))))
 }
+
+/// A shape's geometry with its mesh attributes (PLY vertex colours and
+/// other properties; Mitsuba's `mesh_attribute` textures read them).
+pub(super) type Geometry = (penumbra_render::geometry::Shape, Vec<penumbra_render::texture::MeshAttributeData>);
 
 #[cfg(test)]
 mod tests {

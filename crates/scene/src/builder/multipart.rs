@@ -5,7 +5,7 @@
 //! 3.9.1 cannot sample points on the others ([`Shape::can_emit`]).
 
 use super::resolve;
-use super::shape::Geometry;
+use super::Geometry;
 use crate::desc::Node;
 use crate::error::{LoadError, Result};
 use crate::ply;

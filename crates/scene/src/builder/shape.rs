@@ -2,6 +2,7 @@
 //! meshes read from OBJ, PLY and Mitsuba `.serialized` files), each with its
 //! BSDF and optional area emitter, and Mitsuba's `shapegroup` / `instance`.
 
+use super::Geometry;
 use super::{emitter, find_plugin, multipart, plugin, resolve, Builder, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
@@ -14,7 +15,6 @@ use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
 use penumbra_render::scene::ShapeInfo;
 use penumbra_render::scene::ShapeMedia;
-use penumbra_render::texture::MeshAttributeData;
 use std::rc::Rc;
 use std::sync::Arc;
 
@@ -33,10 +33,6 @@ pub(super) enum ShapeBuilder {
     /// the image is the same.
     Merge,
 }
-
-/// A shape's geometry with its mesh attributes (PLY vertex colours and
-/// other properties; Mitsuba's `mesh_attribute` textures read them).
-pub(super) type Geometry = (Shape, Vec<MeshAttributeData>);
 
 pub(super) const SHAPES: &Plugins<ShapeBuilder> = &[
     ("rectangle", ShapeBuilder::Geometry(rectangle)),
