@@ -180,7 +180,7 @@ impl Microfacet {
         let cos2 = m.z * m.z;
         let r = match self.kind {
             MicrofacetType::Beckmann => {
-                (-((m.x / au).powi(2) + (m.y / av).powi(2)) / cos2).exp() / (PI * au * av * cos2 * cos2)
+                crate::simd::exp(-((m.x / au).powi(2) + (m.y / av).powi(2)) / cos2) / (PI * au * av * cos2 * cos2)
             }
             MicrofacetType::Ggx => 1.0 / (PI * au * av * ((m.x / au).powi(2) + (m.y / av).powi(2) + cos2).powi(2)),
         };

@@ -181,7 +181,7 @@ struct Gtr1 {
 impl Gtr1 {
     fn eval(&self, m: Vec3) -> f32 {
         let a2 = self.alpha * self.alpha;
-        let r = (a2 - 1.0) / (PI * a2.ln() * (1.0 + (a2 - 1.0) * m.z * m.z));
+        let r = (a2 - 1.0) / (PI * crate::simd::ln(a2) * (1.0 + (a2 - 1.0) * m.z * m.z));
         if r * m.z > 1e-20 {
             r
         } else {
@@ -198,7 +198,7 @@ impl Gtr1 {
     }
 
     fn sample(&self, u: Vec2) -> Vec3 {
-        let (sin_phi, cos_phi) = (2.0 * PI * u.x).sin_cos();
+        let (sin_phi, cos_phi) = crate::simd::sin_cos(2.0 * PI * u.x);
         let a2 = self.alpha * self.alpha;
         let cos2 = (1.0 - a2.powf(1.0 - u.y)) / (1.0 - a2);
         let sin_theta = (1.0 - cos2).max(0.0).sqrt();

@@ -158,7 +158,7 @@ impl Cylinder {
     /// Uniform point on the tube: (point, front normal, density per unit area),
     /// with Mitsuba's mapping (φ = 2π u.y, z = u.x).
     pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3, f32) {
-        let (s, c) = (2.0 * PI * u.y).sin_cos();
+        let (s, c) = crate::simd::sin_cos(2.0 * PI * u.y);
         let p = self.to_world.transform_point3(Vec3::new(c, s, u.x));
         let dpdu = self.to_world.transform_vector3(Vec3::new(-s, c, 0.0));
         let dpdv = self.to_world.transform_vector3(Vec3::Z);

@@ -127,8 +127,8 @@ impl Sphere {
         // Angle alpha at the sphere centre between -wc and the sampled point.
         let cos_alpha = sin2_t / sin_max + cos_t * safe_sqrt(1.0 - sin2_t / sin2_max);
         let sin_alpha = safe_sqrt(1.0 - cos_alpha * cos_alpha);
-        let phi = u.y * 2.0 * PI;
-        let w = Vec3::new(sin_alpha * phi.cos(), sin_alpha * phi.sin(), cos_alpha);
+        let (sin_phi, cos_phi) = crate::simd::sin_cos(u.y * 2.0 * PI);
+        let w = Vec3::new(sin_alpha * cos_phi, sin_alpha * sin_phi, cos_alpha);
         let frame = Frame::from_normal((center - p_ref).normalize());
         let nd = frame.to_world(-w);
         let p = center + nd * radius;

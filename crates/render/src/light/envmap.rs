@@ -183,7 +183,7 @@ impl EnvMapLight {
         let (c0, c1) = (self.cos_theta[r], self.cos_theta[r + 1]);
         let cos_t = (c0 + (y - r as f32) * (c1 - c0)).clamp(-1.0, 1.0);
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let (sin_p, cos_p) = ((p.x + 0.5 / self.width as f32) * (2.0 * PI)).sin_cos();
+        let (sin_p, cos_p) = crate::simd::sin_cos((p.x + 0.5 / self.width as f32) * (2.0 * PI));
         let w = self.world_from_light * Vec3::new(sin_p * sin_t, cos_t, -cos_p * sin_t);
         let len = w.length();
         let wi = w / len;

@@ -14,7 +14,7 @@
 use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
 use crate::geometry::Aabb;
-use crate::math::{luminance, safe_acos, Mat3, Mat4, Spectrum, PI};
+use crate::math::{luminance, Mat3, Mat4, Spectrum, PI};
 use crate::texture::Bitmap;
 use glam::Vec3;
 use std::sync::Arc;
@@ -62,7 +62,7 @@ impl SpotLight {
         } else if cos_theta >= self.cos_beam {
             1.0
         } else {
-            (self.cutoff - safe_acos(cos_theta)) * self.inv_transition
+            (self.cutoff - crate::simd::acos(cos_theta)) * self.inv_transition
         }
     }
 

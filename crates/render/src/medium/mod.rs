@@ -105,7 +105,7 @@ fn clip(b: &Aabb, o: Vec3, d: Vec3, t_end: f32) -> Option<(f32, f32)> {
 /// e^{−σ t}, with e^{−0 · ∞} = 1.
 #[inline]
 fn tr(sigma: Spectrum, t: f32) -> Spectrum {
-    let f = |s: f32| if s == 0.0 { 1.0 } else { (-s * t).exp() };
+    let f = |s: f32| if s == 0.0 { 1.0 } else { crate::simd::exp(-s * t) };
     Spectrum::new(f(sigma.x), f(sigma.y), f(sigma.z))
 }
 
@@ -125,7 +125,7 @@ pub const MAX_TRACKING_STEPS: u32 = 1 << 20;
 #[inline]
 fn exp_step(sigma: f32, u: f32) -> f32 {
     if sigma > 0.0 {
-        -(1.0 - u).ln() / sigma
+        -crate::simd::ln(1.0 - u) / sigma
     } else {
         f32::INFINITY
     }

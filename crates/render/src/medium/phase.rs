@@ -81,8 +81,8 @@ impl PhaseFunction {
                     ((1.0 + g * g - sqr * sqr) / (2.0 * g)).clamp(-1.0, 1.0)
                 };
                 let sin = safe_sqrt(1.0 - cos * cos);
-                let phi = 2.0 * PI * u2.y;
-                Frame::from_normal(wi).to_world(Vec3::new(sin * phi.cos(), sin * phi.sin(), -cos))
+                let (sin_phi, cos_phi) = crate::simd::sin_cos(2.0 * PI * u2.y);
+                Frame::from_normal(wi).to_world(Vec3::new(sin * cos_phi, sin * sin_phi, -cos))
             }
             PhaseFunction::Blend { weight, first, second } => {
                 // The second component when u < weight, its number rescaled.

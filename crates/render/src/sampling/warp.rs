@@ -1,7 +1,10 @@
 //! Warps from the unit square to disks, hemispheres, spheres, cones and
 //! triangles, with their densities. Chi-square tests live in `testing::chi2`.
+//! Angles go through [`crate::simd::sin_cos`], whose lanes are bitwise its
+//! scalar value, so SIMD kernels built on these warps match them.
 
 use crate::math::{safe_sqrt, INV_4PI, INV_PI, PI};
+use crate::simd::sin_cos;
 use glam::{Vec2, Vec3};
 
 /// Shirley–Chiu concentric map onto the unit disk (uniform in area).
@@ -16,7 +19,8 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     } else {
         (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
     };
-    r * Vec2::new(theta.cos(), theta.sin())
+    let (s, c) = sin_cos(theta);
+    r * Vec2::new(c, s)
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method); density cos θ / π
@@ -38,8 +42,8 @@ pub fn cosine_hemisphere_pdf(w: Vec3) -> f32 {
 pub fn sample_uniform_hemisphere(u: Vec2) -> Vec3 {
     let z = u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (s, c) = sin_cos(2.0 * PI * u.y);
+    Vec3::new(r * c, r * s, z)
 }
 
 /// Uniform direction on the unit sphere; density 1 / (4π).
@@ -47,8 +51,8 @@ pub fn sample_uniform_hemisphere(u: Vec2) -> Vec3 {
 pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
     let z = 1.0 - 2.0 * u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (s, c) = sin_cos(2.0 * PI * u.y);
+    Vec3::new(r * c, r * s, z)
 }
 
 /// Solid-angle density of [`sample_uniform_sphere`]: 1 / (4π).
@@ -63,8 +67,8 @@ pub fn uniform_sphere_pdf() -> f32 {
 pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     let cos_t = (1.0 - cos_max).mul_add(-u.x, 1.0);
     let sin_t = safe_sqrt(1.0 - cos_t * cos_t);
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+    let (s, c) = sin_cos(2.0 * PI * u.y);
+    Vec3::new(sin_t * c, sin_t * s, cos_t)
 }
 
 /// Solid-angle density of [`sample_uniform_cone`] inside the cone: 1 / (2π (1 - cos_max)).
