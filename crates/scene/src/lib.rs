@@ -10,6 +10,7 @@ pub mod error;
 pub mod image_io;
 pub mod mitsuba;
 pub mod obj;
+pub mod pbrt;
 pub mod ply;
 pub mod props;
 pub mod serialized;

@@ -1,0 +1,182 @@
+//! pbrt-v4's tokens: quoted strings (with C escapes), `[`, `]`, and bare
+//! words (directives, numbers, `true`/`false`), separated by whitespace;
+//! `#` starts a comment to the end of the line. Every token keeps its line
+//! and column.
+
+use crate::error::{FileLoc, LoadError, Result};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What a token is.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Tok {
+    /// A quoted string, escapes resolved.
+    Str(String),
+    /// `[`
+    Open,
+    /// `]`
+    Close,
+    /// Anything else: a directive name, a number, `true` or `false`.
+    Word(String),
+}
+
+/// A token and where it starts.
+#[derive(Debug, Clone)]
+pub struct Token {
+    /// The token.
+    pub tok: Tok,
+    /// Its first character's line and column.
+    pub loc: FileLoc,
+}
+
+/// Splits one file's text into tokens.
+pub struct Lexer<'a> {
+    text: &'a [u8],
+    pos: usize,
+    line: u32,
+    line_start: usize,
+    file: Arc<PathBuf>,
+}
+
+impl<'a> Lexer<'a> {
+    /// A lexer over `text`, the contents of `file`.
+    pub fn new(text: &'a str, file: Arc<PathBuf>) -> Self {
+        Lexer { text: text.as_bytes(), pos: 0, line: 1, line_start: 0, file }
+    }
+
+    fn loc(&self, pos: usize) -> FileLoc {
+        // Columns count characters, not bytes.
+        let col = String::from_utf8_lossy(&self.text[self.line_start..pos]).chars().count() as u32 + 1;
+        FileLoc::new(self.file.clone(), self.line, col)
+    }
+
+    /// The next token, `None` at the end of the file.
+    pub fn next_token(&mut self) -> Result<Option<Token>> {
+        // Whitespace and comments.
+        while self.pos < self.text.len() {
+            match self.text[self.pos] {
+                b'\n' => {
+                    self.pos += 1;
+                    self.line += 1;
+                    self.line_start = self.pos;
+                }
+                b' ' | b'\t' | b'\r' => self.pos += 1,
+                b'#' => {
+                    while self.pos < self.text.len() && self.text[self.pos] != b'\n' {
+                        self.pos += 1;
+                    }
+                }
+                _ => break,
+            }
+        }
+        if self.pos >= self.text.len() {
+            return Ok(None);
+        }
+        let start = self.pos;
+        let loc = self.loc(start);
+        let tok = match self.text[start] {
+            b'[' => {
+                self.pos += 1;
+                Tok::Open
+            }
+            b']' => {
+                self.pos += 1;
+                Tok::Close
+            }
+            b'"' => {
+                self.pos += 1;
+                let mut s = Vec::new();
+                loop {
+                    let Some(&c) = self.text.get(self.pos) else {
+                        return Err(LoadError::at(&loc, "unterminated string: add the closing '\"'"));
+                    };
+                    self.pos += 1;
+                    match c {
+                        b'"' => break,
+                        b'\n' => return Err(LoadError::at(
+                            &loc,
+                            "a string runs to the end of its line: add the closing '\"' (strings may not span lines)",
+                        )),
+                        b'\\' => {
+                            let Some(&e) = self.text.get(self.pos) else {
+                                return Err(LoadError::at(&loc, "unterminated string: add the closing '\"'"));
+                            };
+                            self.pos += 1;
+                            s.push(match e {
+                                b'b' => 8,
+                                b'f' => 12,
+                                b'n' => b'\n',
+                                b'r' => b'\r',
+                                b't' => b'\t',
+                                b'\\' => b'\\',
+                                b'\'' => b'\'',
+                                b'"' => b'"',
+                                other => {
+                                    let at = self.loc(self.pos - 2);
+                                    return Err(LoadError::at(
+                                        &at,
+                                        format!("unknown escape '\\{}' in a string", other as char),
+                                    ));
+                                }
+                            });
+                        }
+                        c => s.push(c),
+                    }
+                }
+                // The file is UTF-8 (checked when read), and escapes are ASCII.
+                Tok::Str(String::from_utf8_lossy(&s).into_owned())
+            }
+            _ => {
+                while self.pos < self.text.len()
+                    && !matches!(self.text[self.pos], b' ' | b'\t' | b'\r' | b'\n' | b'"' | b'[' | b']' | b'#')
+                {
+                    self.pos += 1;
+                }
+                Tok::Word(String::from_utf8_lossy(&self.text[start..self.pos]).into_owned())
+            }
+        };
+        Ok(Some(Token { tok, loc }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lex(s: &str) -> Result<Vec<(Tok, u32, u32)>> {
+        let mut l = Lexer::new(s, Arc::new(PathBuf::from("t.pbrt")));
+        let mut v = Vec::new();
+        while let Some(t) = l.next_token()? {
+            v.push((t.tok, t.loc.line, t.loc.col));
+        }
+        Ok(v)
+    }
+
+    #[test]
+    fn tokens_with_positions() {
+        let v = lex("Shape \"sphere\" # c\n  \"float radius\" [2.5]\n\"string s\" \"a\\\"b\\n\"").unwrap();
+        assert_eq!(
+            v,
+            vec![
+                (Tok::Word("Shape".into()), 1, 1),
+                (Tok::Str("sphere".into()), 1, 7),
+                (Tok::Str("float radius".into()), 2, 3),
+                (Tok::Open, 2, 18),
+                (Tok::Word("2.5".into()), 2, 19),
+                (Tok::Close, 2, 22),
+                (Tok::Str("string s".into()), 3, 1),
+                (Tok::Str("a\"b\n".into()), 3, 12),
+            ]
+        );
+    }
+
+    #[test]
+    fn bad_strings_are_errors_with_positions() {
+        let e = lex("Shape \"sphere").unwrap_err().to_string();
+        assert!(e.contains("t.pbrt:1:7") && e.contains("unterminated"), "{e}");
+        let e = lex("A\n  \"x\ny\"").unwrap_err().to_string();
+        assert!(e.contains("t.pbrt:2:3") && e.contains("end of its line"), "{e}");
+        let e = lex("\"a\\q\"").unwrap_err().to_string();
+        assert!(e.contains("t.pbrt:1:3") && e.contains("\\q"), "{e}");
+    }
+}
