@@ -26,6 +26,7 @@ pub mod constant;
 pub mod directional;
 pub mod directionalarea;
 pub mod envmap;
+pub mod equal_area;
 pub mod point;
 pub mod projector;
 pub mod sampler;
@@ -37,6 +38,7 @@ pub use constant::ConstantLight;
 pub use directional::DirectionalLight;
 pub use directionalarea::DirectionalAreaLight;
 pub use envmap::EnvMapLight;
+pub use equal_area::EqualAreaEnvLight;
 pub use point::PointLight;
 pub use projector::ProjectorLight;
 pub use sampler::{LightSampler, LightSelection};
@@ -76,6 +78,9 @@ pub enum Light {
     Directional(DirectionalLight),
     /// `envmap`: radiance at infinity from a latitude-longitude image.
     EnvMap(EnvMapLight),
+    /// pbrt-v4 `infinite` with an image: radiance at infinity from a square
+    /// equal-area octahedral image.
+    EqualAreaEnv(EqualAreaEnvLight),
     /// `projector`: an image projected from a point (delta in position).
     Projector(ProjectorLight),
     /// `directionalarea`: emission along a shape's normals (delta in
@@ -93,6 +98,7 @@ impl Light {
             Light::Spot(_) => "spot",
             Light::Directional(_) => "directional",
             Light::EnvMap(_) => "envmap",
+            Light::EqualAreaEnv(_) => "infinite",
             Light::Projector(_) => "projector",
             Light::DirectionalArea(_) => "directionalarea",
         }
@@ -108,6 +114,7 @@ impl Light {
             Light::Spot(s) => s.sample_li(p_ref),
             Light::Directional(d) => d.sample_li(),
             Light::EnvMap(e) => e.sample_li(u2),
+            Light::EqualAreaEnv(e) => e.sample_li(u2),
             Light::Projector(p) => p.sample_li(p_ref),
             Light::DirectionalArea(d) => d.sample_li(),
         }
@@ -123,6 +130,7 @@ impl Light {
             Light::Area(a) => hit.map_or(0.0, |hit| a.pdf_li(p_ref, hit, &shapes[a.shape as usize])),
             Light::Constant(c) => c.pdf(),
             Light::EnvMap(e) => e.pdf(wi),
+            Light::EqualAreaEnv(e) => e.pdf(wi),
             Light::Point(_)
             | Light::Spot(_)
             | Light::Directional(_)
@@ -136,7 +144,7 @@ impl Light {
     /// a delta that no ray hits).
     pub fn is_environment(&self) -> bool {
         match self {
-            Light::Constant(_) | Light::EnvMap(_) => true,
+            Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) => true,
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -154,6 +162,7 @@ impl Light {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
+            Light::EqualAreaEnv(e) => e.eval_pdf(wi),
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -170,6 +179,7 @@ impl Light {
         match self {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
+            Light::EqualAreaEnv(e) => e.eval(wi),
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -188,7 +198,7 @@ impl Light {
             | Light::Directional(_)
             | Light::Projector(_)
             | Light::DirectionalArea(_) => true,
-            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) => false,
+            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) => false,
         }
     }
 
@@ -203,6 +213,7 @@ impl Light {
             Light::Spot(s) => s.power(),
             Light::Directional(d) => d.power(),
             Light::EnvMap(e) => e.power(scene_radius),
+            Light::EqualAreaEnv(e) => e.power(scene_radius),
             Light::Projector(p) => p.power(),
             // No weight for a light no sample can reach (see directionalarea.rs).
             Light::DirectionalArea(_) => Spectrum::ZERO,
@@ -220,7 +231,7 @@ impl Light {
             Light::Spot(s) => Some(s.bounds()),
             Light::Projector(p) => Some(p.bounds()),
             Light::DirectionalArea(d) => Some(d.bounds(&shapes[d.shape as usize])),
-            Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => None,
+            Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) | Light::Directional(_) => None,
         }
     }
 }
@@ -245,6 +256,15 @@ mod tests {
             Light::Area(AreaLight { shape: 1, radiance: Spectrum::ONE.into() }),
             Light::Constant(ConstantLight { radiance: Spectrum::splat(0.5) }),
             Light::EnvMap(EnvMapLight::new(8, 5, texels, Mat4::from_rotation_y(0.3), 1.0).unwrap()),
+            Light::EqualAreaEnv(
+                EqualAreaEnvLight::new(
+                    4,
+                    (0..16).map(|k| [0.2 + k as f32, 1.0, 0.1]).collect(),
+                    Mat4::from_rotation_x(0.4),
+                    0.5,
+                )
+                .unwrap(),
+            ),
             Light::Point(PointLight { position: Vec3::new(0.0, 2.0, 1.0), intensity: Spectrum::ONE }),
             Light::Spot(SpotLight::new(Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)), Spectrum::ONE, 60.0, 30.0)),
             Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Spectrum::ONE, scene_radius: 3.0 }),
@@ -266,7 +286,10 @@ mod tests {
     #[test]
     fn names_are_mitsubas_plugins() {
         let names: Vec<&str> = every_light().lights.iter().map(Light::name).collect();
-        assert_eq!(names, ["area", "area", "constant", "envmap", "point", "spot", "directional", "projector"]);
+        assert_eq!(
+            names,
+            ["area", "area", "constant", "envmap", "infinite", "point", "spot", "directional", "projector"]
+        );
     }
 
     /// `pdf_li` is the density `sample_li` reports (at the emitter point the
@@ -276,7 +299,7 @@ mod tests {
     fn pdf_li_is_the_sampled_density() {
         let scene = every_light();
         let p_ref = Vec3::new(0.1, 0.2, 0.3);
-        let mut checked = [0usize; 8];
+        let mut checked = [0usize; 9];
         for (i, light) in scene.lights.iter().enumerate() {
             for k in 0..256 {
                 let u = Vec2::new((k % 16) as f32 + 0.5, (k / 16) as f32 + 0.5) / 16.0;
@@ -312,7 +335,8 @@ mod tests {
         let scene = every_light();
         for light in &scene.lights {
             let b = light.bounds(&scene.shapes);
-            let at_infinity = matches!(light, Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_));
+            let at_infinity =
+                matches!(light, Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) | Light::Directional(_));
             assert_eq!(b.is_none(), at_infinity, "{}", light.name());
             if let Some(b) = b {
                 assert!(b.emits(), "{}", light.name());

@@ -85,9 +85,73 @@ pub fn sample_uniform_triangle(u: Vec2) -> Vec2 {
     Vec2::new(1.0 - su, u.y * su)
 }
 
+/// Clarberg's equal-area octahedral map from the unit square to the unit
+/// sphere, as pbrt-v4 defines it (`EqualAreaSquareToSphere`): every region
+/// of the square maps to a region of the sphere with 4π times its area, so
+/// a uniform point gives a uniform direction (density 1/(4π)).
+#[inline]
+pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
+    let (u, v) = (2.0 * p.x - 1.0, 2.0 * p.y - 1.0);
+    let (up, vp) = (u.abs(), v.abs());
+    // Signed distance from the square's diagonal |u| + |v| = 1: positive
+    // inside (the upper hemisphere), negative in the folded corners.
+    let signed_distance = 1.0 - (up + vp);
+    let r = 1.0 - signed_distance.abs();
+    let phi = (if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 }) * (PI / 4.0);
+    let z = (1.0 - r * r).copysign(signed_distance);
+    let (s, c) = sin_cos(phi);
+    let k = r * safe_sqrt(2.0 - r * r);
+    Vec3::new(c.copysign(u) * k, s.copysign(v) * k, z)
+}
+
+/// The inverse of [`equal_area_square_to_sphere`] for a unit vector `d`
+/// (pbrt-v4's `EqualAreaSphereToSquare`).
+#[inline]
+pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
+    let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
+    let r = safe_sqrt(1.0 - z);
+    let (a, b) = (x.max(y), x.min(y));
+    let b = if a == 0.0 { 0.0 } else { b / a };
+    let mut phi = crate::simd::atan(b) * (2.0 / PI);
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d.z < 0.0 {
+        (u, v) = (1.0 - v, 1.0 - u);
+    }
+    Vec2::new((u.copysign(d.x) + 1.0) * 0.5, (v.copysign(d.y) + 1.0) * 0.5)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn equal_area_maps_invert_each_other_and_keep_area() {
+        let n = 200;
+        for i in 0..=n {
+            for j in 0..=n {
+                let p = Vec2::new(i as f32 / n as f32, j as f32 / n as f32);
+                let d = equal_area_square_to_sphere(p);
+                assert!((d.length() - 1.0).abs() < 2e-6, "{p} -> {d}");
+                let q = equal_area_sphere_to_square(d);
+                // The square's boundary is folded (opposite edge halves meet), so
+                // compare directions there.
+                let back = equal_area_square_to_sphere(q);
+                assert!((back - d).length() < 2e-5, "{p} -> {d} -> {q} -> {back}");
+                if i > 0 && i < n && j > 0 && j < n {
+                    assert!((q - p).length() < 2e-5, "{p} -> {d} -> {q}");
+                }
+            }
+        }
+        // Known points: the centre is +z, the corners are -z, edge midpoints lie on the equator.
+        assert!((equal_area_square_to_sphere(Vec2::splat(0.5)) - Vec3::Z).length() < 1e-6);
+        assert!((equal_area_square_to_sphere(Vec2::ZERO) + Vec3::Z).length() < 1e-6);
+        assert!((equal_area_square_to_sphere(Vec2::new(1.0, 0.5)) - Vec3::X).length() < 1e-6);
+        assert!((equal_area_square_to_sphere(Vec2::new(0.5, 1.0)) - Vec3::Y).length() < 1e-6);
+    }
 
     #[test]
     fn disk_and_hemisphere_stay_in_domain() {

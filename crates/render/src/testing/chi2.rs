@@ -184,6 +184,10 @@ mod tests {
             |w| if w.z >= cm { warp::uniform_cone_pdf(cm) as f64 } else { 0.0 },
         );
         assert!(p > a, "cone p = {p}");
+        // Equal-area: uniform on the square gives uniform directions.
+        let p =
+            chi2_test(N, 5, |_, u| Some(warp::equal_area_square_to_sphere(u)), |_| warp::uniform_sphere_pdf() as f64);
+        assert!(p > a, "equal-area octahedral map p = {p}");
         // A deliberately wrong pdf must be rejected: the test can fail.
         let p = chi2_test(
             N,
