@@ -7,6 +7,7 @@ pub mod cylinder;
 pub mod disk;
 pub mod ellipsoids;
 pub mod interaction;
+pub mod loop_subdiv;
 pub mod mesh;
 pub mod ray;
 pub mod sdfgrid;
