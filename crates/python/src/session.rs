@@ -60,8 +60,10 @@ pub fn render<'py>(
     }
     let ov = Overrides { spp, seed: Some(seed), integrator: integrator.clone(), sampler: None };
     let job = scene.job(&ov).map_err(|e| load_error(py, &e))?;
-    let layers = penumbra::layers::parse(&aovs.join(",")).map_err(anyhow_error)?;
-    if matches!(job.integrator, penumbra_render::integrator::Integrator::PTracer(_)) && layers != Default::default() {
+    let mut layers = penumbra::layers::parse(&aovs.join(",")).map_err(anyhow_error)?;
+    // The integrator's own output channels (`aov`, `moment`), as the command line's EXR layers.
+    layers.channels = job.integrator.channel_names();
+    if matches!(job.integrator, penumbra_render::integrator::Integrator::PTracer(_)) && !aovs.is_empty() {
         return Err(error("ptracer: aovs need per-pixel samples, which a particle tracer's splats are not"));
     }
     let pool = penumbra::thread_pool(threads).map_err(anyhow_error)?;
@@ -199,6 +201,21 @@ pub fn render<'py>(
     }
     if let Some(v) = film.develop_variance() {
         out.set_item(penumbra::layers::VARIANCE, array(py, v.into_iter().flatten().collect(), h, w, 3)?)?;
+    }
+    // Integrator channels "name.C": one array per name, channels in the integrator's order.
+    let mut groups: Vec<(&str, Vec<usize>)> = Vec::new();
+    for (c, name) in film.channels.iter().enumerate() {
+        let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l);
+        match groups.iter_mut().find(|(l, _)| *l == layer) {
+            Some((_, list)) => list.push(c),
+            None => groups.push((layer, vec![c])),
+        }
+    }
+    for (layer, list) in groups {
+        let planes: Vec<Vec<f32>> = list.iter().map(|&c| film.develop_channel(c)).collect();
+        let n = (w * h) as usize;
+        let v: Vec<f32> = (0..n).flat_map(|i| planes.iter().map(move |p| p[i])).collect();
+        out.set_item(layer, array(py, v, h, w, list.len())?)?;
     }
     Ok(out)
 }

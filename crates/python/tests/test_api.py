@@ -48,6 +48,20 @@ def test_aovs_are_the_command_line_layers(cli, cbox, tmp_path):
     assert ref["metadata"]["spp"] == "4"
 
 
+def test_integrator_channels_are_the_command_line_layers(cli, tmp_path):
+    scenes = os.path.join(os.path.dirname(__file__), "..", "..", "..", "tests", "scenes")
+    for name, spp in (("aov_channels.xml", 2), ("moment_cbox.xml", 2)):
+        path = os.path.join(scenes, name)
+        out = tmp_path / (name + ".exr")
+        run_cli(cli, path, "--spp", spp, "-o", out)
+        got = penumbra.render(penumbra.load_file(path), spp=spp, progress=False)
+        ref = penumbra.read(out, metadata=True)
+        assert isinstance(got, dict) and len(got) > 1, name
+        assert set(got) == set(ref) - {"metadata"}, (name, set(got), set(ref))
+        for k in got:
+            assert np.array_equal(bits(got[k]), bits(ref[k])), (name, k)
+
+
 def test_integrator_and_threads(cli, cbox, tmp_path):
     out = tmp_path / "cli.exr"
     run_cli(cli, cbox, "-D", "res=24", "--spp", 3, "--integrator", "direct:emitter_samples=2", "--threads", 1, "-o", out)

@@ -59,7 +59,9 @@ def render(
     - ``integrator``: ``"path"``, ``"direct:emitter_samples=4"``, ... (as ``--integrator``).
     - ``aovs``: extra layers (``"albedo"``, ``"normal"``, ``"depth"``,
       ``"position"``, ``"variance"``): then a dict ``{"image": ..., "albedo": ...}``
-      is returned, each (height, width, channels).
+      is returned, each (height, width, channels). Integrators with output
+      channels of their own (``aov``, ``moment``) also return such a dict, with
+      one array per layer as the command line's EXR names them (``"dd.y"``, ...).
     - ``progress``: ``True`` for a progress bar (tqdm if installed), ``False`` for
       none, or a callable ``f(done, total)``.
     - ``checkpoint``: a file to resume from (if it belongs to this render); it is
@@ -97,7 +99,7 @@ def render(
     finally:
         if bar is not None:
             bar.close()
-    return out if aovs else out["image"]
+    return out if aovs or len(out) > 1 else out["image"]
 
 
 def read(path, metadata=False):
