@@ -274,6 +274,45 @@ impl TensorFile {
     }
 }
 
+/// The tables of an RGB `.bsdf` file for the `measured` BSDF, with the
+/// element types and dimension counts Mitsuba 3.9.1 requires (the shapes
+/// are checked by `Measured::new`). Spectral files (a `wavelengths` field)
+/// are refused, as Mitsuba's RGB variants refuse them.
+pub fn measured_tables(t: &TensorFile) -> Result<penumbra_render::bsdf::measured::MeasuredTables, String> {
+    if t.field("wavelengths").is_some() {
+        return Err("the file holds spectral measurements ('wavelengths'); Mitsuba renders them only in spectral variants, Penumbra not at all".into());
+    }
+    let get = |name: &str| t.field(name).ok_or_else(|| format!("the file has no field '{name}'"));
+    let f32s = |name: &str, ndim: usize| -> Result<(Vec<f32>, Vec<usize>), String> {
+        let f = get(name)?;
+        if f.shape.len() != ndim {
+            return Err(format!("field '{name}' has {} dimensions, not {ndim}", f.shape.len()));
+        }
+        // Sizes fit in the file (checked by `parse`), hence in usize.
+        Ok((t.f32_data(f)?, f.shape.iter().map(|&s| s as usize).collect()))
+    };
+    let desc = get("description")?;
+    if desc.shape.len() != 1 {
+        return Err("field 'description' must have one dimension".into());
+    }
+    t.u8_data(desc)?;
+    let jac = get("jacobian")?;
+    let jacobian = t.u8_data(jac)?;
+    if jac.shape != [1] {
+        return Err("field 'jacobian' must hold one value".into());
+    }
+    Ok(penumbra_render::bsdf::measured::MeasuredTables {
+        theta_i: f32s("theta_i", 1)?.0,
+        phi_i: f32s("phi_i", 1)?.0,
+        ndf: f32s("ndf", 2)?,
+        sigma: f32s("sigma", 2)?,
+        vndf: f32s("vndf", 4)?,
+        luminance: f32s("luminance", 4)?,
+        rgb: f32s("rgb", 5)?,
+        jacobian: jacobian[0] != 0,
+    })
+}
+
 /// Writes a tensor file's bytes as `mitsuba.tensor_io.write` does (data
 /// aligned to 8 bytes, in the order given); for tests and tools.
 pub fn write(fields: &[(&str, Dtype, &[u64], &[u8])]) -> Vec<u8> {

@@ -22,6 +22,7 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
 pub mod hair;
+pub mod measured;
 pub mod microfacet;
 pub mod plastic;
 pub mod pplastic;

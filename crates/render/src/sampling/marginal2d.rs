@@ -61,8 +61,10 @@ impl Marginal2D {
         if Some(data.len()) != slices.checked_mul(n_data) {
             return Err(format!("{} values, but {slices} slice(s) of {w} x {h} need {}", data.len(), slices * n_data));
         }
-        if let Some(i) = data.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-            return Err(format!("value {i} is {}; densities must be finite and not negative", data[i]));
+        // Negative values (measurement noise in interpolated-only tables)
+        // are kept, as Mitsuba keeps them; sampling clamps its roots.
+        if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+            return Err(format!("value {i} is {}; values must be finite", data[i]));
         }
         let (n_marg, n_cond) = (h - 1, (w - 1) * h);
         let (scale_x, scale_y) = (0.5 / (w - 1) as f64, 0.5 / (h - 1) as f64);
@@ -416,6 +418,5 @@ mod tests {
         assert!(Marginal2D::new(&[1.0; 4], 2, 2, vec![vec![0.0, 1.0]], true).is_err());
         assert!(Marginal2D::new(&[1.0; 8], 2, 2, vec![vec![1.0, 0.0]], true).is_err());
         assert!(Marginal2D::new(&[1.0, f32::NAN, 1.0, 1.0], 2, 2, vec![], true).is_err());
-        assert!(Marginal2D::new(&[1.0, -1.0, 1.0, 1.0], 2, 2, vec![], true).is_err());
     }
 }
