@@ -10,7 +10,10 @@
 //! the VNDF, as with `MI_SAMPLE_LUMINANCE = 1`, `MI_SAMPLE_DIFFUSE = 0`.
 //! Files whose `phi_i` spans a half or a quarter turn are mirrored into
 //! that range (`m_reduction` 2 or 4); `phi_i` of one or two values marks
-//! an isotropic material.
+//! an isotropic material, which is never mirrored. (Mitsuba 3.9.1 leaves
+//! `m_reduction` unset for those, mitsuba3 pull request #1850, and may
+//! mirror them by chance; that changes only the σ(φ_i) lookup, which an
+//! isotropic material's σ does not depend on.)
 //!
 //! Directions here are Mitsuba's: `wi` towards the viewer, `wo` sampled.
 //!
@@ -274,9 +277,13 @@ mod tests {
                     * (1.0 + 0.3 * (2.0 * std::f64::consts::PI * i(k[0]) / hf).cos())
             }),
             sigma: table(&[h, w], |k| 0.5 + 0.4 * (i(k[1]) / wf) + 0.05 * (3.0 * i(k[0]) / hf).sin()),
+            // Zero at θ_m = 0, as a measured VNDF in the warped domain is
+            // (its density in u_m carries the Jacobian 2π² u sin θ_m).
             vndf: table(&[p, t, h, w], |k| {
-                0.1 + (-3.0 * (i(k[3]) / wf - 0.2 * i(k[1]) / tf).powi(2)).exp()
-                    * (1.2 + (i(k[2]) * 0.7 + i(k[0])).sin())
+                i(k[3]) / wf
+                    * (0.1
+                        + (-3.0 * (i(k[3]) / wf - 0.2 * i(k[1]) / tf).powi(2)).exp()
+                            * (1.2 + (i(k[2]) * 0.7 + i(k[0])).sin()))
             }),
             luminance: table(&[p, t, n, n], |k| lum(i(k[0]), i(k[1]), i(k[2]), i(k[3]))),
             rgb: table(&[p, t, 3, n, n], |k| {
@@ -294,7 +301,6 @@ mod tests {
     /// Sampling against the pdf by chi-square (the pdf integrates to the
     /// probability that the reflected direction stays above the surface).
     #[test]
-    #[ignore = "open: fails; sample() and pdf() disagree (see sample_weight_is_eval_over_pdf)"]
     fn chi2_of_sampling() {
         let iso = synthetic(&[0.0], &[0.0, 0.4, 0.9, 1.4], (9, 7), 8, true);
         let half = synthetic(&[-PI, -PI / 2.0, 0.0], &[0.0, 0.7, 1.4], (6, 5), 6, false);
@@ -306,18 +312,27 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "open: fails; sample()'s pdf differs from pdf() at the sampled direction"]
     fn sample_weight_is_eval_over_pdf() {
         let b = synthetic(&[-PI, -PI / 2.0, 0.0], &[0.0, 0.7, 1.4], (6, 5), 6, true);
-        let wi = d(0.6, 1.9);
         let mut rng = crate::testing::TestRng::new(3);
-        for _ in 0..500 {
-            if let Some((wo, pdf, weight)) = b.sample(wi, rng.next_2d()) {
+        let mut checked = 0;
+        for wi in [d(0.6, 1.9), d(1.2, -0.4), d(0.1, 2.9)] {
+            for _ in 0..2000 {
+                let Some((wo, pdf, weight)) = b.sample(wi, rng.next_2d()) else { continue };
                 let (e, p) = (b.eval(wi, wo), b.pdf(wi, wo));
-                assert!((pdf - p).abs() <= 2e-3 * p, "pdf {pdf} vs {p}");
-                assert!((weight * pdf - e).abs().max_element() <= 2e-3 * e.max_element(), "{weight} * {pdf} vs {e}");
+                assert!((weight * pdf - e).abs().max_element() <= 1e-3 * e.max_element(), "{weight} * {pdf} vs {e}");
+                // pdf() takes sin θ_m as sqrt(1 - cos² θ_m) (Mitsuba's
+                // Frame3f::sin_theta), whose f32 relative error is about
+                // 3e-8 / θ_m²; sample() has it from sincos. They agree away
+                // from the pole.
+                let m = (wi + wo).normalize();
+                if (m.z as f64).acos() > 0.01 {
+                    assert!((pdf - p).abs() <= 1e-3 * p, "wi {wi} wo {wo}: pdf {pdf} vs {p}");
+                    checked += 1;
+                }
             }
         }
+        assert!(checked > 4000, "{checked} samples checked");
     }
 
     #[test]
