@@ -55,11 +55,11 @@ const ISO_SAMPLE: [SampleCase; 4] = [
     ([1.3, -2.0], [0.05, 0.6], [0.406395763, 0.913256943, -0.028359808], 3.96444154, [0.0, 0.0, 0.0]),
 ];
 const ANISO_EVAL: [EvalCase; 5] = [
-    ([0.3, 0.5], [0.6, 2.5], [0.421154469, 0.627486765, 0.855459332], 0.152186766),
-    ([1.0, -1.2], [0.2, 0.3], [0.43387562, 0.653390467, 0.899170756], 0.0415017232),
-    ([0.7, 2.8], [1.1, -0.4], [0.433889717, 0.63699609, 0.85698849], 0.105712987),
-    ([0.05, 1.0], [0.5, 1.0], [0.42451632, 0.632969022, 0.863505244], 0.155312151),
-    ([1.3, -2.0], [1.2, 1.5], [0.290973157, 0.435385078, 0.595809996], 0.022537034),
+    ([0.3, 0.5], [0.6, 2.5], [0.0505385362, 0.0752984062, 0.10265512], 0.152186766),
+    ([1.0, -1.2], [0.2, 0.3], [0.0520650782, 0.0784068555, 0.107900493], 0.0415017232),
+    ([0.7, 2.8], [1.1, -0.4], [0.0520667657, 0.0764395371, 0.102838613], 0.105712987),
+    ([0.05, 1.0], [0.5, 1.0], [0.0509419627, 0.0759562775, 0.103620626], 0.155312151),
+    ([1.3, -2.0], [1.2, 1.5], [0.0349167809, 0.0522462092, 0.0714972019], 0.022537034),
 ];
 const ANISO_SAMPLE: [SampleCase; 4] = [
     (
@@ -67,28 +67,28 @@ const ANISO_SAMPLE: [SampleCase; 4] = [
         [0.25, 0.75],
         [-0.153047517, 0.296763152, 0.942607224],
         0.216546908,
-        [2.08849883, 3.10090995, 4.21447039],
+        [0.250619859, 0.372109145, 0.505736411],
     ),
     (
         [1.0, -1.2],
         [0.9, 0.1],
         [-0.303105444, 0.787827492, 0.53614819],
         136.337494,
-        [0.0050927191, 0.00717698643, 0.00928821322],
+        [0.000611126248, 0.000861238281, 0.00111458555],
     ),
     (
         [0.7, 2.8],
         [0.5, 0.5],
         [0.60911721, -0.091814585, 0.787747681],
         3.00306082,
-        [0.319238394, 0.462228209, 0.613957942],
+        [0.0383086056, 0.0554673895, 0.0736749545],
     ),
     (
         [1.3, -2.0],
         [0.05, 0.6],
         [0.293616295, 0.849579811, 0.438182145],
         1.46556056,
-        [0.487642944, 0.712234616, 0.953703105],
+        [0.0585171506, 0.0854681656, 0.114444368],
     ),
 ];
 
@@ -96,14 +96,14 @@ fn check(name: &str, evals: &[EvalCase], samples: &[SampleCase]) {
     let b = load(name);
     for (wi, wo, e, p) in evals {
         let (wi, wo) = (d(wi[0], wi[1]), d(wo[0], wo[1]));
-        let ours = b.eval(wi, wo);
+        let ours = b.mitsuba_eval(wi, wo);
         assert!((0..3).all(|c| close(ours[c], e[c], 1e-4)), "{name} eval {wi} {wo}: {ours} vs {e:?}");
-        let pdf = b.pdf(wi, wo);
+        let pdf = b.mitsuba_pdf(wi, wo);
         assert!(close(pdf, *p, 1e-4), "{name} pdf {wi} {wo}: {pdf} vs {p}");
     }
     for (wi, u, wo, p, w) in samples {
         let wi = d(wi[0], wi[1]);
-        match b.sample(wi, Vec2::from(*u)) {
+        match b.mitsuba_sample(wi, Vec2::from(*u)) {
             Some((o, pdf, weight)) => {
                 assert!((0..3).all(|c| (o[c] as f64 - wo[c]).abs() < 1e-4), "{name} sample {wi} {u:?}: {o} vs {wo:?}");
                 assert!(close(pdf, *p, 1e-3), "{name} sample pdf: {pdf} vs {p}");
@@ -127,4 +127,71 @@ fn isotropic_file_matches_mitsuba() {
 #[test]
 fn half_turn_file_matches_mitsuba() {
     check("aniso2.bsdf", &ANISO_EVAL, &ANISO_SAMPLE);
+}
+
+/// Builds a one-sphere scene whose BSDF is `measured` with `filename`,
+/// the scene file placed in `dir`.
+fn build_in(dir: &std::path::Path, filename: &str) -> Result<penumbra_render::material::Material, String> {
+    use penumbra_scene::builder::{build, Overrides};
+    let xml = format!(
+        r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
+<integer name="height" value="4"/></film></sensor>
+<shape type="sphere"><bsdf type="measured"><string name="filename" value="{filename}"/></bsdf></shape></scene>"#
+    );
+    let desc = penumbra_scene::mitsuba::parse_str(&xml, &dir.join("m.xml"), &[]).map_err(|e| e.to_string())?;
+    let job = build(&desc, &Overrides::default()).map_err(|e| e.to_string())?;
+    Ok(job.scene.materials[job.scene.shape_info[0].material as usize].clone())
+}
+
+#[test]
+fn plugin_loads_the_file_and_refuses_bad_ones_by_name() {
+    use penumbra_render::material::Material;
+    use penumbra_scene::tensor::{write, Dtype};
+    let scenes = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/scenes");
+    match build_in(&scenes, "measured/aniso2.bsdf").unwrap() {
+        Material::Measured(p) => {
+            let (wi, wo) = (d(0.3, 0.5), d(0.6, 2.5));
+            let e = ANISO_EVAL[0].2;
+            let ours = p.0.mitsuba_eval(wi, wo);
+            assert!((0..3).all(|c| close(ours[c], e[c], 1e-4)), "{ours} vs {e:?}");
+        }
+        m => panic!("{m:?}"),
+    }
+    let dir = std::env::temp_dir().join(format!("penumbra-measured-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = std::fs::read(scenes.join("measured/iso.bsdf")).unwrap();
+    std::fs::write(dir.join("truncated.bsdf"), &good[..good.len() - 100]).unwrap();
+    std::fs::write(dir.join("text.bsdf"), b"not a tensor file at all").unwrap();
+    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let spectral = write(&[("wavelengths", Dtype::F32, &[2], &f32s(&[400.0, 500.0]))]);
+    std::fs::write(dir.join("spectral.bsdf"), spectral).unwrap();
+    // Every field present, but `vndf` of the wrong shape.
+    let one = f32s(&[1.0; 64]);
+    let bad_shape = write(&[
+        ("description", Dtype::U8, &[1], b"x"),
+        ("phi_i", Dtype::F32, &[1], &f32s(&[0.0])),
+        ("theta_i", Dtype::F32, &[2], &f32s(&[0.0, 1.0])),
+        ("ndf", Dtype::F32, &[2, 2], &one[..16]),
+        ("sigma", Dtype::F32, &[2, 2], &one[..16]),
+        ("vndf", Dtype::F32, &[1, 1, 2, 2], &one[..16]),
+        ("luminance", Dtype::F32, &[1, 2, 2, 2], &one[..32]),
+        ("rgb", Dtype::F32, &[1, 2, 3, 2, 2], &one[..96]),
+        ("jacobian", Dtype::U8, &[1], &[1]),
+    ]);
+    std::fs::write(dir.join("bad_shape.bsdf"), bad_shape).unwrap();
+    let cases: &[(&str, &[&str])] = &[
+        ("missing.bsdf", &["m.xml", "missing.bsdf", "not found"]),
+        ("truncated.bsdf", &["m.xml", "truncated.bsdf", "byte ", "truncated"]),
+        ("text.bsdf", &["text.bsdf", "not a tensor file"]),
+        ("spectral.bsdf", &["spectral.bsdf", "spectral"]),
+        ("bad_shape.bsdf", &["bad_shape.bsdf", "'vndf'"]),
+    ];
+    for (file, words) in cases {
+        let e = build_in(&dir, file).err().unwrap_or_else(|| panic!("{file} should be refused"));
+        eprintln!("{e}");
+        for w in *words {
+            assert!(e.contains(w), "error for {file}\n  was: {e}\n  should mention: {w}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -3,11 +3,12 @@
 //! tabulated over the incident direction (φ_i, θ_i) and a warped
 //! half-vector domain. The tables (`MeasuredTables`) come from the file's
 //! fields `theta_i`, `phi_i`, `ndf`, `sigma`, `vndf`, `luminance`, `rgb`
-//! and `jacobian` (`description` is only logged). The value for a pair of
-//! directions is the `rgb` table at the VNDF-inverted half vector, times
-//! NDF(h) / (4 σ(wo)) when `jacobian` is set; it already includes the
-//! cosine (Mitsuba's `eval`). Sampling warps by the luminance table, then
-//! the VNDF, as with `MI_SAMPLE_LUMINANCE = 1`, `MI_SAMPLE_DIFFUSE = 0`.
+//! and `jacobian` (`description` is only checked). The value for a pair
+//! of directions is the `rgb` table at the VNDF-inverted half vector,
+//! times NDF(h) / (4 σ(wi)) when `jacobian` is set; it includes the cosine
+//! of the sampled direction (Mitsuba's `eval`; [`BsdfModel::eval`] divides
+//! it out). Sampling warps by the luminance table, then the VNDF, as with
+//! `MI_SAMPLE_LUMINANCE = 1`, `MI_SAMPLE_DIFFUSE = 0`.
 //! Files whose `phi_i` spans a half or a quarter turn are mirrored into
 //! that range (`m_reduction` 2 or 4); `phi_i` of one or two values marks
 //! an isotropic material, which is never mirrored. (Mitsuba 3.9.1 leaves
@@ -15,16 +16,18 @@
 //! mirror them by chance; that changes only the σ(φ_i) lookup, which an
 //! isotropic material's σ does not depend on.)
 //!
-//! Directions here are Mitsuba's: `wi` towards the viewer, `wo` sampled.
+//! | parameter | type   | default  |
+//! |-----------|--------|----------|
+//! | filename  | string | required: an RGL `.bsdf` file in RGB form (field `rgb`); spectral files (field `wavelengths`) are refused, as Mitsuba's RGB variants refuse them |
 //!
-//! Done: the model (tables, eval, pdf, sample) built from checked tables.
-//! Remains: the `BsdfParams`/`BsdfKind` registration (bsdf/mod.rs,
-//! material/mod.rs, scene builder `filename` through `TensorFile`),
-//! spectral files (`wavelengths`/`spectra` fields; Mitsuba refuses them
-//! in RGB variants, so the loader must refuse them too), and a
-//! reference scene.
+//! The `mitsuba_*` methods take Mitsuba's directions: `wi` towards the
+//! viewer (the contract's `wo`), `wo` sampled (the contract's `wi`).
 
+use super::{BsdfModel, BsdfParams, BsdfSample};
+use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
+use crate::texture::Texture;
+use std::sync::Arc;
 use crate::sampling::marginal2d::Marginal2D;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -64,12 +67,9 @@ pub struct Measured {
 }
 
 /// `dr::mulsign_neg(x, y)`: x times the negated sign of y (sign bit).
+/// A multiplication, not a branch returning `-x` (see [`super::mulsign`]).
 fn mulsign_neg(x: f32, y: f32) -> f32 {
-    if y.is_sign_negative() {
-        x
-    } else {
-        -x
-    }
+    x * if y.is_sign_negative() { 1.0 } else { -1.0 }
 }
 
 /// The elevation of a unit vector, stable near the pole.
@@ -171,7 +171,7 @@ impl Measured {
     }
 
     /// Mitsuba's `eval`: the BSDF times cos θ_o, RGB.
-    pub fn eval(&self, wi: Vec3, wo: Vec3) -> Spectrum {
+    pub fn mitsuba_eval(&self, wi: Vec3, wo: Vec3) -> Spectrum {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return Spectrum::ZERO;
         }
@@ -188,7 +188,7 @@ impl Measured {
     }
 
     /// Mitsuba's `pdf`: the density of `sample` per unit solid angle.
-    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+    pub fn mitsuba_pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
@@ -209,7 +209,7 @@ impl Measured {
     }
 
     /// Mitsuba's `sample`: the sampled `wo`, its pdf, and eval / pdf.
-    pub fn sample(&self, wi: Vec3, u: Vec2) -> Option<(Vec3, f32, Spectrum)> {
+    pub fn mitsuba_sample(&self, wi: Vec3, u: Vec2) -> Option<(Vec3, f32, Spectrum)> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -239,6 +239,53 @@ impl Measured {
         }
         let weight = spec / pdf;
         weight.is_finite().then_some((wo, pdf, weight))
+    }
+}
+
+/// Mitsuba `measured` as the scene stores it: the loaded file, shared.
+#[derive(Debug, Clone)]
+pub struct MeasuredParams(pub Arc<Measured>);
+
+impl BsdfParams for MeasuredParams {
+    type Model<'a> = &'a Measured;
+
+    #[inline]
+    fn at(&self, _si: &SurfaceInteraction) -> &Measured {
+        &self.0
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        Vec::new()
+    }
+
+    /// The tables are looked up at the azimuth φ_i of the frame (an
+    /// isotropic file's σ too), so the frame's orientation matters.
+    fn anisotropic(&self) -> bool {
+        true
+    }
+}
+
+impl BsdfModel for &Measured {
+    #[inline]
+    fn has_smooth(&self) -> bool {
+        true
+    }
+
+    /// Mitsuba's value, which includes cos θ_i, divided by it.
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+        if wi.z <= 0.0 {
+            return Spectrum::ZERO;
+        }
+        self.mitsuba_eval(wo, wi) / wi.z
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.mitsuba_pdf(wo, wi)
+    }
+
+    fn sample(&self, wo: Vec3, _u: f32, u2: Vec2) -> Option<BsdfSample> {
+        let (wi, pdf, weight) = self.mitsuba_sample(wo, u2)?;
+        Some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 }
 
@@ -306,7 +353,7 @@ mod tests {
         let half = synthetic(&[-PI, -PI / 2.0, 0.0], &[0.0, 0.7, 1.4], (6, 5), 6, false);
         let cases = [(&iso, d(0.3, 0.5)), (&iso, d(1.1, -2.0)), (&half, d(0.7, 2.8)), (&half, d(0.4, -0.6))];
         for (b, wi) in cases {
-            let p = chi2_test(200_000, 11, |_, u| b.sample(wi, u).map(|s| s.0), |wo| b.pdf(wi, wo) as f64);
+            let p = chi2_test(200_000, 11, |_, u| b.mitsuba_sample(wi, u).map(|s| s.0), |wo| b.mitsuba_pdf(wi, wo) as f64);
             assert!(p > alpha(cases.len()), "wi {wi}: p = {p}");
         }
     }
@@ -318,8 +365,8 @@ mod tests {
         let mut checked = 0;
         for wi in [d(0.6, 1.9), d(1.2, -0.4), d(0.1, 2.9)] {
             for _ in 0..2000 {
-                let Some((wo, pdf, weight)) = b.sample(wi, rng.next_2d()) else { continue };
-                let (e, p) = (b.eval(wi, wo), b.pdf(wi, wo));
+                let Some((wo, pdf, weight)) = b.mitsuba_sample(wi, rng.next_2d()) else { continue };
+                let (e, p) = (b.mitsuba_eval(wi, wo), b.mitsuba_pdf(wi, wo));
                 assert!((weight * pdf - e).abs().max_element() <= 1e-3 * e.max_element(), "{weight} * {pdf} vs {e}");
                 // pdf() takes sin θ_m as sqrt(1 - cos² θ_m) (Mitsuba's
                 // Frame3f::sin_theta), whose f32 relative error is about
