@@ -26,11 +26,11 @@
 use super::{BsdfModel, BsdfParams, BsdfSample};
 use crate::geometry::SurfaceInteraction;
 use crate::math::Spectrum;
-use crate::texture::Texture;
-use std::sync::Arc;
 use crate::sampling::marginal2d::Marginal2D;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// The float32 tables of a `.bsdf` file, C order, with their shapes.
 #[derive(Debug, Clone, Default)]
@@ -353,7 +353,8 @@ mod tests {
         let half = synthetic(&[-PI, -PI / 2.0, 0.0], &[0.0, 0.7, 1.4], (6, 5), 6, false);
         let cases = [(&iso, d(0.3, 0.5)), (&iso, d(1.1, -2.0)), (&half, d(0.7, 2.8)), (&half, d(0.4, -0.6))];
         for (b, wi) in cases {
-            let p = chi2_test(200_000, 11, |_, u| b.mitsuba_sample(wi, u).map(|s| s.0), |wo| b.mitsuba_pdf(wi, wo) as f64);
+            let p =
+                chi2_test(200_000, 11, |_, u| b.mitsuba_sample(wi, u).map(|s| s.0), |wo| b.mitsuba_pdf(wi, wo) as f64);
             assert!(p > alpha(cases.len()), "wi {wi}: p = {p}");
         }
     }

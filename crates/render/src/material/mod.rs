@@ -12,8 +12,8 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, HairParams, MeasuredParams, Nested,
-    PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
+    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, HairParams, MeasuredParams,
+    Nested, PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
     RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;

@@ -10,9 +10,9 @@ use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
 use penumbra_render::bsdf::{
     presets, ConductorParams, DielectricParams, DiffuseParams, HairAbsorption, HairLobes, HairParams, Measured,
-    MeasuredParams, Microfacet,
-    MicrofacetType, PPlasticParams, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
-    RoughDielectricParams, RoughPlasticParams, RoughPlasticTables, Roughness, ThinDielectricParams,
+    MeasuredParams, Microfacet, MicrofacetType, PPlasticParams, PlasticParams, PrincipledParams, PrincipledThinParams,
+    RoughConductorParams, RoughDielectricParams, RoughPlasticParams, RoughPlasticTables, Roughness,
+    ThinDielectricParams,
 };
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
