@@ -20,6 +20,9 @@ tests/scenes/measured/aniso2.bsdf: phi_i = 3 values over [-pi, 0] (Mitsuba's
   reduction 2: mirrored into a half turn), theta_i 3 values, jacobian 0,
   rgb scaled by 0.12 so that, without the NDF / (4 sigma) factor, the
   albedo stays below 1 (tests/scenes/measured.xml renders it).
+tests/scenes/measured/aniso4.bsdf: phi_i = 3 values over [-pi, -pi/2]
+  (reduction 4: mirrored into a quarter turn), theta_i 4 values, ndf/sigma
+  7 x 6, luminance and rgb 7 x 7, jacobian 1.
 """
 import math
 import os
@@ -87,6 +90,7 @@ def main():
     files = {
         "iso.bsdf": bsdf([0.0], [0.0, 0.4, 0.9, 1.4], (9, 7), 8, 1, 0.0, 1.0),
         "aniso2.bsdf": bsdf([-math.pi, -math.pi / 2, 0.0], [0.0, 0.7, 1.4], (6, 5), 6, 0, 0.05, 0.12),
+        "aniso4.bsdf": bsdf([-math.pi, -0.75 * math.pi, -math.pi / 2], [0.0, 0.5, 1.0, 1.5], (7, 6), 7, 1, 0.05, 1.0),
     }
     for name, data in files.items():
         with open(os.path.join(OUT, name), "wb") as f:
