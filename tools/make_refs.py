@@ -78,6 +78,7 @@ SPP = {
     "spot_texture": 32768,
     "pplastic": 65536,
     "hair": 65536,
+    "measured": 65536,
     "area_texture": 16384,
     "projector": 16384,
     "directionalarea": 8192,

@@ -15,6 +15,7 @@ pub mod ply;
 pub mod props;
 pub mod serialized;
 pub mod spectrum;
+pub mod tensor;
 pub mod vol;
 
 pub use builder::{supported_plugins, Overrides};

@@ -213,6 +213,13 @@ fn hair_matches_mitsuba() {
 }
 
 #[test]
+fn measured_matches_mitsuba() {
+    // An isotropic and a half-turn anisotropic RGL .bsdf file, the latter
+    // also on a sphere turned about the view axis.
+    compare("measured", 256);
+}
+
+#[test]
 fn textured_area_lights_match_mitsuba() {
     // `area` emitters with a bitmap and a checkerboard `radiance`.
     compare("area_texture", 256);

@@ -22,6 +22,7 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
 pub mod hair;
+pub mod measured;
 pub mod microfacet;
 pub mod plastic;
 pub mod pplastic;
@@ -38,6 +39,7 @@ pub use conductor::{Conductor, ConductorParams};
 pub use dielectric::{Dielectric, DielectricParams};
 pub use diffuse::{Diffuse, DiffuseParams};
 pub use hair::{Hair, HairAbsorption, HairLobes, HairParams};
+pub use measured::{Measured, MeasuredParams};
 pub use microfacet::{Microfacet, MicrofacetType, Roughness};
 pub use plastic::{Plastic, PlasticParams};
 pub use pplastic::{PPlastic, PPlasticParams};
@@ -92,6 +94,7 @@ macro_rules! with_model {
             BsdfKind::RoughPlastic($b) => $e,
             BsdfKind::PPlastic($b) => $e,
             BsdfKind::Hair($b) => $e,
+            BsdfKind::Measured($b) => $e,
             BsdfKind::Principled($b) => $e,
             BsdfKind::PrincipledThin($b) => $e,
             BsdfKind::Blend($b) => $e,
@@ -183,6 +186,8 @@ pub enum BsdfKind<'a> {
     PPlastic(PPlastic),
     /// Mitsuba `hair`.
     Hair(Hair<'a>),
+    /// Mitsuba `measured` (RGL `.bsdf` files, RGB).
+    Measured(&'a Measured),
     /// Mitsuba `principled`.
     Principled(Principled),
     /// Mitsuba `principledthin`.

@@ -12,8 +12,8 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, HairParams, Nested,
-    PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
+    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, HairParams, MeasuredParams,
+    Nested, PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
     RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
@@ -65,6 +65,8 @@ pub enum Material {
     PPlastic(PPlasticParams),
     /// Mitsuba `hair`.
     Hair(Box<HairParams>),
+    /// Mitsuba `measured` (RGL `.bsdf` files, RGB).
+    Measured(MeasuredParams),
     /// Mitsuba `principled` (the Disney BSDF).
     Principled(Box<PrincipledParams>),
     /// Mitsuba `principledthin` (the thin-sheet Disney BSDF).
@@ -172,6 +174,7 @@ impl Material {
                 Material::RoughPlastic(p) => BsdfKind::RoughPlastic(p.at(si)),
                 Material::PPlastic(p) => BsdfKind::PPlastic(p.at(si)),
                 Material::Hair(p) => BsdfKind::Hair(p.at(si)),
+                Material::Measured(p) => BsdfKind::Measured(p.at(si)),
                 Material::Principled(p) => BsdfKind::Principled(p.at(si)),
                 Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.at(si)),
                 Material::Null => BsdfKind::Null,
@@ -208,6 +211,7 @@ impl Material {
             Material::RoughPlastic(p) => p.reads_uv(),
             Material::PPlastic(p) => p.reads_uv(),
             Material::Hair(p) => p.reads_uv(),
+            Material::Measured(p) => p.reads_uv(),
             Material::Principled(p) => p.reads_uv(),
             Material::PrincipledThin(p) => p.reads_uv(),
             Material::Null => false,

@@ -3,15 +3,16 @@
 //! read through [`Textures`].
 
 use super::texture::Textures;
-use super::{plugin, Plugins};
+use super::{plugin, resolve, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use glam::Vec3;
 use penumbra_render::bsdf::plastic::fresnel_diffuse_reflectance;
 use penumbra_render::bsdf::{
-    presets, ConductorParams, DielectricParams, DiffuseParams, HairAbsorption, HairLobes, HairParams, Microfacet,
-    MicrofacetType, PPlasticParams, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
-    RoughDielectricParams, RoughPlasticParams, RoughPlasticTables, Roughness, ThinDielectricParams,
+    presets, ConductorParams, DielectricParams, DiffuseParams, HairAbsorption, HairLobes, HairParams, Measured,
+    MeasuredParams, Microfacet, MicrofacetType, PPlasticParams, PlasticParams, PrincipledParams, PrincipledThinParams,
+    RoughConductorParams, RoughDielectricParams, RoughPlasticParams, RoughPlasticTables, Roughness,
+    ThinDielectricParams,
 };
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
@@ -31,6 +32,7 @@ pub(crate) const BSDFS: &Plugins<BuildBsdf> = &[
     ("roughplastic", plastic),
     ("pplastic", pplastic),
     ("hair", hair),
+    ("measured", measured),
     ("twosided", twosided),
     ("mask", mask),
     ("normalmap", normalmap),
@@ -416,6 +418,23 @@ fn hair(node: &Node, tex: &mut Textures) -> Result<Material> {
         lobes: HairLobes::new(longitudinal, azimuthal, tilt, int / ext),
         absorption,
     })))
+}
+
+/// Mitsuba's `measured`: an RGL `.bsdf` file (RGB) by `filename`, read
+/// through [`crate::tensor`]; whatever is wrong with the file is an error
+/// at the `filename` property naming the file (and the byte, where the
+/// format is at fault).
+fn measured(node: &Node, _tex: &mut Textures) -> Result<Material> {
+    let (file, loc) =
+        node.get_string("filename")?.ok_or_else(|| node.error("measured needs a 'filename' (an RGL .bsdf file)"))?;
+    let path = resolve(&loc, &file, "measured BSDF file")?;
+    let bsdf = std::fs::read(&path)
+        .map_err(|e| format!("cannot read it: {e}"))
+        .and_then(crate::tensor::TensorFile::parse)
+        .and_then(|t| crate::tensor::measured_tables(&t))
+        .and_then(Measured::new)
+        .map_err(|e| LoadError::at(&loc, format!("measured BSDF file '{}': {e}", path.display())))?;
+    Ok(Material::Measured(MeasuredParams(std::sync::Arc::new(bsdf))))
 }
 
 fn twosided(node: &Node, tex: &mut Textures) -> Result<Material> {
