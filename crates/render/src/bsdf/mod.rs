@@ -19,6 +19,7 @@
 pub mod blend;
 pub mod conductor;
 pub mod dielectric;
+pub mod difftrans;
 pub mod diffuse;
 pub mod fresnel;
 pub mod hair;
@@ -37,6 +38,7 @@ pub mod thindielectric;
 pub use blend::{Blend, Nested};
 pub use conductor::{Conductor, ConductorParams};
 pub use dielectric::{Dielectric, DielectricParams};
+pub use difftrans::{DiffuseTransmission, DiffuseTransmissionParams};
 pub use diffuse::{Diffuse, DiffuseParams};
 pub use hair::{Hair, HairAbsorption, HairLobes, HairParams};
 pub use measured::{Measured, MeasuredParams};
@@ -85,6 +87,7 @@ macro_rules! with_model {
     ($kind:expr, $b:ident => $e:expr, null => $null:expr) => {
         match $kind {
             BsdfKind::Diffuse($b) => $e,
+            BsdfKind::DiffuseTransmission($b) => $e,
             BsdfKind::Dielectric($b) => $e,
             BsdfKind::ThinDielectric($b) => $e,
             BsdfKind::Conductor($b) => $e,
@@ -168,6 +171,8 @@ pub struct BsdfSample {
 pub enum BsdfKind<'a> {
     /// Mitsuba `diffuse`.
     Diffuse(Diffuse),
+    /// pbrt-v4 `diffusetransmission`.
+    DiffuseTransmission(DiffuseTransmission),
     /// Mitsuba `dielectric`.
     Dielectric(Dielectric),
     /// Mitsuba `thindielectric`.

@@ -12,9 +12,9 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, HairParams, MeasuredParams,
-    Nested, PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
-    RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
+    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, DiffuseTransmissionParams,
+    HairParams, MeasuredParams, Nested, PPlasticParams, Perturbation, PlasticParams, PrincipledParams,
+    PrincipledThinParams, RoughConductorParams, RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
 use crate::math::Frame;
@@ -47,6 +47,8 @@ impl Scratch {
 pub enum Material {
     /// Mitsuba `diffuse`.
     Diffuse(DiffuseParams),
+    /// pbrt-v4 `diffusetransmission`.
+    DiffuseTransmission(DiffuseTransmissionParams),
     /// Mitsuba `dielectric`.
     Dielectric(DielectricParams),
     /// Mitsuba `thindielectric`.
@@ -165,6 +167,7 @@ impl Material {
                     continue;
                 }
                 Material::Diffuse(p) => BsdfKind::Diffuse(p.at(si)),
+                Material::DiffuseTransmission(p) => BsdfKind::DiffuseTransmission(p.at(si)),
                 Material::Dielectric(p) => BsdfKind::Dielectric(p.at(si)),
                 Material::ThinDielectric(p) => BsdfKind::ThinDielectric(p.at(si)),
                 Material::Conductor(p) => BsdfKind::Conductor(p.at(si)),
@@ -202,6 +205,7 @@ impl Material {
     pub fn reads_uv(&self) -> bool {
         match self {
             Material::Diffuse(p) => p.reads_uv(),
+            Material::DiffuseTransmission(p) => p.reads_uv(),
             Material::Dielectric(p) => p.reads_uv(),
             Material::ThinDielectric(p) => p.reads_uv(),
             Material::Conductor(p) => p.reads_uv(),
