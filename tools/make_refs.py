@@ -81,6 +81,8 @@ SPP = {
     "area_texture": 16384,
     "projector": 16384,
     "directionalarea": 8192,
+    "sunsky": 8192,
+    "timed_sunsky": 8192,
     "old_format": 16384,
     "ellipsoids": 16384,
     "sdfgrid": 32768,

@@ -14,6 +14,7 @@ pub mod ply;
 pub mod props;
 pub mod serialized;
 pub mod spectrum;
+pub mod sunsky_data;
 pub mod vol;
 
 pub use builder::{supported_plugins, Overrides};

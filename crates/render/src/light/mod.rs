@@ -30,6 +30,7 @@ pub mod point;
 pub mod projector;
 pub mod sampler;
 pub mod spot;
+pub mod sunsky;
 
 pub use area::AreaLight;
 pub use bvh::LightBounds;
@@ -41,6 +42,7 @@ pub use point::PointLight;
 pub use projector::ProjectorLight;
 pub use sampler::{LightSampler, LightSelection};
 pub use spot::SpotLight;
+pub use sunsky::SunskyLight;
 
 use crate::geometry::{Shape, SurfaceInteraction};
 use crate::math::Spectrum;
@@ -81,6 +83,14 @@ pub enum Light {
     /// `directionalarea`: emission along a shape's normals (delta in
     /// direction), reached by no path this renderer traces.
     DirectionalArea(DirectionalAreaLight),
+    /// `sunsky` / `timed_sunsky`: the Hosek–Wilkie sky and sun at infinity
+    /// (`timed` tells which plugin, for [`Light::name`]).
+    Sunsky {
+        /// The model at the rendered instant.
+        light: Box<SunskyLight>,
+        /// Built from `timed_sunsky`.
+        timed: bool,
+    },
 }
 
 impl Light {
@@ -95,6 +105,8 @@ impl Light {
             Light::EnvMap(_) => "envmap",
             Light::Projector(_) => "projector",
             Light::DirectionalArea(_) => "directionalarea",
+            Light::Sunsky { timed: false, .. } => "sunsky",
+            Light::Sunsky { timed: true, .. } => "timed_sunsky",
         }
     }
 
@@ -110,6 +122,7 @@ impl Light {
             Light::EnvMap(e) => e.sample_li(u2),
             Light::Projector(p) => p.sample_li(p_ref),
             Light::DirectionalArea(d) => d.sample_li(),
+            Light::Sunsky { light, .. } => light.sample_li(u2),
         }
     }
 
@@ -123,6 +136,7 @@ impl Light {
             Light::Area(a) => hit.map_or(0.0, |hit| a.pdf_li(p_ref, hit, &shapes[a.shape as usize])),
             Light::Constant(c) => c.pdf(),
             Light::EnvMap(e) => e.pdf(wi),
+            Light::Sunsky { light, .. } => light.pdf(wi),
             Light::Point(_)
             | Light::Spot(_)
             | Light::Directional(_)
@@ -136,7 +150,7 @@ impl Light {
     /// a delta that no ray hits).
     pub fn is_environment(&self) -> bool {
         match self {
-            Light::Constant(_) | Light::EnvMap(_) => true,
+            Light::Constant(_) | Light::EnvMap(_) | Light::Sunsky { .. } => true,
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -154,6 +168,7 @@ impl Light {
         match self {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
+            Light::Sunsky { light, .. } => light.eval_pdf(wi),
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -170,6 +185,7 @@ impl Light {
         match self {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
+            Light::Sunsky { light, .. } => light.eval(wi),
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -188,7 +204,7 @@ impl Light {
             | Light::Directional(_)
             | Light::Projector(_)
             | Light::DirectionalArea(_) => true,
-            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) => false,
+            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) | Light::Sunsky { .. } => false,
         }
     }
 
@@ -203,6 +219,7 @@ impl Light {
             Light::Spot(s) => s.power(),
             Light::Directional(d) => d.power(),
             Light::EnvMap(e) => e.power(scene_radius),
+            Light::Sunsky { light, .. } => light.power(scene_radius),
             Light::Projector(p) => p.power(),
             // No weight for a light no sample can reach (see directionalarea.rs).
             Light::DirectionalArea(_) => Spectrum::ZERO,
@@ -220,7 +237,7 @@ impl Light {
             Light::Spot(s) => Some(s.bounds()),
             Light::Projector(p) => Some(p.bounds()),
             Light::DirectionalArea(d) => Some(d.bounds(&shapes[d.shape as usize])),
-            Light::Constant(_) | Light::EnvMap(_) | Light::Directional(_) => None,
+            Light::Constant(_) | Light::EnvMap(_) | Light::Sunsky { .. } | Light::Directional(_) => None,
         }
     }
 }
