@@ -188,8 +188,12 @@ fn close(got: f32, want: f32, rel: f32, abs: f32) -> bool {
     (got - want).abs() <= rel * want.abs() + abs
 }
 
+/// Tests that read or change `PENUMBRA_SUNSKY_DATA` hold this.
+static ENV: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn radiance_pdf_and_samples_match_mitsuba() {
+    let _env = ENV.lock().unwrap_or_else(|e| e.into_inner());
     if let Err(e) = penumbra_scene::sunsky_data::load() {
         return skip("radiance_pdf_and_samples_match_mitsuba", &e);
     }
@@ -240,4 +244,95 @@ fn radiance_pdf_and_samples_match_mitsuba() {
         "largest deviations: radiance {:e} (relative), direction {:e}, pdf {:e} (relative)",
         worst[0], worst[1], worst[2]
     );
+}
+
+fn error(emitter: &str) -> String {
+    light(emitter).expect_err("an error")
+}
+
+#[test]
+fn bad_parameters_are_errors_at_their_line() {
+    let _env = ENV.lock().unwrap_or_else(|e| e.into_inner());
+    // (An unknown parameter is reported once the emitter is built.)
+    if let Err(e) = penumbra_scene::sunsky_data::load() {
+        return skip("bad_parameters_are_errors_at_their_line", &e);
+    }
+    let cases = [
+        (r#"<emitter type="sunsky"><float name="turbidity" value="11"/></emitter>"#, "turbidity 11 is outside [1, 10]"),
+        (r#"<emitter type="sunsky"><float name="sun_scale" value="-1"/></emitter>"#, "sun_scale must not be negative"),
+        (
+            r#"<emitter type="sunsky"><float name="sun_aperture" value="0"/></emitter>"#,
+            "sun_aperture 0 must be in ]0, 180[",
+        ),
+        (
+            r#"<emitter type="sunsky"><rgb name="albedo" value="0.2, 1.5, 0.3"/></emitter>"#,
+            "albedo values must be in [0, 1]",
+        ),
+        (
+            r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="1"/><float name="hour" value="9"/></emitter>"#,
+            "either 'sun_direction' or the time and place",
+        ),
+        (
+            r#"<emitter type="sunsky"><transform name="to_world"><scale value="2"/></transform></emitter>"#,
+            "to_world must be a rotation",
+        ),
+        (
+            r#"<emitter type="timed_sunsky"><float name="window_end_time" value="25"/></emitter>"#,
+            "window_end_time 25 is outside [0, 24]",
+        ),
+        (
+            r#"<emitter type="timed_sunsky"><integer name="start_year" value="2026"/><integer name="end_year" value="2025"/></emitter>"#,
+            "the start date is after the end date",
+        ),
+        (r#"<emitter type="sunsky"><float name="exposure" value="2"/></emitter>"#, "exposure"),
+    ];
+    for (xml, want) in cases {
+        let e = error(xml);
+        eprintln!("{e}");
+        assert!(e.contains(want) && e.contains("sunsky.xml:1"), "{xml}: {e}");
+    }
+}
+
+#[test]
+fn timed_sunsky_refuses_a_shutter_interval() {
+    let _env = ENV.lock().unwrap_or_else(|e| e.into_inner());
+    if let Err(e) = penumbra_scene::sunsky_data::load() {
+        return skip("timed_sunsky_refuses_a_shutter_interval", &e);
+    }
+    let sensor = SENSOR.replace("<film", r#"<float name="shutter_close" value="0.5"/><film"#);
+    let xml = format!("<scene version=\"3.0.0\">{sensor}\n<emitter type=\"timed_sunsky\"/></scene>");
+    let desc = parse_str(&xml, Path::new("sunsky.xml"), &[]).unwrap();
+    let e = build(&desc, &Overrides::default()).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("sunsky.xml:2") && e.contains("renders one instant"), "{e}");
+}
+
+#[test]
+fn missing_or_bad_tables_are_errors_naming_what_to_do() {
+    let _env = ENV.lock().unwrap_or_else(|e| e.into_inner());
+    let saved = std::env::var_os("PENUMBRA_SUNSKY_DATA");
+    let dir = std::env::temp_dir().join(format!("penumbra-sunsky-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::env::set_var("PENUMBRA_SUNSKY_DATA", &dir);
+    // No files: the directory tried, the plugin, its line, the remedy.
+    let e = error(r#"<emitter type="sunsky"/>"#);
+    let ok_missing = e.contains("sunsky.xml:1")
+        && e.contains("sunsky: no sunsky data found")
+        && e.contains(&dir.display().to_string())
+        && e.contains("pip install mitsuba")
+        && e.contains("PENUMBRA_SUNSKY_DATA");
+    // Truncated files: the file and the byte offset.
+    let mut header = b"tensor_file\0\x01\x00\x01\x00\x00\x00".to_vec();
+    header.extend(5u16.to_le_bytes());
+    std::fs::write(dir.join("sunsky_datasets.bin"), &header).unwrap();
+    std::fs::write(dir.join("sampling_data.bin"), &header).unwrap();
+    let t = error(r#"<emitter type="timed_sunsky"/>"#);
+    let ok_truncated = t.contains("timed_sunsky:") && t.contains("sunsky_datasets.bin") && t.contains("byte 20");
+    match saved {
+        Some(v) => std::env::set_var("PENUMBRA_SUNSKY_DATA", v),
+        None => std::env::remove_var("PENUMBRA_SUNSKY_DATA"),
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    eprintln!("{e}\n{t}");
+    assert!(ok_missing, "{e}");
+    assert!(ok_truncated, "{t}");
 }

@@ -30,8 +30,10 @@
 //! interpolated linearly on turbidity and albedo, then by a quintic Bézier
 //! in x = ∛(2η/π) on the sun's elevation η, Hosek & Wilkie 2012 §5):
 //!
-//! L_sky = (1 + A e^{B/(cos θ + 0.01)}) (C + D e^{E γ} + F cos²γ + G χ(H, γ)
-//! + I √cos θ) · L_M, with χ(H, γ) = (1 + cos²γ) / (1 + H² − 2H cos γ)^{3/2}
+//! ```text
+//! L_sky = (1 + A exp(B / (cos θ + 0.01))) · (C + D exp(E γ) + F cos²γ + G χ(H, γ) + I √cos θ) · L_M
+//! χ(H, γ) = (1 + cos²γ) / (1 + H² − 2 H cos γ)^(3/2)
+//! ```
 //! (Hosek & Wilkie 2012, eq. 9), θ the view zenith angle and γ the angle to
 //! the sun. The sun (inside the cone of half-angle `sun_aperture / 2`) is
 //! the tabulated irradiance (`sampling_data.bin`) over the solid angle of
@@ -340,6 +342,8 @@ fn spectral_srgb(s: &[f32], cie: &[[f32; 3]; 11]) -> [f32; 3] {
         }
     }
     let xyz = xyz.map(|x| x / 11.0);
+    // Mitsuba's `xyz_to_srgb`, digits as it writes them.
+    #[allow(clippy::excessive_precision)]
     const M: [[f32; 3]; 3] =
         [[3.240479, -1.537150, -0.498535], [-0.969256, 1.875991, 0.041556], [0.055648, -0.204043, 1.057311]];
     M.map(|r| r[0] * xyz[0] + r[1] * xyz[1] + r[2] * xyz[2])
@@ -685,6 +689,7 @@ impl SunskyLight {
 
     /// Samples the sky or the sun (see the module docs); None when the sun
     /// is below the horizon or the sample falls below it.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     pub fn sample_li(&self, u: Vec2) -> Option<LightSample> {
         if !self.sun_up() {
             return None;

@@ -333,6 +333,7 @@ fn location(node: &Node) -> Result<Location> {
 
 /// Mitsuba's `sunsky`: the sun from `sun_direction` (world space) or from
 /// the date, time and place (defaults: Tokyo, 10 July 2010, 15:00).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 fn sunsky(node: &Node) -> Result<PendingLight> {
     let params = sunsky_params(node)?;
     const TIME_PLACE: [&str; 9] =
