@@ -284,6 +284,10 @@ fn bad_parameters_are_errors_at_their_line() {
             r#"<emitter type="timed_sunsky"><integer name="start_year" value="2026"/><integer name="end_year" value="2025"/></emitter>"#,
             "the start date is after the end date",
         ),
+        (
+            r#"<emitter type="timed_sunsky"><float name="shutter_open" value="1"/><float name="shutter_close" value="1"/></emitter>"#,
+            "shutter_close must be after shutter_open",
+        ),
         (r#"<emitter type="sunsky"><float name="exposure" value="2"/></emitter>"#, "exposure"),
     ];
     for (xml, want) in cases {

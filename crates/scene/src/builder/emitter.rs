@@ -399,8 +399,9 @@ fn timed_sunsky(node: &Node) -> Result<PendingLight> {
     }
     let shutter_open = node.float("shutter_open", 0.0)?;
     let shutter_close = node.float("shutter_close", 1.0)?;
-    if !(shutter_close >= shutter_open) {
-        return Err(node.error("timed_sunsky: shutter_open must not be after shutter_close"));
+    // (Mitsuba accepts equal times, then divides by zero: every time maps to NaN.)
+    if !(shutter_close > shutter_open) {
+        return Err(node.error("timed_sunsky: shutter_close must be after shutter_open"));
     }
     let range = TimedRange {
         location: location(node)?,
