@@ -168,7 +168,7 @@ mod tests {
         head.extend((fields.len() as u32).to_le_bytes());
         let header_len: usize =
             head.len() + fields.iter().map(|(n, _, s, _)| 2 + n.len() + 11 + 8 * s.len()).sum::<usize>();
-        let mut data = Vec::new();
+        let mut data: Vec<u8> = Vec::new();
         for (name, dtype, shape, bytes) in fields {
             head.extend((name.len() as u16).to_le_bytes());
             head.extend(name.as_bytes());
