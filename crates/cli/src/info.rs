@@ -145,12 +145,15 @@ fn short(v: &Value) -> String {
 /// Features Penumbra renders differently from Mitsuba's spectral variants
 /// or serves by another method, found in the scene description.
 fn approximations(desc: &SceneDesc) -> Vec<String> {
-    let (mut sampled, mut constant, mut visible) = (0, 0, 0);
+    let (mut sampled, mut constant, mut visible, mut skies) = (0, 0, 0, 0);
     let mut seen = std::collections::HashSet::new();
     let mut stack: Vec<&Node> = vec![&desc.root];
     while let Some(node) = stack.pop() {
         if !seen.insert(node as *const Node) {
             continue;
+        }
+        if node.kind == Kind::Emitter && matches!(node.plugin.as_str(), "sunsky" | "timed_sunsky") {
+            skies += 1;
         }
         for p in &node.props {
             match &p.value {
@@ -180,6 +183,12 @@ fn approximations(desc: &SceneDesc) -> Vec<String> {
         notes.push(format!(
             "{visible} BSDFs with sample_visible=false are sampled with visible normals \
              (same expected image, different noise)"
+        ));
+    }
+    if skies > 0 {
+        notes.push(format!(
+            "{skies} sunsky / timed_sunsky emitters: the Hosek-Wilkie RGB tables, as Mitsuba's *_rgb variants \
+             (its spectral variants would differ slightly); a timed_sunsky at the sensor's one instant"
         ));
     }
     notes

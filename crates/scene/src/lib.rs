@@ -15,6 +15,7 @@ pub mod ply;
 pub mod props;
 pub mod serialized;
 pub mod spectrum;
+pub mod sunsky_data;
 pub mod tensor;
 pub mod vol;
 

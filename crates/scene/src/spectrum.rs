@@ -284,7 +284,7 @@ fn lerp_table(table: &[f32; CIE_SAMPLES], i0: usize, w1: f64) -> f64 {
 }
 
 /// The CIE 1931 2° colour matching functions at `w` nm.
-fn cie1931_xyz(w: f64) -> [f64; 3] {
+pub(crate) fn cie1931_xyz(w: f64) -> [f64; 3] {
     match table_pos(w) {
         Some((i0, w1)) => [lerp_table(&CIE_X, i0, w1), lerp_table(&CIE_Y, i0, w1), lerp_table(&CIE_Z, i0, w1)],
         None => [0.0; 3],

@@ -237,6 +237,24 @@ fn directionalarea_emitters_match_mitsuba() {
     compare("directionalarea", 256);
 }
 
+#[test]
+fn sunsky_matches_mitsuba() {
+    // Mitsuba's Hosek-Wilkie `sunsky` (from a date, time and place) over diffuse shapes.
+    if let Some(why) = common::sunsky_data_missing() {
+        return common::skip("sunsky_matches_mitsuba", &why);
+    }
+    compare("sunsky", 256);
+}
+
+#[test]
+fn timed_sunsky_matches_mitsuba() {
+    // `timed_sunsky` at one instant, with the complex (limb-darkened) sun.
+    if let Some(why) = common::sunsky_data_missing() {
+        return common::skip("timed_sunsky_matches_mitsuba", &why);
+    }
+    compare("timed_sunsky", 256);
+}
+
 /// Mitsuba's `ellipsoids` (analytic) and `ellipsoidsmesh` (icosahedral
 /// shells) from one PLY file, two of the ellipsoids overlapping (back faces culled).
 #[test]

@@ -31,6 +31,7 @@ pub mod point;
 pub mod projector;
 pub mod sampler;
 pub mod spot;
+pub mod sunsky;
 
 pub use area::AreaLight;
 pub use bvh::LightBounds;
@@ -43,6 +44,7 @@ pub use point::PointLight;
 pub use projector::ProjectorLight;
 pub use sampler::{LightSampler, LightSelection};
 pub use spot::SpotLight;
+pub use sunsky::SunskyLight;
 
 use crate::geometry::{Shape, SurfaceInteraction};
 use crate::math::Spectrum;
@@ -86,6 +88,14 @@ pub enum Light {
     /// `directionalarea`: emission along a shape's normals (delta in
     /// direction), reached by no path this renderer traces.
     DirectionalArea(DirectionalAreaLight),
+    /// `sunsky` / `timed_sunsky`: the Hosek–Wilkie sky and sun at infinity
+    /// (`timed` tells which plugin, for [`Light::name`]).
+    Sunsky {
+        /// The model at the rendered instant.
+        light: Box<SunskyLight>,
+        /// Built from `timed_sunsky`.
+        timed: bool,
+    },
 }
 
 impl Light {
@@ -101,6 +111,8 @@ impl Light {
             Light::EqualAreaEnv(_) => "infinite",
             Light::Projector(_) => "projector",
             Light::DirectionalArea(_) => "directionalarea",
+            Light::Sunsky { timed: false, .. } => "sunsky",
+            Light::Sunsky { timed: true, .. } => "timed_sunsky",
         }
     }
 
@@ -117,6 +129,7 @@ impl Light {
             Light::EqualAreaEnv(e) => e.sample_li(u2),
             Light::Projector(p) => p.sample_li(p_ref),
             Light::DirectionalArea(d) => d.sample_li(),
+            Light::Sunsky { light, .. } => light.sample_li(u2),
         }
     }
 
@@ -131,6 +144,7 @@ impl Light {
             Light::Constant(c) => c.pdf(),
             Light::EnvMap(e) => e.pdf(wi),
             Light::EqualAreaEnv(e) => e.pdf(wi),
+            Light::Sunsky { light, .. } => light.pdf(wi),
             Light::Point(_)
             | Light::Spot(_)
             | Light::Directional(_)
@@ -144,7 +158,7 @@ impl Light {
     /// a delta that no ray hits).
     pub fn is_environment(&self) -> bool {
         match self {
-            Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) => true,
+            Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) | Light::Sunsky { .. } => true,
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -163,6 +177,7 @@ impl Light {
             Light::Constant(c) => (c.radiance, c.pdf()),
             Light::EnvMap(e) => e.eval_pdf(wi),
             Light::EqualAreaEnv(e) => e.eval_pdf(wi),
+            Light::Sunsky { light, .. } => light.eval_pdf(wi),
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -180,6 +195,7 @@ impl Light {
             Light::Constant(c) => c.radiance,
             Light::EnvMap(e) => e.eval(wi),
             Light::EqualAreaEnv(e) => e.eval(wi),
+            Light::Sunsky { light, .. } => light.eval(wi),
             Light::Area(_)
             | Light::Point(_)
             | Light::Spot(_)
@@ -198,7 +214,9 @@ impl Light {
             | Light::Directional(_)
             | Light::Projector(_)
             | Light::DirectionalArea(_) => true,
-            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) => false,
+            Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) | Light::Sunsky { .. } => {
+                false
+            }
         }
     }
 
@@ -214,6 +232,7 @@ impl Light {
             Light::Directional(d) => d.power(),
             Light::EnvMap(e) => e.power(scene_radius),
             Light::EqualAreaEnv(e) => e.power(scene_radius),
+            Light::Sunsky { light, .. } => light.power(scene_radius),
             Light::Projector(p) => p.power(),
             // No weight for a light no sample can reach (see directionalarea.rs).
             Light::DirectionalArea(_) => Spectrum::ZERO,
@@ -231,7 +250,11 @@ impl Light {
             Light::Spot(s) => Some(s.bounds()),
             Light::Projector(p) => Some(p.bounds()),
             Light::DirectionalArea(d) => Some(d.bounds(&shapes[d.shape as usize])),
-            Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) | Light::Directional(_) => None,
+            Light::Constant(_)
+            | Light::EnvMap(_)
+            | Light::EqualAreaEnv(_)
+            | Light::Sunsky { .. }
+            | Light::Directional(_) => None,
         }
     }
 }

@@ -9,9 +9,12 @@ use crate::image_io;
 use glam::{DVec3, Vec3};
 use penumbra_render::camera::tan_half_x;
 use penumbra_render::geometry::Shape;
+use penumbra_render::light::sunsky::{
+    dir_to_sph, sun_coordinates, DateTime, Location, SunskyParams, SunskyTables, TimedRange,
+};
 use penumbra_render::light::{
     AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight,
-    SpotLight,
+    SpotLight, SunskyLight,
 };
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
@@ -28,20 +31,33 @@ pub(super) const EMITTERS: &Plugins<BuildEmitter> = &[
     ("spot", spot),
     ("directional", directional),
     ("projector", projector),
+    ("sunsky", sunsky),
+    ("timed_sunsky", timed_sunsky),
 ];
 
 fn rgb(v: [f64; 3]) -> Spectrum {
     Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
 }
 
+/// What a light may need from the rest of the scene, known once the
+/// geometry and the sensor are built.
+pub(super) struct LightContext {
+    /// The geometry's bounding radius: a directional light's flux is that
+    /// through the scene's bounding disk.
+    pub scene_radius: f32,
+    /// The sensor's `shutter_open` and `shutter_close` (Mitsuba's defaults 0, 0).
+    pub shutter: (f64, f64),
+    /// Where the sensor is declared.
+    pub sensor_loc: crate::error::FileLoc,
+}
+
 /// A light as declared (parsed and checked where the scene declares it),
-/// made once the geometry's bounding radius is known: a directional light's
-/// flux is that through the scene's bounding disk.
-pub(super) type PendingLight = Box<dyn FnOnce(f32) -> Light>;
+/// made once the [`LightContext`] is known.
+pub(super) type PendingLight = Box<dyn FnOnce(&LightContext) -> Result<Light>>;
 
 /// A light that needs nothing from the rest of the scene.
 fn ready(light: Light) -> PendingLight {
-    Box::new(move |_| light)
+    Box::new(move |_| Ok(light))
 }
 
 /// The area emitter `en` attached to the shape `shape_node`, built as
@@ -185,7 +201,9 @@ fn directional(node: &Node) -> Result<PendingLight> {
     }
     let irradiance = rgb(node.get_rgb("irradiance")?.unwrap_or([1.0; 3]));
     let direction = dir.normalize().as_vec3();
-    Ok(Box::new(move |scene_radius| Light::Directional(DirectionalLight { direction, irradiance, scene_radius })))
+    Ok(Box::new(move |cx| {
+        Ok(Light::Directional(DirectionalLight { direction, irradiance, scene_radius: cx.scene_radius }))
+    }))
 }
 
 fn envmap(node: &Node) -> Result<PendingLight> {
@@ -238,4 +256,183 @@ fn projector(node: &Node) -> Result<PendingLight> {
     let tan_half = glam::Vec2::new(tan_x, tan_x / aspect);
     let light = ProjectorLight::new(to_world.as_mat4(), irradiance, scale as f32, tan_half);
     Ok(ready(Light::Projector(light)))
+}
+
+/// The Hosek–Wilkie tables, read at run time (see `sunsky_data.rs`); a
+/// missing or bad file is an error at the emitter.
+fn sunsky_tables(node: &Node) -> Result<SunskyTables> {
+    crate::sunsky_data::load().map_err(|e| node.error(format!("{}: {e}", node.plugin)))
+}
+
+/// What `sunsky` and `timed_sunsky` share (Mitsuba's `BaseSunskyEmitter`),
+/// checked as Mitsuba checks it.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn sunsky_params(node: &Node) -> Result<SunskyParams> {
+    let name = node.plugin.as_str();
+    let sun_scale = node.float("sun_scale", 1.0)?;
+    if !(sun_scale >= 0.0) {
+        return Err(LoadError::at(node.loc_of("sun_scale"), format!("{name}: sun_scale must not be negative")));
+    }
+    let sky_scale = node.float("sky_scale", 1.0)?;
+    if !(sky_scale >= 0.0) {
+        return Err(LoadError::at(node.loc_of("sky_scale"), format!("{name}: sky_scale must not be negative")));
+    }
+    let turbidity = node.float("turbidity", 3.0)?;
+    if !(1.0..=10.0).contains(&turbidity) {
+        return Err(LoadError::at(
+            node.loc_of("turbidity"),
+            format!("{name}: turbidity {turbidity} is outside [1, 10]"),
+        ));
+    }
+    let aperture = node.float("sun_aperture", 0.5358)?;
+    if !(aperture > 0.0 && aperture < 180.0) {
+        return Err(LoadError::at(
+            node.loc_of("sun_aperture"),
+            format!("{name}: sun_aperture {aperture} must be in ]0, 180[ degrees"),
+        ));
+    }
+    if let Some(c) = node.children_of(Kind::Texture).next() {
+        return Err(LoadError::at(
+            &c.loc,
+            format!("{name}: the albedo cannot be a texture (it must not vary spatially); give a colour"),
+        ));
+    }
+    let albedo = node.get_rgb("albedo")?.unwrap_or([0.3; 3]);
+    if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
+        return Err(LoadError::at(
+            node.loc_of("albedo"),
+            format!("{name}: albedo values must be in [0, 1], got {albedo:?}"),
+        ));
+    }
+    let to_world = node.transform("to_world")?;
+    let m = glam::DMat3::from_mat4(to_world);
+    if !((m.transpose() * m).abs_diff_eq(glam::DMat3::IDENTITY, 1e-5)) {
+        return Err(LoadError::at(
+            node.loc_of("to_world"),
+            format!("{name}: to_world must be a rotation (its directions are not rescaled)"),
+        ));
+    }
+    Ok(SunskyParams {
+        turbidity: turbidity as f32,
+        albedo: albedo.map(|a| a as f32),
+        sun_scale: sun_scale as f32,
+        sky_scale: sky_scale as f32,
+        sun_aperture: aperture as f32,
+        complex_sun: node.bool("complex_sun", false)?,
+        world_from_light: glam::Mat3::from_mat4(to_world.as_mat4()),
+    })
+}
+
+fn location(node: &Node) -> Result<Location> {
+    Ok(Location {
+        latitude: node.float("latitude", 35.6894)? as f32,
+        longitude: node.float("longitude", 139.6917)? as f32,
+        timezone: node.float("timezone", 9.0)? as f32,
+    })
+}
+
+/// Mitsuba's `sunsky`: the sun from `sun_direction` (world space) or from
+/// the date, time and place (defaults: Tokyo, 10 July 2010, 15:00).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn sunsky(node: &Node) -> Result<PendingLight> {
+    let params = sunsky_params(node)?;
+    const TIME_PLACE: [&str; 9] =
+        ["latitude", "longitude", "timezone", "year", "month", "day", "hour", "minute", "second"];
+    let (theta, phi) = match node.get_point("sun_direction")? {
+        Some(d) => {
+            if let Some(p) = TIME_PLACE.iter().find(|p| node.has(p)) {
+                return Err(LoadError::at(
+                    node.loc_of(p),
+                    "sunsky: give either 'sun_direction' or the time and place, not both",
+                ));
+            }
+            if !(d.length() > 0.0) {
+                return Err(LoadError::at(node.loc_of("sun_direction"), "sunsky: sun_direction must not be zero"));
+            }
+            let local = params.world_from_light.transpose() * d.normalize().as_vec3();
+            dir_to_sph(local.normalize())
+        }
+        None => {
+            let t = DateTime {
+                year: node.int("year", 2010)? as i32,
+                month: node.int("month", 7)? as i32,
+                day: node.int("day", 10)? as i32,
+                hour: node.float("hour", 15.0)? as f32,
+                minute: node.float("minute", 0.0)? as f32,
+                second: node.float("second", 0.0)? as f32,
+            };
+            sun_coordinates(&t, &location(node)?)
+        }
+    };
+    let tables = sunsky_tables(node)?;
+    let light = SunskyLight::sunsky(&params, &tables, theta, phi);
+    Ok(ready(Light::Sunsky { light: Box::new(light), timed: false }))
+}
+
+/// Mitsuba's `timed_sunsky`, at the sensor's instant (`shutter_open`): the
+/// sensor's shutter must not be open over an interval, since Penumbra does
+/// not sample ray times.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn timed_sunsky(node: &Node) -> Result<PendingLight> {
+    let params = sunsky_params(node)?;
+    let date = |prefix: &str, default: [i64; 3]| -> Result<DateTime> {
+        Ok(DateTime {
+            year: node.int(&format!("{prefix}_year"), default[0])? as i32,
+            month: node.int(&format!("{prefix}_month"), default[1])? as i32,
+            day: node.int(&format!("{prefix}_day"), default[2])? as i32,
+            hour: 0.0,
+            minute: 0.0,
+            second: 0.0,
+        })
+    };
+    let start = date("start", [2025, 1, 1])?;
+    let end = date("end", [start.year as i64 + 1, start.month as i64, start.day as i64])?;
+    let window_start = node.float("window_start_time", 7.0)?;
+    let window_end = node.float("window_end_time", 19.0)?;
+    for (p, v) in [("window_start_time", window_start), ("window_end_time", window_end)] {
+        if !(0.0..=24.0).contains(&v) {
+            return Err(LoadError::at(node.loc_of(p), format!("timed_sunsky: {p} {v} is outside [0, 24] hours")));
+        }
+    }
+    if window_start > window_end {
+        return Err(node.error("timed_sunsky: window_start_time is after window_end_time"));
+    }
+    let shutter_open = node.float("shutter_open", 0.0)?;
+    let shutter_close = node.float("shutter_close", 1.0)?;
+    // (Mitsuba accepts equal times, then divides by zero: every time maps to NaN.)
+    if !(shutter_close > shutter_open) {
+        return Err(node.error("timed_sunsky: shutter_close must be after shutter_open"));
+    }
+    let range = TimedRange {
+        location: location(node)?,
+        start,
+        end,
+        window_start: window_start as f32,
+        window_end: window_end as f32,
+        shutter_open: shutter_open as f32,
+        shutter_close: shutter_close as f32,
+    };
+    if range.days().is_none() {
+        return Err(node.error("timed_sunsky: the start date is after the end date"));
+    }
+    let tables = sunsky_tables(node)?;
+    let loc = node.loc.clone();
+    Ok(Box::new(move |cx: &LightContext| {
+        let (open, close) = cx.shutter;
+        if close > open {
+            return Err(LoadError::at(
+                &loc,
+                format!(
+                    "timed_sunsky: the sensor ({}) keeps its shutter open from {open} to {close}; Penumbra renders one \
+                     instant (it does not sample ray times), so give the sensor no shutter interval \
+                     (shutter_close = shutter_open) and choose the instant with the sensor's shutter_open and this \
+                     emitter's shutter_open / shutter_close",
+                    cx.sensor_loc
+                ),
+            ));
+        }
+        let (theta, phi) = range.sun_angles(open as f32);
+        let light = SunskyLight::timed(&params, &tables, theta, phi);
+        Ok(Light::Sunsky { light: Box::new(light), timed: true })
+    }))
 }

@@ -238,7 +238,12 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
     cache.shapes = std::mem::take(&mut b.cache);
     let radius = accel.bounds.bounding_radius();
     camera.set_scene_bounds(accel.bounds.min, accel.bounds.max);
-    let lights = b.lights.into_iter().map(|light| light(radius)).collect();
+    let cx = emitter::LightContext {
+        scene_radius: radius,
+        shutter: (sensor.float("shutter_open", 0.0)?, sensor.float("shutter_close", 0.0)?),
+        sensor_loc: sensor.loc.clone(),
+    };
+    let lights = b.lights.into_iter().map(|light| light(&cx)).collect::<Result<Vec<_>>>()?;
     let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
     if let Integrator::PTracer(pt) = &integrator {
         check_ptracer(pt, &camera, sampler.spp, &integrator_loc)?;

@@ -37,6 +37,12 @@ mod skip;
 #[allow(unused_imports)]
 pub use skip::{in_ci, skip};
 
+/// Why the Hosek-Wilkie tables of `sunsky` cannot be read (None when they
+/// can): they come with an installed Mitsuba, not with Penumbra.
+pub fn sunsky_data_missing() -> Option<String> {
+    penumbra_scene::sunsky_data::load().err()
+}
+
 /// Probability that [`compare`] rejects two unbiased estimates of one image.
 pub const FALSE_ALARM: f64 = 1e-4;
 /// Side of the square pixel blocks of the block statistics.
