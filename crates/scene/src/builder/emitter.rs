@@ -6,12 +6,13 @@ use super::{plugin, resolve, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
+use crate::scene_builder::Emission;
+pub(super) use crate::scene_builder::PendingLight;
 use glam::{DVec3, Vec3};
 use penumbra_render::camera::tan_half_x;
 use penumbra_render::geometry::Shape;
 use penumbra_render::light::{
-    AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight,
-    SpotLight,
+    ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight, SpotLight,
 };
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
@@ -34,28 +35,17 @@ fn rgb(v: [f64; 3]) -> Spectrum {
     Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
 }
 
-/// A light as declared (parsed and checked where the scene declares it),
-/// made once the geometry's bounding radius is known: a directional light's
-/// flux is that through the scene's bounding disk.
-pub(super) type PendingLight = Box<dyn FnOnce(f32) -> Light>;
-
 /// A light that needs nothing from the rest of the scene.
 fn ready(light: Light) -> PendingLight {
     Box::new(move |_| light)
 }
 
-/// The area emitter `en` attached to the shape `shape_node`, built as
-/// `shape` with id `shape_id`. Its `radiance` (Mitsuba's default 1) is a
+/// The light the area emitter `en` attached to the shape `shape_node`
+/// (built as `shape`) emits. Its `radiance` (Mitsuba's default 1) is a
 /// colour or a nested `bitmap` / `checkerboard` texture.
-pub(super) fn area(
-    en: &Node,
-    shape_node: &Node,
-    shape: &Shape,
-    shape_id: u32,
-    textures: &mut Textures,
-) -> Result<PendingLight> {
+pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, textures: &mut Textures) -> Result<Emission> {
     if en.plugin == "directionalarea" {
-        return directional_area(en, shape_node, shape, shape_id);
+        return directional_area(en, shape_node, shape);
     }
     if en.plugin != "area" {
         return Err(en.error(format!(
@@ -87,7 +77,7 @@ pub(super) fn area(
     if shape.area() <= 0.0 {
         return Err(shape_node.error("an area emitter's shape has zero area"));
     }
-    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance })))
+    Ok(Emission::Diffuse(radiance))
 }
 
 /// An emitter declared at the top level (not attached to a shape).
@@ -104,7 +94,7 @@ fn area_at_top_level(node: &Node) -> Result<PendingLight> {
 
 /// Mitsuba's `directionalarea` on the shape `shape_node`: `radiance` (a
 /// colour, default 1) along the shape's normals.
-fn directional_area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
+fn directional_area(en: &Node, shape_node: &Node, shape: &Shape) -> Result<Emission> {
     if let Some(c) = en.children_of(Kind::Texture).next() {
         return Err(LoadError::at(&c.loc, "directionalarea: a textured radiance is not supported; give a colour"));
     }
@@ -122,7 +112,7 @@ fn directional_area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) 
     if shape.area() <= 0.0 {
         return Err(shape_node.error("a directionalarea emitter's shape has zero area"));
     }
-    Ok(ready(Light::DirectionalArea(DirectionalAreaLight { shape: shape_id, radiance })))
+    Ok(Emission::Directional(radiance))
 }
 
 fn constant(node: &Node) -> Result<PendingLight> {
