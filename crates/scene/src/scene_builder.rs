@@ -372,13 +372,19 @@ impl SceneBuilder {
                 return Err(LoadError::at(at, "the shape cannot carry an area light (points on it cannot be sampled)"))
             }
             Some(_) if shape.area() <= 0.0 => return Err(LoadError::at(at, "an area light's shape has zero area")),
+            Some(Emission::Diffuse(Texture::MeshAttribute(_))) => {
+                return Err(LoadError::at(at, "an area light's radiance cannot be a mesh attribute"))
+            }
+            Some(Emission::Diffuse(Texture::Constant(c))) | Some(Emission::Directional(c)) if c.min_element() < 0.0 => {
+                return Err(LoadError::at(at, "an area light's radiance must not be negative"))
+            }
             Some(Emission::Diffuse(radiance)) => Some(Light::Area(AreaLight { shape: id, radiance })),
             Some(Emission::Directional(radiance)) => {
                 Some(Light::DirectionalArea(DirectionalAreaLight { shape: id, radiance }))
             }
         };
         let light = light.map(|l| {
-            self.add_light(l);
+            self.lights.push(Box::new(move |_| l));
             (self.lights.len() - 1) as u32
         });
         self.shapes.push(shape);
@@ -388,9 +394,9 @@ impl SceneBuilder {
         Ok(id)
     }
 
-    /// The shape `id`, as added.
-    pub fn shape(&self, id: ShapeId) -> &Shape {
-        &self.shapes[id as usize]
+    /// The shape `id`, as added (`None` if there is no such shape).
+    pub fn shape(&self, id: ShapeId) -> Option<&Shape> {
+        self.shapes.get(id as usize)
     }
 
     /// How many shapes have been added.
@@ -434,8 +440,12 @@ impl SceneBuilder {
 
     /// Adds a light that is not on a shape (point, spot, directional,
     /// environment, ...): a directional light's `scene_radius` is set to
-    /// the scene's bounding radius when the scene is finished.
-    pub fn add_light(&mut self, light: Light) {
+    /// the scene's bounding radius when the scene is finished. Area lights
+    /// come with their shape ([`ShapeDesc::emission`]).
+    pub fn add_light(&mut self, light: Light, at: &Location) -> Result<()> {
+        if matches!(light, Light::Area(_) | Light::DirectionalArea(_)) {
+            return Err(LoadError::at(at, "an area light is given with its shape (ShapeDesc::emission)"));
+        }
         self.lights.push(Box::new(move |radius| match light {
             Light::Directional(mut d) => {
                 d.scene_radius = radius;
@@ -443,6 +453,7 @@ impl SceneBuilder {
             }
             l => l,
         }));
+        Ok(())
     }
 
     /// Adds a light made from the scene's bounding radius once it is known.

@@ -202,6 +202,14 @@ fn bad_input_is_an_error_at_the_location_given() {
     assert_eq!(e, "scene.pbrt:12:1: material 7 does not exist");
     let e = s.add_instance(3, Mat4::IDENTITY, &at).unwrap_err().to_string();
     assert_eq!(e, "scene.pbrt:12:1: group 3 does not exist");
+    let light =
+        penumbra_render::light::Light::Area(penumbra_render::light::AreaLight { shape: 0, radiance: Vec3::ONE.into() });
+    let e = s.add_light(light, &at).unwrap_err().to_string();
+    assert!(e.contains("an area light is given with its shape"), "{e}");
+    let negative = self::tile().into_geometry(&Mat4::IDENTITY, false, false, &at).unwrap();
+    let emission = Some(Emission::Diffuse(Vec3::new(1.0, -1.0, 1.0).into()));
+    let e = s.add_shape(ShapeDesc { emission, ..ShapeDesc::new(negative, m) }, &at).unwrap_err().to_string();
+    assert!(e.contains("must not be negative"), "{e}");
     let e = s.finish().err().unwrap().to_string();
     assert_eq!(e, "scene.pbrt:12:1: the scene has no camera");
 }

@@ -186,7 +186,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             )))
         }
         (Some(top), None) => (top, None),
-        (None, Some((nested, id))) => (nested.clone(), Some(b.scene.shape(*id).clone())),
+        (None, Some((nested, id))) => (nested.clone(), b.scene.shape(*id).cloned()),
         (None, None) => return Err(root.error("the scene has no <sensor>; add a perspective sensor")),
     };
     let (camera, filter, film, sampler) = build_sensor(&sensor, ov, on_shape)?;
