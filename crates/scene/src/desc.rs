@@ -1,6 +1,8 @@
-//! Format-neutral scene description: a tree of plugin nodes with typed
-//! properties, each carrying its file position. The Mitsuba XML reader
-//! produces it; `builder/` turns it into a render scene.
+//! Mitsuba's object model: a tree of plugin nodes with typed properties,
+//! each carrying its file position. The Mitsuba XML reader produces it;
+//! `builder/` translates it into calls of the format-neutral
+//! [`crate::scene_builder::SceneBuilder`]. Other formats' readers call the
+//! builder directly.
 
 use crate::error::{FileLoc, LoadError};
 use glam::{DMat4, DVec3};

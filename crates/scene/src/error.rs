@@ -17,12 +17,21 @@ pub struct FileLoc {
     /// looked up in, in order (Mitsuba's file resolver after `<path>`
     /// elements); `None` means the directory of `file` alone.
     pub search: Option<Arc<Vec<PathBuf>>>,
+    /// A position that is not a line (when `line` is 0): a glTF JSON
+    /// pointer (`/meshes/0/primitives/1`), a byte offset (`byte 1024`).
+    pub place: Option<Arc<str>>,
 }
 
 impl FileLoc {
     /// A position without search directories.
     pub fn new(file: Arc<PathBuf>, line: u32, col: u32) -> Self {
-        FileLoc { file, line, col, search: None }
+        FileLoc { file, line, col, search: None, place: None }
+    }
+
+    /// A position in `file` given by `place` (a JSON pointer, a byte offset):
+    /// shown as `FILE at PLACE`.
+    pub fn with_place(file: Arc<PathBuf>, place: impl Into<Arc<str>>) -> Self {
+        FileLoc { file, line: 0, col: 0, search: None, place: Some(place.into()) }
     }
 
     /// The directories searched for a relative file name given here.
@@ -34,18 +43,21 @@ impl FileLoc {
     }
 }
 
-/// Two positions are equal when file, line and column are (search
+/// Two positions are equal when file, line, column and place are (search
 /// directories are context, not position).
 impl PartialEq for FileLoc {
     fn eq(&self, other: &Self) -> bool {
-        self.file == other.file && self.line == other.line && self.col == other.col
+        self.file == other.file && self.line == other.line && self.col == other.col && self.place == other.place
     }
 }
 impl Eq for FileLoc {}
 
 impl fmt::Display for FileLoc {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}:{}", self.file.display(), self.line, self.col)
+        match &self.place {
+            Some(place) if self.line == 0 => write!(f, "{} at {place}", self.file.display()),
+            _ => write!(f, "{}:{}:{}", self.file.display(), self.line, self.col),
+        }
     }
 }
 
@@ -76,7 +88,7 @@ impl LoadError {
 impl fmt::Display for LoadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.loc {
-            Some(l) if l.line > 0 => write!(f, "{l}: {}", self.message),
+            Some(l) if l.line > 0 || l.place.is_some() => write!(f, "{l}: {}", self.message),
             Some(l) => write!(f, "{}: {}", l.file.display(), self.message),
             None => write!(f, "{}", self.message),
         }

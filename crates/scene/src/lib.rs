@@ -1,5 +1,7 @@
-//! Scene loading for Penumbra: Mitsuba 3 XML → format-neutral description
-//! (`desc`) → render job (`build`), plus mesh readers, image output and atomic file writes.
+//! Scene loading for Penumbra: each format's reader translates its scene
+//! into calls of the format-neutral [`SceneBuilder`], which assembles the
+//! render job (Mitsuba 3 XML: `mitsuba` → `desc` → `builder`), plus mesh
+//! readers, image output and atomic file writes.
 
 #![warn(missing_docs)]
 
@@ -13,6 +15,7 @@ pub mod obj;
 pub mod pbrt;
 pub mod ply;
 pub mod props;
+pub mod scene_builder;
 pub mod serialized;
 pub mod spectrum;
 pub mod sunsky_data;
@@ -21,6 +24,7 @@ pub mod vol;
 
 pub use builder::{supported_plugins, Overrides};
 pub use error::{FileLoc, LoadError, Result};
+pub use scene_builder::{Location, SceneBuilder};
 
 use penumbra_render::render::RenderJob;
 use std::path::Path;

@@ -6,6 +6,7 @@ use super::{plugin, resolve, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
+use crate::scene_builder::Emission;
 use glam::{DVec3, Vec3};
 use penumbra_render::camera::tan_half_x;
 use penumbra_render::geometry::Shape;
@@ -13,8 +14,7 @@ use penumbra_render::light::sunsky::{
     dir_to_sph, sun_coordinates, DateTime, Location, SunskyParams, SunskyTables, TimedRange,
 };
 use penumbra_render::light::{
-    AreaLight, ConstantLight, DirectionalAreaLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight,
-    SpotLight, SunskyLight,
+    ConstantLight, DirectionalLight, EnvMapLight, Light, PointLight, ProjectorLight, SpotLight, SunskyLight,
 };
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::Texture;
@@ -52,7 +52,9 @@ pub(super) struct LightContext {
 }
 
 /// A light as declared (parsed and checked where the scene declares it),
-/// made once the [`LightContext`] is known.
+/// made once the [`LightContext`] is known (the builder's
+/// [`crate::scene_builder::PendingLight`] gets the scene radius; `mod.rs`
+/// adds the sensor's part).
 pub(super) type PendingLight = Box<dyn FnOnce(&LightContext) -> Result<Light>>;
 
 /// A light that needs nothing from the rest of the scene.
@@ -60,18 +62,12 @@ fn ready(light: Light) -> PendingLight {
     Box::new(move |_| Ok(light))
 }
 
-/// The area emitter `en` attached to the shape `shape_node`, built as
-/// `shape` with id `shape_id`. Its `radiance` (Mitsuba's default 1) is a
+/// The light the area emitter `en` attached to the shape `shape_node`
+/// (built as `shape`) emits. Its `radiance` (Mitsuba's default 1) is a
 /// colour or a nested `bitmap` / `checkerboard` texture.
-pub(super) fn area(
-    en: &Node,
-    shape_node: &Node,
-    shape: &Shape,
-    shape_id: u32,
-    textures: &mut Textures,
-) -> Result<PendingLight> {
+pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, textures: &mut Textures) -> Result<Emission> {
     if en.plugin == "directionalarea" {
-        return directional_area(en, shape_node, shape, shape_id);
+        return directional_area(en, shape_node, shape);
     }
     if en.plugin != "area" {
         return Err(en.error(format!(
@@ -103,7 +99,7 @@ pub(super) fn area(
     if shape.area() <= 0.0 {
         return Err(shape_node.error("an area emitter's shape has zero area"));
     }
-    Ok(ready(Light::Area(AreaLight { shape: shape_id, radiance })))
+    Ok(Emission::Diffuse(radiance))
 }
 
 /// An emitter declared at the top level (not attached to a shape).
@@ -120,7 +116,7 @@ fn area_at_top_level(node: &Node) -> Result<PendingLight> {
 
 /// Mitsuba's `directionalarea` on the shape `shape_node`: `radiance` (a
 /// colour, default 1) along the shape's normals.
-fn directional_area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) -> Result<PendingLight> {
+fn directional_area(en: &Node, shape_node: &Node, shape: &Shape) -> Result<Emission> {
     if let Some(c) = en.children_of(Kind::Texture).next() {
         return Err(LoadError::at(&c.loc, "directionalarea: a textured radiance is not supported; give a colour"));
     }
@@ -138,7 +134,7 @@ fn directional_area(en: &Node, shape_node: &Node, shape: &Shape, shape_id: u32) 
     if shape.area() <= 0.0 {
         return Err(shape_node.error("a directionalarea emitter's shape has zero area"));
     }
-    Ok(ready(Light::DirectionalArea(DirectionalAreaLight { shape: shape_id, radiance })))
+    Ok(Emission::Directional(radiance))
 }
 
 fn constant(node: &Node) -> Result<PendingLight> {

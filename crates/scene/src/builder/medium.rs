@@ -16,6 +16,7 @@
 use super::{plugin, resolve, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
+use crate::scene_builder::SceneBuilder;
 use glam::{Mat4, Vec3};
 use penumbra_render::math::Spectrum;
 use penumbra_render::medium::volume::unit_cube_bounds;
@@ -37,13 +38,11 @@ pub(super) const VOLUMES: &Plugins<BuildVolume> = &[("constvolume", constvolume)
 #[derive(Default)]
 pub(super) struct Media {
     index: HashMap<*const Node, u32>,
-    /// Every medium, by index.
-    pub(super) media: Vec<Medium>,
 }
 
 impl Media {
     /// The index of the medium `node`, built on first use.
-    pub(super) fn get(&mut self, node: &Rc<Node>) -> Result<u32> {
+    pub(super) fn get(&mut self, node: &Rc<Node>, scene: &mut SceneBuilder) -> Result<u32> {
         let key = Rc::as_ptr(node);
         if let Some(&i) = self.index.get(&key) {
             return Ok(i);
@@ -58,8 +57,7 @@ impl Media {
         // default); the flag cannot change the image.
         node.accept(&["has_spectral_extinction"]);
         node.check_all_used(&[Kind::Phase, Kind::Volume])?;
-        let i = self.media.len() as u32;
-        self.media.push(Medium { kind, phase, sample_emitters });
+        let i = scene.add_medium(Medium { kind, phase, sample_emitters });
         self.index.insert(key, i);
         Ok(i)
     }

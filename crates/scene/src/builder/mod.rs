@@ -1,6 +1,7 @@
-//! Scene description → render job. The only module that knows both the
-//! format-neutral description and the render types: one file per object
-//! kind (`shape`, `bsdf`, `texture`, `emitter`, `sensor`, `integrator`),
+//! Mitsuba scene description → calls of the format-neutral
+//! [`SceneBuilder`], which assembles the render job: one file per object
+//! kind (`shape`, `bsdf`, `texture`, `emitter`, `sensor`, `integrator`,
+//! `medium`), each translating its plugins' parameters into render values,
 //! orchestrated by [`build`]. Every property a plugin reads is marked;
 //! whatever is left unread is reported as unsupported (see `props.rs`).
 
@@ -15,7 +16,6 @@ mod shape;
 mod texture;
 
 use bsdf::build_material;
-use emitter::PendingLight;
 use integrator::build_integrator;
 pub use integrator::integrator_from_spec;
 use sensor::build_sensor;
@@ -25,17 +25,14 @@ use texture::Textures;
 use crate::desc::{Kind, Node, SceneDesc};
 use crate::error::FileLoc;
 use crate::error::{LoadError, Result};
-use penumbra_render::accel::{Accel, Instance, Primitive, ShapeGroup};
-use penumbra_render::geometry::Shape;
+pub use crate::scene_builder::GeometryCache;
+use crate::scene_builder::{Geometry, GroupId, SceneBuilder};
 use penumbra_render::integrator::{Integrator, PathIntegrator};
 use penumbra_render::light::LightSelection;
-use penumbra_render::material::Material;
 use penumbra_render::render::RenderJob;
-use penumbra_render::scene::{Scene, ShapeInfo, ShapeMedia};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
-use std::sync::Arc;
 
 /// Settings from the command line that override the scene file.
 #[derive(Debug, Clone, Default)]
@@ -114,30 +111,12 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
     build_cached(desc, ov, &mut GeometryCache::default())
 }
 
-/// What rebuilding the same scene with other parameters (Python's
-/// `scene.set`) can reuse: each shape's geometry, keyed by its node's
-/// position, plugin and properties (so a changed radius or transform
-/// rebuilds that shape), and the top-level BVH when every shape it holds
-/// was reused. Reused geometry is bitwise the geometry a fresh build makes
-/// from the same description; mesh files are not read again, so a file
-/// changed on disk needs a fresh load.
-#[derive(Default)]
-pub struct GeometryCache {
-    /// Geometry by shape key, with the properties its builder read.
-    shapes: HashMap<String, (Geometry, Vec<String>)>,
-    /// The last top-level BVH and the shape keys it was built over.
-    accel: Option<(Vec<String>, Accel)>,
-    /// Shapes built (not reused) over the cache's life.
-    pub shapes_built: u64,
-    /// Top-level BVHs built over the cache's life.
-    pub accels_built: u64,
-}
-
 /// [`build`], reusing (and refilling) `cache`: the job is bitwise the one
-/// [`build`] makes.
+/// [`build`] makes. A shape's geometry is cached under its node's position,
+/// plugin and properties.
 pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache) -> Result<RenderJob> {
     let root = &desc.root;
-    let mut b = Builder { cache: std::mem::take(&mut cache.shapes), ..Builder::default() };
+    let mut b = Builder::new(SceneBuilder::with_cache(root.loc.clone(), cache));
     let mut sensor = None;
     let mut integrator = None;
     for child in &root.children {
@@ -149,7 +128,16 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             Kind::Emitter | Kind::Sampler | Kind::Film | Kind::Rfilter
                 if Rc::strong_count(node) > 1 && (node.kind != Kind::Emitter || matches!(node.plugin.as_str(), "area" | "directionalarea")) => {}
             Kind::Shape => b.shape(node)?,
-            Kind::Emitter => b.lights.push(emitter::top_level(node)?),
+            Kind::Emitter => {
+                // Made once the scene radius (from the builder) and the sensor are known, in document order.
+                let light = emitter::top_level(node)?;
+                let sensor_cx = b.sensor_cx.clone();
+                let loc = node.loc.clone();
+                b.scene.add_light_deferred(Box::new(move |scene_radius| {
+                    let s = sensor_cx.get().ok_or_else(|| LoadError::at(&loc, "an emitter in a scene without a sensor"))?;
+                    light(&emitter::LightContext { scene_radius, shutter: s.shutter, sensor_loc: s.loc.clone() })
+                }))
+            }
             Kind::Sensor => {
                 if sensor.is_some() {
                     return Err(LoadError::at(&child.loc, "the scene has more than one sensor; Penumbra renders one"));
@@ -170,7 +158,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
                 b.textures.build(node)?;
             }
             Kind::Medium => {
-                b.media.get(node)?;
+                b.media.get(node, &mut b.scene)?;
             }
             _ => {
                 return Err(LoadError::at(
@@ -207,12 +195,12 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             )))
         }
         (Some(top), None) => (top, None),
-        (None, Some((nested, id))) => (nested.clone(), Some(b.shapes[*id as usize].clone())),
+        (None, Some((nested, id))) => (nested.clone(), b.scene.shape(*id).cloned()),
         (None, None) => return Err(root.error("the scene has no <sensor>; add a perspective sensor")),
     };
-    let (mut camera, filter, film, sampler) = build_sensor(&sensor, ov, on_shape)?;
+    let (camera, filter, film, sampler) = build_sensor(&sensor, ov, on_shape)?;
     let camera_medium = match sensor.single_child(Kind::Medium)? {
-        Some(m) => Some(b.media.get(&m)?),
+        Some(m) => Some(b.media.get(&m, &mut b.scene)?),
         None => None,
     };
     let integrator_loc = integrator.as_ref().map_or_else(|| sensor.loc.clone(), |n| n.loc.clone());
@@ -221,118 +209,68 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         (None, Some(node)) => build_integrator(node)?,
         (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
     };
-    b.textures.finish_mesh_attributes(b.shapes.len());
-    // Lights are made once the geometry's bounds are known.
-    // Reused only without instances, whose groups have BVHs of their own.
-    let accel = match cache.accel.take() {
-        Some((keys, accel)) if b.instances.is_empty() && keys == b.shape_keys => accel,
-        _ => {
-            cache.accels_built += 1;
-            Accel::build(&b.placed, &b.shapes, &b.instances)
-        }
-    };
-    if b.instances.is_empty() {
-        cache.accel = Some((std::mem::take(&mut b.shape_keys), accel.clone()));
-    }
-    cache.shapes_built += b.shapes_built;
-    cache.shapes = std::mem::take(&mut b.cache);
-    let radius = accel.bounds.bounding_radius();
-    camera.set_scene_bounds(accel.bounds.min, accel.bounds.max);
-    let cx = emitter::LightContext {
-        scene_radius: radius,
+    b.textures.finish_mesh_attributes(b.scene.shape_count());
+    // What the declared lights need of the sensor (timed_sunsky: its shutter).
+    let _ = b.sensor_cx.set(SensorContext {
         shutter: (sensor.float("shutter_open", 0.0)?, sensor.float("shutter_close", 0.0)?),
-        sensor_loc: sensor.loc.clone(),
-    };
-    let lights = b.lights.into_iter().map(|light| light(&cx)).collect::<Result<Vec<_>>>()?;
-    let mut scene = Scene::with_accel(accel, b.shapes, b.infos, b.instances, b.placed, b.materials, lights);
-    if let Integrator::PTracer(pt) = &integrator {
-        check_ptracer(pt, &camera, sampler.spp, &integrator_loc)?;
-    }
-    scene.set_light_selection(selection);
-    if !b.media.media.is_empty() {
-        let shape_media = if b.shape_media.iter().any(ShapeMedia::is_transition) { b.shape_media } else { Vec::new() };
-        scene.set_media(std::mem::take(&mut b.media.media), shape_media, camera_medium);
-    }
-    Ok(RenderJob {
-        scene,
-        camera,
-        integrator,
-        sampler,
-        filter,
-        width: film.crop_size.0,
-        height: film.crop_size.1,
-        crop_offset: film.crop_offset,
-        full_size: film.size,
-        stream: true,
-        packet_lanes: 0,
-    })
+        loc: sensor.loc.clone(),
+    });
+    let mut scene = b.scene;
+    scene.set_camera(camera, camera_medium);
+    scene.set_film(film, filter);
+    scene.set_sampler(sampler);
+    scene.set_integrator(integrator, selection, &integrator_loc);
+    scene.finish_cached(cache)
 }
 
-/// What Penumbra's `ptracer` needs: a perspective or thin-lens camera and (as Mitsuba)
-/// a sample count that is a multiple of `samples_per_pass`.
-fn check_ptracer(
-    pt: &penumbra_render::integrator::ParticleTracer,
-    camera: &penumbra_render::camera::Camera,
-    spp: u32,
-    at: &crate::error::FileLoc,
-) -> Result<()> {
-    use penumbra_render::camera::Projection;
-    if !matches!(camera.projection, Projection::Pinhole | Projection::ThinLens { .. }) {
-        return Err(LoadError::at(at, "ptracer connects light paths to perspective and thinlens sensors only"));
-    }
-    if let Some(n) = pt.samples_per_pass {
-        if !spp.is_multiple_of(n) {
-            return Err(LoadError::at(
-                at,
-                format!("ptracer: sample_count ({spp}) must be a multiple of samples_per_pass ({n}), as in Mitsuba"),
-            ));
-        }
-    }
-    Ok(())
+/// What declared lights need of the sensor: its shutter interval and where it is declared.
+struct SensorContext {
+    shutter: (f64, f64),
+    loc: crate::error::FileLoc,
 }
 
-#[derive(Default)]
+/// The translation of one scene's nodes into [`SceneBuilder`] calls, with
+/// what is shared through `<ref>` by node identity.
 struct Builder {
-    /// Every shape by id, shape-group members included.
-    shapes: Vec<Shape>,
-    infos: Vec<ShapeInfo>,
-    instances: Vec<Instance>,
-    /// What the scene's BVH holds, in file order: the shapes placed
-    /// directly and the instances.
-    placed: Vec<Primitive>,
-    materials: Vec<Material>,
+    /// The scene assembled.
+    scene: SceneBuilder,
     textures: Textures,
-    /// In scene order: area lights with their shapes, top-level emitters as declared.
-    lights: Vec<PendingLight>,
     /// BSDF nodes already built, by node identity (shared through `<ref>`).
     bsdf_index: HashMap<*const Node, u32>,
     default_bsdf: Option<u32>,
     default_emitter_bsdf: Option<u32>,
     /// Shape groups already built, by node identity (instanced through `<ref>`).
-    groups: HashMap<*const Node, Arc<ShapeGroup>>,
-    /// [`GeometryCache::shapes`], taken for the build.
-    cache: HashMap<String, (Geometry, Vec<String>)>,
-    /// The cache key of each shape, by id.
-    shape_keys: Vec<String>,
-    /// Shapes whose geometry was built, not reused.
-    shapes_built: u64,
+    groups: HashMap<*const Node, GroupId>,
     /// Media, built where first used.
     media: medium::Media,
-    /// Per shape id, the media it bounds.
-    shape_media: Vec<ShapeMedia>,
     /// Sensors nested in shapes (`irradiancemeter`), with the shape's id.
     shape_sensors: Vec<(Rc<Node>, u32)>,
+    /// The sensor's part of the declared lights' context, set once the sensor is built.
+    sensor_cx: Rc<std::cell::OnceCell<SensorContext>>,
 }
 
 impl Builder {
+    fn new(scene: SceneBuilder) -> Self {
+        Builder {
+            scene,
+            textures: Textures::default(),
+            bsdf_index: HashMap::new(),
+            default_bsdf: None,
+            default_emitter_bsdf: None,
+            groups: HashMap::new(),
+            media: medium::Media::default(),
+            shape_sensors: Vec::new(),
+            sensor_cx: Rc::default(),
+        }
+    }
+
     fn bsdf(&mut self, node: &Rc<Node>) -> Result<u32> {
         let key = Rc::as_ptr(node);
         if let Some(&i) = self.bsdf_index.get(&key) {
             return Ok(i);
         }
         let m = build_material(node, &mut self.textures)?;
-        let i = self.materials.len() as u32;
-        self.materials.push(m);
+        let i = self.scene.add_material(m);
         self.bsdf_index.insert(key, i);
         Ok(i)
     }
@@ -359,10 +297,6 @@ pub(crate) fn resolve(loc: &FileLoc, name: &str, what: &str) -> Result<PathBuf> 
     let searched: Vec<String> = dirs.iter().map(|d| format!("'{}'", d.display())).collect();
     Err(LoadError::at(loc, format!("{what} '{name}' not found (searched {})", searched.join(", "))))
 }
-
-/// A shape's geometry with its mesh attributes (PLY vertex colours and
-/// other properties; Mitsuba's `mesh_attribute` textures read them).
-pub(super) type Geometry = (penumbra_render::geometry::Shape, Vec<penumbra_render::texture::MeshAttributeData>);
 
 #[cfg(test)]
 mod tests {

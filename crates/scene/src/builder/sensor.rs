@@ -14,11 +14,7 @@ pub const SAMPLER_OVERRIDES: &[&str] =
     &["independent", "stratified", "multijitter", "orthogonal", "ldsampler", "sobol"];
 
 /// Film geometry: full size and the crop window rendered.
-pub(super) struct FilmRect {
-    pub(super) size: (u32, u32),
-    pub(super) crop_offset: (u32, u32),
-    pub(super) crop_size: (u32, u32),
-}
+pub(super) use crate::scene_builder::Film as FilmRect;
 
 pub(super) type SensorParts = (Camera, Filter, FilmRect, Sampler);
 

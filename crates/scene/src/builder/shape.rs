@@ -6,17 +6,15 @@ use super::Geometry;
 use super::{emitter, find_plugin, multipart, plugin, resolve, Builder, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
+use crate::scene_builder::{GroupId, MeshData, ShapeDesc};
 use crate::{obj, ply};
 use glam::{DMat4, DVec3};
-use penumbra_render::accel::{Instance, Primitive, ShapeGroup};
 use penumbra_render::bsdf::DiffuseParams;
 use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
-use penumbra_render::scene::ShapeInfo;
 use penumbra_render::scene::ShapeMedia;
 use std::rc::Rc;
-use std::sync::Arc;
 
 /// How a shape plugin is built.
 #[derive(Clone, Copy)]
@@ -61,11 +59,7 @@ impl Builder {
             Some(ShapeBuilder::Group) => {
                 self.shape_group(node)?;
             }
-            Some(ShapeBuilder::Instance) => {
-                let instance = self.instance(node)?;
-                self.placed.push(Primitive::Instance(self.instances.len() as u32));
-                self.instances.push(instance);
-            }
+            Some(ShapeBuilder::Instance) => self.instance(node)?,
             Some(ShapeBuilder::Merge) => {
                 for child in node.children_of(Kind::Shape) {
                     self.shape(&child.node)?;
@@ -74,7 +68,7 @@ impl Builder {
             }
             _ => {
                 let id = self.plain_shape(node)?;
-                self.placed.push(Primitive::Shape(id));
+                self.scene.place_shape(id);
             }
         }
         Ok(())
@@ -83,10 +77,10 @@ impl Builder {
     /// Mitsuba's `shapegroup`: its shapes are built once, as shapes of the
     /// scene (with ids, materials and object-space geometry), into a group
     /// that instances place.
-    fn shape_group(&mut self, node: &Rc<Node>) -> Result<Arc<ShapeGroup>> {
+    fn shape_group(&mut self, node: &Rc<Node>) -> Result<GroupId> {
         let key = Rc::as_ptr(node);
-        if let Some(g) = self.groups.get(&key) {
-            return Ok(g.clone());
+        if let Some(&g) = self.groups.get(&key) {
+            return Ok(g);
         }
         let mut members = Vec::new();
         for child in &node.children {
@@ -115,13 +109,13 @@ impl Builder {
         if members.is_empty() {
             return Err(node.error("the shapegroup holds no shapes"));
         }
-        let group = Arc::new(ShapeGroup::new(members, &self.shapes));
-        self.groups.insert(key, group.clone());
+        let group = self.scene.add_group(members, &node.loc)?;
+        self.groups.insert(key, group);
         Ok(group)
     }
 
     /// Mitsuba's `instance`: a shapegroup (by reference) placed by `to_world`.
-    fn instance(&mut self, node: &Rc<Node>) -> Result<Instance> {
+    fn instance(&mut self, node: &Rc<Node>) -> Result<()> {
         let to_world = node.transform("to_world")?;
         if node.single_child(Kind::Emitter)?.is_some() || node.single_child(Kind::Bsdf)?.is_some() {
             return Err(node.error("an instance takes no emitter or bsdf; its shapegroup's shapes carry their own"));
@@ -135,7 +129,7 @@ impl Builder {
             return Err(LoadError::at(node.loc_of("to_world"), "the instance's to_world is singular"));
         }
         node.check_all_used(&[Kind::Shape])?;
-        Ok(Instance::new(group, to_world.as_mat4()))
+        self.scene.add_instance(group, to_world.as_mat4(), node.loc_of("to_world"))
     }
 
     /// Every other shape: geometry, BSDF and an optional area emitter.
@@ -147,7 +141,8 @@ impl Builder {
             // Builder::shape places these, and shape groups refuse them.
             return Err(node.error(format!("a {} cannot be placed here", node.plugin)));
         };
-        let (shape, attributes) = self.geometry(node, geometry, &to_world, flip)?;
+        let (geometry, key) = self.geometry(node, geometry, &to_world, flip)?;
+        let (shape, attributes) = &geometry;
         if shape.prim_count() == 0 {
             return Err(node.error(format!("{} has no triangles", node.describe())));
         }
@@ -160,30 +155,25 @@ impl Builder {
             // emitters (checked against Mitsuba 3.9: an emitter without a BSDF
             // reflects nothing).
             None if emitter.is_some() => *self.default_emitter_bsdf.get_or_insert_with(|| {
-                self.materials.push(Material::Diffuse(DiffuseParams { reflectance: Spectrum::ZERO.into() }));
-                (self.materials.len() - 1) as u32
+                self.scene.add_material(Material::Diffuse(DiffuseParams { reflectance: Spectrum::ZERO.into() }))
             }),
             None => *self.default_bsdf.get_or_insert_with(|| {
-                self.materials.push(Material::Diffuse(DiffuseParams { reflectance: Spectrum::splat(0.5).into() }));
-                (self.materials.len() - 1) as u32
+                self.scene.add_material(Material::Diffuse(DiffuseParams { reflectance: Spectrum::splat(0.5).into() }))
             }),
         };
-        let shape_id = self.shapes.len() as u32;
+        let shape_id = self.scene.shape_count() as u32;
         if let Some(bn) = &bsdf_node {
-            let indices = if let Shape::Mesh(m) = &shape { Some(&m.mesh.indices[..]) } else { None };
-            self.textures.bind_mesh_attributes(bn, shape_id, node, &attributes, indices)?;
+            let indices = if let Shape::Mesh(m) = shape { Some(&m.mesh.indices[..]) } else { None };
+            self.textures.bind_mesh_attributes(bn, shape_id, node, attributes, indices)?;
         }
-        let light = match emitter {
+        let emission = match emitter {
             Some(en) if !shape.can_emit() => {
                 return Err(LoadError::at(
                     &en.loc,
                     format!("{} cannot carry an area emitter (Mitsuba 3.9.1 cannot sample points on it)", node.plugin),
                 ))
             }
-            Some(en) => {
-                self.lights.push(emitter::area(&en, node, &shape, shape_id, &mut self.textures)?);
-                Some((self.lights.len() - 1) as u32)
-            }
+            Some(en) => Some(emitter::area(&en, node, shape, &mut self.textures)?),
             None => None,
         };
         if let Some(sensor) = node.single_child(Kind::Sensor)? {
@@ -191,10 +181,8 @@ impl Builder {
         }
         let media = self.shape_media(node)?;
         node.check_all_used(&[Kind::Bsdf, Kind::Emitter, Kind::Medium, Kind::Sensor])?;
-        self.shapes.push(shape);
-        self.infos.push(ShapeInfo { material: bsdf, light });
-        self.shape_media.push(media);
-        Ok(shape_id)
+        let desc = ShapeDesc { geometry, material: bsdf, emission, media, cache_key: Some(key) };
+        self.scene.add_shape(desc, &node.loc)
     }
 
     /// The media a shape bounds: nested or referenced `<medium>`s named
@@ -221,37 +209,33 @@ impl Builder {
                     format!("only one {} medium can be given per shape", c.name.as_deref().unwrap_or_default()),
                 ));
             }
-            *slot = Some(self.media.get(&c.node)?);
+            *slot = Some(self.media.get(&c.node, &mut self.scene)?);
         }
         Ok(m)
     }
 
     /// `node`'s geometry from the [`super::GeometryCache`], or built and
-    /// cached. A reused entry marks the properties its builder read, as a
-    /// build would.
+    /// cached, with its cache key. A reused entry marks the properties its
+    /// builder read, as a build would.
     fn geometry(
         &mut self,
         node: &Node,
         build: fn(&Node, &DMat4, bool) -> Result<Geometry>,
         to_world: &DMat4,
         flip: bool,
-    ) -> Result<Geometry> {
+    ) -> Result<(Geometry, String)> {
         let props: Vec<String> = node.props.iter().map(|p| format!("{}={:?}", p.name, p.value)).collect();
         let key = format!("{}|{}|{}", node.loc, node.plugin, props.join(";"));
-        self.shape_keys.push(key.clone());
-        if let Some((geometry, read)) = self.cache.get(&key) {
-            for p in node.props.iter().filter(|p| read.contains(&p.name)) {
-                p.used.set(true);
-            }
-            return Ok(geometry.clone());
+        let (geometry, read) = self.scene.cached_geometry(&key, || {
+            let unread: Vec<bool> = node.props.iter().map(|p| !p.used.get()).collect();
+            let geometry = build(node, to_world, flip)?;
+            let read = node.props.iter().zip(unread).filter(|(p, u)| *u && p.used.get()).map(|(p, _)| p.name.clone());
+            Ok((geometry, read.collect()))
+        })?;
+        for p in node.props.iter().filter(|p| read.contains(&p.name)) {
+            p.used.set(true);
         }
-        let unread: Vec<bool> = node.props.iter().map(|p| !p.used.get()).collect();
-        let geometry = build(node, to_world, flip)?;
-        let read =
-            node.props.iter().zip(unread).filter(|(p, u)| *u && p.used.get()).map(|(p, _)| p.name.clone()).collect();
-        self.shapes_built += 1;
-        self.cache.insert(key, (geometry.clone(), read));
-        Ok(geometry)
+        Ok((geometry, key))
     }
 }
 
@@ -300,18 +284,16 @@ fn mesh_file(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {
     let path = resolve(&loc, &file, "mesh file")?;
     // Mitsuba flips v for OBJ by default, not for PLY.
     let flip_uv = node.bool("flip_tex_coords", node.plugin == "obj")?;
-    let (mut m, attributes) = if node.plugin == "obj" {
+    let (m, attributes) = if node.plugin == "obj" {
         (obj::load_obj_with(&path, flip_uv)?, Vec::new())
     } else {
         ply::load_ply_with_attributes(&path, flip_uv)?
     };
     let face_normals = node.bool("face_normals", false)?;
-    m.transform(&to_world.as_mat4());
-    if flip {
-        m.flip();
-    }
-    m.validate().map_err(|e| LoadError::at(&loc, format!("mesh '{}': {e}", path.display())))?;
-    Ok((Shape::Mesh(Mesh::new(m, face_normals)), attributes))
+    let TriangleMesh { positions, normals, uvs, indices } = m;
+    let data = MeshData { positions, indices, normals, uvs, colors: Vec::new(), attributes };
+    data.into_geometry(&to_world.as_mat4(), flip, face_normals, &loc)
+        .map_err(|e| LoadError::at(&loc, format!("mesh '{}': {}", path.display(), e.message)))
 }
 
 fn sphere(node: &Node, to_world: &DMat4, flip: bool) -> Result<Geometry> {

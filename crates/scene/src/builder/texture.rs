@@ -6,10 +6,11 @@ use super::{find_plugin, listed, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
+use crate::scene_builder::image_texture;
 use glam::{Affine2, DMat4, Mat2, Vec2, Vec3};
 use penumbra_render::math::Spectrum;
 use penumbra_render::texture::{
-    AttributeTable, Bitmap, Checkerboard, FilterType, MeshAttribute, MeshAttributeData, Texture, WrapMode,
+    AttributeTable, Checkerboard, FilterType, MeshAttribute, MeshAttributeData, Texture, WrapMode,
 };
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -240,8 +241,6 @@ fn build_bitmap(node: &Node) -> Result<Texture> {
     let raw = node.bool("raw", false)?;
     let to_uv = to_uv(node)?;
     let img = image_io::read_image_with(&path, raw).map_err(|e| LoadError::at(&loc, e))?;
-    let data = img.pixels.iter().map(|p| Vec3::from_array(*p)).collect();
-    let bitmap = Bitmap::new(img.width as usize, img.height as usize, data, filter, wrap, to_uv)
-        .map_err(|e| LoadError::at(&loc, format!("bitmap texture '{}': {e}", path.display())))?;
-    Ok(Texture::Bitmap(Arc::new(bitmap)))
+    image_texture(img, filter, wrap, to_uv, &loc)
+        .map_err(|e| LoadError::at(&loc, format!("bitmap texture '{}': {}", path.display(), e.message)))
 }
