@@ -1,0 +1,77 @@
+//! Failing writes: a render whose checkpoint or image cannot be written
+//! (here because of a file-size limit, `prlimit --fsize`, which behaves as a
+//! full disk does for the writer) stops with a clear error naming the file,
+//! keeps the previous checkpoint and image byte for byte, leaves no
+//! temporary file, and the next run resumes from the kept checkpoint.
+
+mod common;
+
+use common::{bin, ok};
+use std::fs;
+use std::os::unix::process::CommandExt;
+use std::path::Path;
+use std::process::Command;
+
+/// `penumbra render` of the bundled box at 24 x 24, one pass per run.
+fn render(out: &Path, ck: &Path) -> Command {
+    let mut c = bin();
+    c.arg("render")
+        .arg(common::cornell())
+        .args(["-D", "res=24", "--spp", "64", "--seed", "5", "--max-pass-spp", "1", "--time", "0", "--quiet"])
+        .arg("-o")
+        .arg(out)
+        .arg("--checkpoint")
+        .arg(ck);
+    c
+}
+
+/// `c` with every file it writes limited to `bytes` (RLIMIT_FSIZE).
+fn limited(mut c: Command, bytes: u64) -> Command {
+    // SAFETY: setrlimit is async-signal-safe and touches only the child.
+    unsafe {
+        c.pre_exec(move || {
+            let lim = libc::rlimit { rlim_cur: bytes as libc::rlim_t, rlim_max: bytes as libc::rlim_t };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    c
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn writes_past_a_file_size_limit_fail_cleanly_and_keep_the_previous_files() {
+    let d = common::tmpdir("fulldisk", "limit");
+    let (out, ck) = (d.join("out.exr"), d.join("render.ck"));
+    // A first pass, stopped by --time 0: a checkpoint and a partial image.
+    ok(render(&out, &ck).output().unwrap());
+    let (ck_before, out_before) = (fs::read(&ck).unwrap(), fs::read(&out).unwrap());
+    assert!(ck_before.len() > 4096 && out_before.len() > 1024);
+
+    // The next pass cannot write its checkpoint (nor its image): an error
+    // naming the file and the cause, not a death by SIGXFSZ.
+    let o = limited(render(&out, &ck), 1024).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{:?}: {err}", o.status);
+    assert!(err.contains("cannot write") && err.contains("File too large"), "{err}");
+    assert!(err.contains("render.ck") || err.contains("out.exr"), "{err}");
+    // Nothing half-written, nothing left behind, the previous files intact.
+    assert_eq!(files(&d), ["out.exr", "render.ck"]);
+    assert!(fs::read(&ck).unwrap() == ck_before, "the previous checkpoint changed");
+    assert!(fs::read(&out).unwrap() == out_before, "the previous image changed");
+
+    // Without the limit, the next run resumes from the kept checkpoint.
+    let o = ok(render(&out, &ck).output().unwrap());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(fs::read(&ck).unwrap() != ck_before, "no new checkpoint: {err}");
+    assert_eq!(files(&d), ["out.exr", "render.ck"]);
+    fs::remove_dir_all(&d).ok();
+}
