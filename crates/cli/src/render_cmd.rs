@@ -270,6 +270,7 @@ impl Plan<'_> {
 /// else an empty film (--fresh deletes the checkpoint first).
 fn resume(plan: &Plan) -> Result<State> {
     let (a, job, layers) = (plan.args, &plan.job, &plan.layers);
+    crate::memory::check(job.width, job.height, layers, a.checkpoint.is_some(), a.max_memory)?;
     let empty = State { film: Film::with_layers(job.width, job.height, layers), passes: 0, spp: 0, seconds: 0.0 };
     let Some(ck) = &a.checkpoint else { return Ok(empty) };
     if a.fresh {

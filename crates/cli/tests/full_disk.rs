@@ -75,3 +75,32 @@ fn writes_past_a_file_size_limit_fail_cleanly_and_keep_the_previous_files() {
     assert_eq!(files(&d), ["out.exr", "render.ck"]);
     fs::remove_dir_all(&d).ok();
 }
+
+/// A film predicted to exceed --max-memory is refused before anything is
+/// allocated or written, with the size asked for and the limit.
+#[test]
+fn a_film_past_max_memory_is_refused_before_rendering() {
+    let d = common::tmpdir("fulldisk", "memory");
+    let out = d.join("out.exr");
+    let o = bin()
+        .arg("render")
+        .arg(common::cornell())
+        .args(["-D", "res=400", "--spp", "1", "--quiet", "--max-memory", "4M", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("400 x 400 film needs about 6.71 MiB") && err.contains("--max-memory, 4.00 MiB"), "{err}");
+    assert!(files(&d).is_empty());
+    let o = bin().arg("render").arg(common::cornell()).args(["--max-memory", "5Q", "-o"]).arg(&out).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown unit"));
+    ok(bin()
+        .arg("render")
+        .arg(common::cornell())
+        .args(["-D", "res=40", "--spp", "1", "--quiet", "--max-memory", "4M", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap());
+    fs::remove_dir_all(&d).ok();
+}
