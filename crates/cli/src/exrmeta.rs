@@ -14,7 +14,7 @@ use std::path::Path;
 
 pub const WEIGHT_CHANNEL: &str = "penumbra.weight";
 pub const PREFIX: &str = "penumbra:";
-/// The largest width or height [`read`] accepts (that of the largest film).
+/// The largest width or height [`read()`] accepts (that of the largest film).
 pub const MAX_SIZE: usize = 1 << 16;
 
 /// An image with its placement in the full frame and its metadata.
