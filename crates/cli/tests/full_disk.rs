@@ -2,7 +2,8 @@
 //! (here because of a file-size limit, `prlimit --fsize`, which behaves as a
 //! full disk does for the writer) stops with a clear error naming the file,
 //! keeps the previous checkpoint and image byte for byte, leaves no
-//! temporary file, and the next run resumes from the kept checkpoint.
+//! temporary file, and the next run resumes from the kept checkpoint (and
+//! removes temporary files that a killed run left).
 
 mod common;
 
@@ -72,6 +73,16 @@ fn writes_past_a_file_size_limit_fail_cleanly_and_keep_the_previous_files() {
     let o = ok(render(&out, &ck).output().unwrap());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(fs::read(&ck).unwrap() != ck_before, "no new checkpoint: {err}");
+    assert_eq!(files(&d), ["out.exr", "render.ck"]);
+
+    // Temporary files left by a run killed mid-write are removed by the
+    // next run, even one that writes nothing (here: refused by --max-memory).
+    fs::write(d.join("out.exr.tmp"), b"half an image").unwrap();
+    fs::write(d.join("render.ck.tmp"), b"half a checkpoint").unwrap();
+    let o = render(&out, &ck).args(["--max-memory", "1K"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("removed") && err.contains("render.ck.tmp") && err.contains("out.exr.tmp"), "{err}");
     assert_eq!(files(&d), ["out.exr", "render.ck"]);
     fs::remove_dir_all(&d).ok();
 }
