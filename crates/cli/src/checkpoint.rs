@@ -17,7 +17,7 @@
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
-use penumbra_render::film::AovKind;
+use penumbra_render::film::{channel_count, AovKind};
 use penumbra_render::film::{Film, FilmLayers, MOMENTS};
 use penumbra_scene::atomic;
 use std::fs;
@@ -106,11 +106,19 @@ impl Checkpoint {
         for name in names.split(',').filter(|s| !s.is_empty()) {
             layers.aovs.push(AovKind::from_name(name).ok_or_else(|| corrupt(&format!("unknown AOV '{name}'")))?);
         }
-        let mut film = Film::with_layers(width, height, &layers);
-        let values = n * 4 + film.aov.len() + film.moments.len() * MOMENTS;
-        if r.b.len() - r.at != values * 8 {
-            return Err(corrupt("its size does not match its resolution"));
+        // The size is checked before the film is allocated: a damaged (or
+        // hostile) header must not ask for memory its data does not hold.
+        let per_pixel = 4 + channel_count(&layers.aovs) + layers.channels.len() + if variance { MOMENTS } else { 0 };
+        let values = n as u128 * per_pixel as u128;
+        let have = (r.b.len() - r.at) as u128;
+        if have != values * 8 {
+            return Err(corrupt(&format!(
+                "its size does not match its resolution ({width} x {height} pixels of {per_pixel} values need \
+                 {} bytes of data, it has {have})",
+                values * 8
+            )));
         }
+        let mut film = Film::with_layers(width, height, &layers);
         for i in 0..n {
             for c in 0..3 {
                 film.acc[i][c] = f64::from_bits(r.u64()?);
@@ -217,5 +225,23 @@ mod tests {
         bad[40] ^= 1;
         assert!(Checkpoint::decode(&bad, "x").unwrap_err().to_string().contains("checksum"));
         assert!(Checkpoint::decode(&bytes[..bytes.len() - 9], "x").is_err());
+    }
+
+    /// A header claiming a film of 65536 x 65536 pixels (with a valid
+    /// checksum) is refused before the film (about 550 GB) is allocated.
+    #[test]
+    fn a_huge_resolution_is_refused_before_allocating() {
+        let layers = FilmLayers { aovs: vec![AovKind::Albedo], variance: true, channels: Vec::new() };
+        let film = Film::with_layers(2, 1, &layers);
+        let settings = Settings { entries: vec![("spp".into(), "8".into())] };
+        let ck = Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film };
+        let mut bytes = ck.encode();
+        bytes.truncate(bytes.len() - 4);
+        let at = bytes.windows(8).position(|w| w == [2, 0, 0, 0, 1, 0, 0, 0]).unwrap();
+        bytes[at..at + 8].copy_from_slice(&[0, 0, 1, 0, 0, 0, 1, 0]);
+        let crc = crc32fast::hash(&bytes);
+        bytes.extend_from_slice(&crc.to_le_bytes());
+        let e = Checkpoint::decode(&bytes, "x").unwrap_err().to_string();
+        assert!(e.contains("65536 x 65536 pixels of 15 values need 515396075520 bytes"), "{e}");
     }
 }

@@ -14,6 +14,8 @@ use std::path::Path;
 
 pub const WEIGHT_CHANNEL: &str = "penumbra.weight";
 pub const PREFIX: &str = "penumbra:";
+/// The largest width or height [`read()`] accepts (that of the largest film).
+pub const MAX_SIZE: usize = 1 << 16;
 
 /// An image with its placement in the full frame and its metadata.
 #[derive(Debug, Clone)]
@@ -75,6 +77,24 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
 
 /// Reads an EXR written by [`write()`] (or any RGB EXR: then `meta` is empty).
 pub fn read(path: &Path) -> Result<ExrImage> {
+    // Sizes from the header are checked before the pixels are allocated:
+    // no film is larger than 65536 x 65536.
+    let header = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| anyhow!("cannot read '{}': {e}", path.display()))?;
+    for h in &header.headers {
+        let (data, display) = (h.layer_size, h.shared_attributes.display_window.size);
+        if [data.0, data.1, display.0, display.1].iter().any(|&s| s > MAX_SIZE) {
+            bail!(
+                "'{}': its header claims a {} x {} image in a {} x {} frame; Penumbra's images are at most \
+                 {MAX_SIZE} x {MAX_SIZE} (the file is damaged, or not a Penumbra render)",
+                path.display(),
+                data.0,
+                data.1,
+                display.0,
+                display.1
+            );
+        }
+    }
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()

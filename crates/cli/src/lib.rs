@@ -15,6 +15,7 @@ pub mod exrmeta;
 pub mod imgtool;
 pub mod info;
 pub mod layers;
+pub mod memory;
 pub mod merge;
 pub mod part;
 pub mod preview;

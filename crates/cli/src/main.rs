@@ -7,6 +7,7 @@ use penumbra::{bench, denoise, imgtool, info, merge, render_cmd};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    penumbra::signals::ignore_file_size_limit_signal();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => render_cmd::run(&a),

@@ -40,6 +40,19 @@ fn describe(w: Window) -> String {
 
 fn load(path: &Path) -> Result<Input> {
     let img = exrmeta::read(path)?;
+    // The header is not trusted: the window must lie in the full frame.
+    let (right, bottom) = (img.offset.0 as u64 + img.width as u64, img.offset.1 as u64 + img.height as u64);
+    if right > img.full_size.0 as u64 || bottom > img.full_size.1 as u64 {
+        bail!(
+            "'{}': its data window {},{},{right},{bottom} reaches outside its display window (0,0,{},{}): \
+             the file is damaged or was not written by `penumbra render`",
+            path.display(),
+            img.offset.0,
+            img.offset.1,
+            img.full_size.0,
+            img.full_size.1
+        );
+    }
     let meta = |k: &str| {
         img.meta.get(k).cloned().ok_or_else(|| {
             anyhow!("'{}' has no penumbra:{k} attribute: it was not written by `penumbra render`", path.display())
@@ -152,7 +165,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
         missing_notes.push(note);
     }
 
-    let n = (out_w.2 * out_w.3) as usize;
+    let n = out_w.2 as usize * out_w.3 as usize;
     let mut rgb = vec![[0f32; 3]; n];
     let mut layers: Vec<(String, Vec<f32>)> = Vec::new();
     let mut spp_min = u32::MAX;

@@ -270,6 +270,15 @@ impl Plan<'_> {
 /// else an empty film (--fresh deletes the checkpoint first).
 fn resume(plan: &Plan) -> Result<State> {
     let (a, job, layers) = (plan.args, &plan.job, &plan.layers);
+    // A temporary file beside an output is what a run killed while writing
+    // that output left behind: nothing else writes it.
+    for path in std::iter::once(&a.output).chain(&a.checkpoint) {
+        let tmp = penumbra_scene::atomic::temp_path(path);
+        if tmp.is_file() && std::fs::remove_file(&tmp).is_ok() {
+            eprintln!("removed '{}', left by a run killed while writing", tmp.display());
+        }
+    }
+    crate::memory::check(job.width, job.height, layers, a.checkpoint.is_some(), a.max_memory)?;
     let empty = State { film: Film::with_layers(job.width, job.height, layers), passes: 0, spp: 0, seconds: 0.0 };
     let Some(ck) = &a.checkpoint else { return Ok(empty) };
     if a.fresh {

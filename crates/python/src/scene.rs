@@ -130,8 +130,26 @@ pub fn load_string(
 }
 
 /// A Python value as a scene value: bool, int, float, str, a 3-sequence
-/// (rgb), or a 4x4 matrix (transform).
+/// (rgb), or a 4x4 matrix (transform). NaN, infinities and numbers past
+/// the single-precision range are refused, as the scene reader refuses them.
 fn to_value(v: &Bound<'_, PyAny>) -> PyResult<Value> {
+    let value = to_value_unchecked(v)?;
+    let numbers: Vec<f64> = match &value {
+        Value::Float(x) => vec![*x],
+        Value::Rgb(c) => c.to_vec(),
+        Value::Transform(m) => m.to_cols_array().to_vec(),
+        _ => Vec::new(),
+    };
+    if let Some(x) = numbers.iter().find(|x| !x.is_finite() || x.abs() > f32::MAX as f64) {
+        return Err(PyValueError::new_err(format!(
+            "cannot set a parameter to {x}: scene values must be finite numbers (at most {:e} in magnitude)",
+            f32::MAX
+        )));
+    }
+    Ok(value)
+}
+
+fn to_value_unchecked(v: &Bound<'_, PyAny>) -> PyResult<Value> {
     if v.is_instance_of::<PyBool>() {
         return Ok(Value::Boolean(v.extract()?));
     }

@@ -163,6 +163,10 @@ def test_parameter_sweep_keeps_geometry_and_matches_a_fresh_load(cbox):
         scene.set("red.reflectance", "text")
     with pytest.raises(KeyError):
         scene.set("reflectance", 0.5)
+    # Hostile numbers are refused, and the scene keeps its last good value.
+    for bad in ([0.2, float("nan"), 0.9], float("inf"), 1e39):
+        with pytest.raises(ValueError, match="must be finite numbers"):
+            scene.set("red.reflectance", bad)
 
 
 def test_progress_reaches_the_total(cbox):

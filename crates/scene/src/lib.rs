@@ -9,6 +9,8 @@ pub mod atomic;
 pub mod builder;
 pub mod desc;
 pub mod error;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod image_io;
 pub mod mitsuba;
 pub mod obj;

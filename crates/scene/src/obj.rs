@@ -32,7 +32,30 @@ pub fn load_obj_with(path: &Path, flip_tex_coords: bool) -> Result<TriangleMesh>
         };
         LoadError::in_file(path, msg)
     })?;
+    check_text(&bytes).map_err(|e| LoadError::at(&FileLoc::new(Arc::new(path.to_path_buf()), e.0, e.1), e.2))?;
     parse_obj(&String::from_utf8_lossy(&bytes), path, flip_tex_coords)
+}
+
+/// Refuses data that is not text (a binary file given as OBJ): the first
+/// NUL or other control byte (tab, line feed, carriage return and form feed
+/// aside) as (line, column, message naming its offset). Bytes that are not
+/// UTF-8 are let through: names and comments in other encodings are
+/// common, and a number spelt with them is refused where it is parsed.
+pub fn check_text(bytes: &[u8]) -> std::result::Result<(), (u32, u32, String)> {
+    let Some(bad) = bytes.iter().position(|&b| b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0c) || b == 0x7f)
+    else {
+        return Ok(());
+    };
+    let good = &bytes[..bad];
+    let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
+    let col = 1 + String::from_utf8_lossy(&good[good.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1)..])
+        .chars()
+        .count();
+    Err((
+        line as u32,
+        col as u32,
+        format!("not an OBJ text file: byte {bad} is the control character 0x{:02x} (is the file binary?)", bytes[bad]),
+    ))
 }
 
 /// Marks an absent texture coordinate or normal index in a corner key.
@@ -52,31 +75,32 @@ pub fn parse_obj(text: &str, path: &Path, flip_tex_coords: bool) -> Result<Trian
     let (mut missing_uv, mut missing_normal) = (false, false);
 
     for (line_no, line) in text.lines().enumerate() {
-        let err = |message: String| LoadError::at(&FileLoc::new(file.clone(), line_no as u32 + 1, 1), message);
+        // The column (in characters) where `word`, a slice of `line`, starts.
+        let col = |word: &str| 1 + line[..word.as_ptr() as usize - line.as_ptr() as usize].chars().count();
+        let err_at = |word: &str, message: String| {
+            LoadError::at(&FileLoc::new(file.clone(), line_no as u32 + 1, col(word) as u32), message)
+        };
         let mut words = line.split_ascii_whitespace();
         let Some(keyword) = words.next() else {
             continue;
         };
         match keyword {
             "v" => {
-                let p = floats::<3>(&mut words, 3).ok_or_else(|| err(bad_line("vertex", line)))?;
-                let p = Vec3::from_array(p);
-                if !p.is_finite() {
-                    return Err(err("vertex position is not finite".into()));
-                }
-                positions.push(p);
+                let p = floats::<3>(&mut words, 3, "vertex", line, &err_at)?;
+                positions.push(Vec3::from_array(p));
             }
             "vn" => {
-                let n = floats::<3>(&mut words, 3).ok_or_else(|| err(bad_line("normal", line)))?;
+                let n = floats::<3>(&mut words, 3, "normal", line, &err_at)?;
                 normals.push(Vec3::from_array(n));
             }
             "vt" => {
-                let [u, v] = floats::<2>(&mut words, 1).ok_or_else(|| err(bad_line("texture coordinate", line)))?;
+                let [u, v] = floats::<2>(&mut words, 1, "texture coordinate", line, &err_at)?;
                 uvs.push(Vec2::new(u, if flip_tex_coords { 1.0 - v } else { v }));
             }
             "f" => {
                 face.clear();
                 for word in words {
+                    let err = |message: String| err_at(word, message);
                     let mut parts = word.split('/');
                     let mut index = |count: usize, what: &str| -> Result<u32> {
                         match parts.next() {
@@ -130,22 +154,37 @@ pub fn parse_obj(text: &str, path: &Path, flip_tex_coords: bool) -> Result<Trian
     })
 }
 
-fn bad_line(what: &str, line: &str) -> String {
-    format!("could not parse {what} line \"{}\"", line.trim())
-}
-
 /// Reads `N` numbers, at least `min` present (the rest are 0); extra
-/// numbers (a `w`, vertex colours) are ignored.
-fn floats<'a, const N: usize>(words: &mut impl Iterator<Item = &'a str>, min: usize) -> Option<[f32; N]> {
-    let mut out = [0.0; N];
+/// numbers (a `w`, vertex colours) are ignored. A missing number is an
+/// error at the keyword, a bad or non-finite one at its column.
+fn floats<'a, const N: usize>(
+    words: &mut impl Iterator<Item = &'a str>,
+    min: usize,
+    what: &str,
+    line: &'a str,
+    err_at: &impl Fn(&str, String) -> LoadError,
+) -> Result<[f32; N]> {
+    let mut out = [0.0f32; N];
     for (i, slot) in out.iter_mut().enumerate() {
         match words.next() {
-            Some(w) => *slot = w.parse().ok()?,
+            Some(w) => {
+                *slot = w.parse().map_err(|_| {
+                    err_at(w, format!("could not parse \"{w}\" as a number in the {what} line \"{}\"", line.trim()))
+                })?;
+                if !slot.is_finite() {
+                    return Err(err_at(w, format!("{what} component \"{w}\" is not a finite single-precision number")));
+                }
+            }
             None if i >= min => break,
-            None => return None,
+            None => {
+                return Err(err_at(
+                    line.trim_start(),
+                    format!("the {what} line \"{}\" has {i} numbers, it needs {min}", line.trim()),
+                ))
+            }
         }
     }
-    Some(out)
+    Ok(out)
 }
 
 /// A 1-based OBJ index, or a negative one counting back from the last
@@ -312,6 +351,46 @@ mod tests {
         check("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", 4, "\"a\"");
         check("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1/1 2 3\n", 6, "malformed");
         check("v 0 inf 0\n", 1, "finite");
+    }
+
+    /// Errors name the column of the offending number or face corner, and
+    /// non-finite normals and texture coordinates are refused like positions.
+    #[test]
+    fn errors_name_the_column_and_refuse_non_finite_numbers() {
+        let check = |text: &str, line: u32, col: u32, word: &str| {
+            let e = parse(text).unwrap_err();
+            let loc = e.loc.clone().unwrap();
+            assert_eq!((loc.line, loc.col), (line, col), "{e}");
+            assert!(e.to_string().starts_with(&format!("/virtual/mesh.obj:{line}:{col}: ")), "{e}");
+            assert!(e.to_string().contains(word), "{e} lacks {word}");
+        };
+        check("v 0 0 0\nv  1 0 x\n", 2, 8, "\"x\"");
+        check("v 0 0 0\n  v 1 0\n", 2, 3, "has 2 numbers");
+        check("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2  4\n", 4, 8, "\"4\"");
+        check("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2 3/x\n", 5, 10, "\"x\"");
+        check("v 0 nan 0\n", 1, 5, "not a finite");
+        check("v 0 0 1e39\n", 1, 7, "\"1e39\" is not a finite");
+        check("vn 0 0 NaN\n", 1, 8, "normal component \"NaN\"");
+        check("vt 0.5 -inf\n", 1, 8, "texture coordinate component \"-inf\"");
+        check("# caf\u{e9}\nv \u{e9}1 0 0\n", 2, 3, "\"\u{e9}1\"");
+    }
+
+    /// A binary file given as OBJ is refused at its first control byte,
+    /// with its offset; other encodings in names and comments are read.
+    #[test]
+    fn binary_data_is_refused_with_its_offset() {
+        assert_eq!(check_text(b"v 0 0 0\r\n\tf 1 2 3\x0c\n"), Ok(()));
+        assert_eq!(check_text(b"# caf\xe9\nv 0 0 0\n"), Ok(()));
+        let (line, col, m) = check_text(b"v 0 0 0\nv 1\x00\x00").unwrap_err();
+        assert_eq!((line, col), (2, 4));
+        assert!(m.contains("byte 11") && m.contains("0x00") && m.contains("binary"), "{m}");
+        let dir = std::env::temp_dir().join(format!("penumbra-obj-binary-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("mesh.obj");
+        std::fs::write(&path, b"\x89PNG\r\n\x1a\n\x00\x00").unwrap();
+        let e = load_obj(&path).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(e.contains("mesh.obj:2:1: not an OBJ text file: byte 6 is the control character 0x1a"), "{e}");
     }
 
     #[test]

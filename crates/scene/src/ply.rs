@@ -69,6 +69,16 @@ impl Scalar {
             _ => return None,
         })
     }
+
+    /// Bytes per value in binary files.
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
 }
 
 #[derive(Debug)]
@@ -116,9 +126,16 @@ fn parse_header(bytes: &[u8], file: &Arc<std::path::PathBuf>) -> Result<Header> 
             return Err(err("unexpected end of file in the PLY header (no end_header)".into()));
         };
         let raw = &bytes[offset..offset + len];
+        let start = offset;
         offset += len + 1;
         let line = std::str::from_utf8(raw)
-            .map_err(|_| err("the PLY header is not ASCII text".into()))?
+            .map_err(|e| {
+                err(format!(
+                    "the PLY header is not text: byte {} (column {}) is not UTF-8",
+                    start + e.valid_up_to(),
+                    1 + e.valid_up_to()
+                ))
+            })?
             .trim_end_matches('\r');
         if line_no == 1 {
             if line.trim() != "ply" {
@@ -170,8 +187,8 @@ fn push_prop(elements: &mut [Element], name: &str, ty: PropType) -> std::result:
 /// Where in the file the value being read starts, for messages.
 #[derive(Clone, Copy)]
 enum At {
-    /// ASCII data: the line (1-based, header lines counted).
-    Line(usize),
+    /// ASCII data: the line and column (1-based, header lines counted).
+    Line(usize, usize),
     /// Binary data: the byte offset from the start of the file.
     Byte(usize),
     /// ASCII data: past its last value.
@@ -181,17 +198,32 @@ enum At {
 impl std::fmt::Display for At {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         match self {
-            At::Line(l) => write!(f, "line {l}"),
+            At::Line(l, c) => write!(f, "line {l}, column {c}"),
             At::Byte(b) => write!(f, "byte {b}"),
             At::End => write!(f, "the end of the data"),
         }
     }
 }
 
+impl At {
+    /// An error about the value at this position of `file`: ASCII positions
+    /// go into the error's location (`file:line:column: ...`), binary ones
+    /// into the message (`... at byte B`).
+    fn error(self, file: &Arc<std::path::PathBuf>, what: &str, message: impl std::fmt::Display) -> LoadError {
+        match self {
+            At::Line(l, c) => {
+                LoadError::at(&FileLoc::new(file.clone(), l as u32, c as u32), format!("{what}: {message}"))
+            }
+            at => LoadError::at(&FileLoc::new(file.clone(), 0, 0), format!("{what} at {at}: {message}")),
+        }
+    }
+}
+
 /// The data after the header; `at` follows the value being read.
 enum Body<'a> {
-    /// `pos`: byte offset in `text`; `line`: the file's line at `pos`.
-    Ascii { text: &'a str, pos: usize, line: usize, at: &'a Cell<At> },
+    /// `pos`: byte offset in `text`; `line`: the file's line at `pos`;
+    /// `line_start`: the offset in `text` where that line starts.
+    Ascii { text: &'a str, pos: usize, line: usize, line_start: usize, at: &'a Cell<At> },
     /// `base`: the data's offset in the file.
     Binary { data: &'a [u8], pos: usize, base: usize, big_endian: bool, at: &'a Cell<At> },
 }
@@ -200,16 +232,21 @@ impl Body<'_> {
     /// One value; `None` at the end of the data or on an unparsable token.
     fn read(&mut self, ty: Scalar) -> Option<f64> {
         match self {
-            Body::Ascii { text, pos, line, at } => {
+            Body::Ascii { text, pos, line, line_start, at } => {
                 let rest = &text.as_bytes()[*pos..];
                 let skip = rest.iter().take_while(|b| b.is_ascii_whitespace()).count();
                 if skip == rest.len() {
                     at.set(At::End);
                     return None;
                 }
-                *line += rest[..skip].iter().filter(|&&b| b == b'\n').count();
+                for (k, &b) in rest[..skip].iter().enumerate() {
+                    if b == b'\n' {
+                        *line += 1;
+                        *line_start = *pos + k + 1;
+                    }
+                }
                 *pos += skip;
-                at.set(At::Line(*line));
+                at.set(At::Line(*line, 1 + text[*line_start..*pos].chars().count()));
                 let len = text.as_bytes()[*pos..].iter().take_while(|b| !b.is_ascii_whitespace()).count();
                 let token = &text[*pos..*pos + len];
                 *pos += len;
@@ -239,6 +276,67 @@ impl Body<'_> {
             }
         }
     }
+}
+
+/// Refuses a header whose element counts the data cannot hold, before
+/// anything is allocated: each property of each element takes at least one
+/// byte (a digit in ASCII files; in binary ones the size of its scalar or of
+/// its list's count). A shorter truncation is found where the data ends,
+/// and named there.
+fn check_counts(header: &Header, data_len: usize, path: &Path) -> Result<()> {
+    let mut needed: u128 = 0;
+    for el in &header.elements {
+        let per_row: u128 = el
+            .props
+            .iter()
+            .map(|p| match (header.format, &p.ty) {
+                (Format::Ascii, _) => 1,
+                (_, PropType::Scalar(t)) | (_, PropType::List { count: t, .. }) => t.size() as u128,
+            })
+            .sum();
+        needed += per_row * el.count as u128;
+        if needed > data_len as u128 + 1 {
+            return Err(LoadError::in_file(
+                path,
+                format!(
+                    "the PLY header claims {} '{}' elements, which need at least {needed} bytes of data with the \
+                     elements before them, but the file has {data_len} bytes after the header (truncated or \
+                     damaged); nothing was allocated",
+                    el.count, el.name
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The reader of the data after the header. ASCII data must be text: the
+/// first byte that is not UTF-8 is named by line, column and offset.
+fn body<'a>(bytes: &'a [u8], header: &Header, file: &Arc<std::path::PathBuf>, at: &'a Cell<At>) -> Result<Body<'a>> {
+    let data = &bytes[header.body..];
+    let header_lines = 1 + bytes[..header.body].iter().filter(|&&b| b == b'\n').count();
+    Ok(match header.format {
+        Format::Ascii => Body::Ascii {
+            text: std::str::from_utf8(data).map_err(|e| {
+                let good = &data[..e.valid_up_to()];
+                let line = header_lines + good.iter().filter(|&&b| b == b'\n').count();
+                let col = 1 + good.iter().rev().take_while(|&&b| b != b'\n').count();
+                LoadError::at(
+                    &FileLoc::new(file.clone(), line as u32, col as u32),
+                    format!(
+                        "ASCII PLY data is not text: byte {} is not UTF-8 (is the file binary, \
+                         with a wrong format line?)",
+                        header.body + good.len()
+                    ),
+                )
+            })?,
+            pos: 0,
+            line: header_lines,
+            line_start: 0,
+            at,
+        },
+        f => Body::Binary { data, pos: 0, base: header.body, big_endian: f == Format::BinaryBe, at },
+    })
 }
 
 /// Where a vertex property goes.
@@ -289,20 +387,7 @@ pub fn parse_ply_with_attributes(
     let header = parse_header(bytes, &file)?;
     let data = &bytes[header.body..];
     let at = Cell::new(At::Byte(header.body));
-    let header_lines = 1 + bytes[..header.body].iter().filter(|&&b| b == b'\n').count();
-    let mut body = match header.format {
-        Format::Ascii => Body::Ascii {
-            text: std::str::from_utf8(data).map_err(|e| {
-                let bad = header.body + e.valid_up_to();
-                let line = header_lines + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
-                LoadError::in_file(path, format!("ASCII PLY data is not text: line {line} (byte {bad}) is not UTF-8"))
-            })?,
-            pos: 0,
-            line: header_lines,
-            at: &at,
-        },
-        f => Body::Binary { data, pos: 0, base: header.body, big_endian: f == Format::BinaryBe, at: &at },
-    };
+    let mut body = body(bytes, &header, &file, &at)?;
     let vertex_count = match header.elements.iter().find(|e| e.name == "vertex") {
         Some(el) => el.count,
         None => return Err(LoadError::in_file(path, "the PLY file has no vertex element")),
@@ -318,6 +403,16 @@ pub fn parse_ply_with_attributes(
             })
     });
     let face_index_prop = face_index_prop.transpose()?;
+    if vertex_count > u32::MAX as usize {
+        return Err(LoadError::in_file(
+            path,
+            format!(
+                "the PLY header claims {vertex_count} vertices; a mesh holds at most {} (32-bit indices)",
+                u32::MAX
+            ),
+        ));
+    }
+    check_counts(&header, data.len(), path)?;
     // Never trust a header count further than the data could go.
     let capacity = |count: usize| count.min(data.len());
     let mut mesh = TriangleMesh::default();
@@ -326,12 +421,8 @@ pub fn parse_ply_with_attributes(
     let mut face_values = Vec::new();
 
     for el in &header.elements {
-        let truncated = |i: usize| {
-            LoadError::in_file(
-                path,
-                format!("{} {i} of {} at {}: unexpected end of data or invalid number", el.name, el.count, at.get()),
-            )
-        };
+        let what = |i: usize| format!("{} {i} of {}", el.name, el.count);
+        let truncated = |i: usize| at.get().error(&file, &what(i), "unexpected end of data or invalid number");
         match el.name.as_str() {
             "vertex" => {
                 let slots = vertex_slots(el);
@@ -355,6 +446,16 @@ pub fn parse_ply_with_attributes(
                             (PropType::Scalar(ty), slot) => {
                                 let raw = body.read(*ty).ok_or_else(|| truncated(i))?;
                                 let v = raw as f32;
+                                if slot != Slot::Skip && !v.is_finite() {
+                                    return Err(at.get().error(
+                                        &file,
+                                        &what(i),
+                                        format!(
+                                            "property '{}' is {raw:e}, which is not a finite single-precision number",
+                                            prop.name
+                                        ),
+                                    ));
+                                }
                                 match slot {
                                     Slot::Pos(k) => p[k] = v,
                                     Slot::Normal(k) => n[k] = v,
@@ -413,12 +514,10 @@ pub fn parse_ply_with_attributes(
                                 for _ in 0..n {
                                     let v = body.read(*item).ok_or_else(|| truncated(i))?;
                                     if !(v >= 0.0 && v < vertex_count as f64 && v.fract() == 0.0) {
-                                        return Err(LoadError::in_file(
-                                            path,
-                                            format!(
-                                                "face {i} refers to vertex {v}, but there are \
-                                                 {vertex_count} vertices"
-                                            ),
+                                        return Err(at.get().error(
+                                            &file,
+                                            &what(i),
+                                            format!("refers to vertex {v}, but there are {vertex_count} vertices"),
                                         ));
                                     }
                                     face.push(v as u32);
@@ -439,6 +538,8 @@ pub fn parse_ply_with_attributes(
                     }
                 }
             }
+            // An element without properties has nothing to read, however many it claims.
+            _ if el.props.is_empty() => {}
             _ => {
                 for i in 0..el.count {
                     for prop in &el.props {
@@ -701,35 +802,16 @@ pub fn parse_ply_table(bytes: &[u8], path: &Path) -> Result<PlyTable> {
         ));
     }
     let at = Cell::new(At::Byte(header.body));
-    let header_lines = 1 + bytes[..header.body].iter().filter(|&&b| b == b'\n').count();
-    let mut body = match header.format {
-        Format::Ascii => Body::Ascii {
-            text: std::str::from_utf8(data).map_err(|e| {
-                let bad = header.body + e.valid_up_to();
-                let line = header_lines + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
-                LoadError::in_file(path, format!("ASCII PLY data is not text: line {line} (byte {bad}) is not UTF-8"))
-            })?,
-            pos: 0,
-            line: header_lines,
-            at: &at,
-        },
-        f => Body::Binary { data, pos: 0, base: header.body, big_endian: f == Format::BinaryBe, at: &at },
-    };
+    let mut body = body(bytes, &header, &file, &at)?;
     let mut values = Vec::with_capacity(el.count * columns);
-    for i in 0..el.count {
+    // Without columns there is nothing to read, however many rows are claimed.
+    let rows = if columns == 0 { 0 } else { el.count };
+    for i in 0..rows {
         for p in &el.props {
-            let v = body.read(Scalar::F32).ok_or_else(|| {
-                LoadError::in_file(
-                    path,
-                    format!(
-                        "{} {i} of {}, property '{}', at {}: unexpected end of data or invalid number",
-                        el.name,
-                        el.count,
-                        p.name,
-                        at.get()
-                    ),
-                )
-            })?;
+            let what = || format!("{} {i} of {}, property '{}'", el.name, el.count, p.name);
+            let v = body
+                .read(Scalar::F32)
+                .ok_or_else(|| at.get().error(&file, &what(), "unexpected end of data or invalid number"))?;
             values.push(v as f32);
         }
     }
@@ -888,21 +970,66 @@ mod tests {
         check(b"ply\nformat ascii 1.0\nelement face 0\nend_header\n", &["no vertex element"]);
         let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
         // ASCII data: the line of the value (header lines counted; line 9 is the first after end_header).
+        let at = |bytes: &[u8], line: u32, col: u32, words: &[&str]| {
+            let e = check(bytes, words);
+            let loc = e.loc.clone().unwrap();
+            assert_eq!((loc.line, loc.col), (line, col), "{e}");
+            assert!(e.to_string().starts_with(&format!("{FILE}:{line}:{col}: ")), "{e}");
+        };
         check(format!("{head}end_header\n0 0 0\n1 0\n").as_bytes(), &["vertex 1 of 3 at the end of the data"]);
-        check(format!("{head}end_header\n0 0 0\n1 0 0\n0 1 zero\n").as_bytes(), &["vertex 2 of 3 at line 10"]);
-        check(format!("{head}end_header\n0 0 0\n\n\n1 0 0\n0 1 zero\n").as_bytes(), &["vertex 2 of 3 at line 12"]);
-        check(
+        at(format!("{head}end_header\n0 0 0\n1 0 0\n0 1 zero\n").as_bytes(), 10, 5, &["vertex 2 of 3: "]);
+        at(format!("{head}end_header\n0 0 0\n\n\n1 0 0\n0 1 zero\n").as_bytes(), 12, 5, &["vertex 2 of 3: "]);
+        at(
             &[format!("{head}end_header\n0 0 0\n1 ").as_bytes(), b"\xff 0\n"].concat(),
-            &["line 9 (byte 108) is not UTF-8"],
+            9,
+            3,
+            &["byte 108 is not UTF-8"],
         );
+        at(b"ply\nformat ascii 1.0\ncomment caf\xe9\n", 3, 1, &["byte 32 (column 12) is not UTF-8"]);
         let faces = "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
-        check(format!("{head}{faces}3 0 1 3\n").as_bytes(), &["face 0", "vertex 3"]);
-        check(format!("{head}{faces}3 0 1 -1\n").as_bytes(), &["face 0", "vertex -1"]);
+        at(format!("{head}{faces}3 0 1 3\n").as_bytes(), 13, 7, &["face 0 of 1: refers to vertex 3"]);
+        at(format!("{head}{faces}3 0 1 -1\n").as_bytes(), 13, 7, &["face 0 of 1: refers to vertex -1"]);
         check(format!("{head}{faces}3 0 1\n").as_bytes(), &["face 0 of 1"]);
+        // Non-finite positions, normals and texture coordinates, in ASCII
+        // (nan, inf, a double past the float range) and binary data.
+        at(format!("{head}end_header\n0 0 0\n1 nan 0\n0 1 0\n").as_bytes(), 9, 3, &["vertex 1 of 3: ", "'y' is NaN"]);
+        at(format!("{head}end_header\n0 0 0\n1 0 -inf\n0 1 0\n").as_bytes(), 9, 5, &["'z' is -inf"]);
+        let dhead = "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n\
+            property double z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+            property float u\nproperty float v\nend_header\n";
+        at(format!("{dhead}1e39 0 0 0 0 1 0 0\n").as_bytes(), 13, 1, &["'x' is 1e39", "not a finite single"]);
+        at(format!("{dhead}0 0 0 0 NaN 1 0 0\n").as_bytes(), 13, 9, &["'ny' is NaN"]);
+        at(format!("{dhead}0 0 0 0 0 1 0 inf\n").as_bytes(), 13, 15, &["'v' is inf"]);
+        let mut b = binary(false);
+        let first_y = b.windows(10).position(|w| w == b"end_header").unwrap() + 11 + 1 + 1 + 8 + 4;
+        b[first_y..first_y + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+        check(&b, &[&format!("vertex 0 of 5 at byte {first_y}: property 'y' is NaN")]);
         check(
             format!("{head}element face 1\nproperty list uchar int indices\nend_header\n").as_bytes(),
             &["vertex_indices"],
         );
+        // Billions of elements claimed: refused before allocating, with the size asked for.
+        let huge = head.replace("vertex 3", "vertex 3000000000");
+        check(
+            format!("{huge}end_header\n0 0 0\n").as_bytes(),
+            &["claims 3000000000 'vertex' elements, which need at least 9000000000 bytes", "has 6 bytes"],
+        );
+        let huge = head.replace("vertex 3", "vertex 5000000000");
+        check(format!("{huge}end_header\n0 0 0\n").as_bytes(), &["5000000000 vertices", "32-bit"]);
+        let binary_huge =
+            "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+            property float z\nelement face 400000000\nproperty list uchar int vertex_indices\nend_header\n";
+        let mut b = binary_huge.as_bytes().to_vec();
+        b.extend_from_slice(&[0u8; 12]);
+        check(&b, &["claims 400000000 'face' elements, which need at least 400000012 bytes", "has 12 bytes"]);
+        // Elements without properties have nothing to read, however many are claimed.
+        let empty = format!(
+            "ply\nformat ascii 1.0\nelement junk 18000000000000000000\n{}end_header\n0 0 0\n1 0 0\n0 1 0\n",
+            &head[21..]
+        );
+        assert_eq!(parse(empty.as_bytes()).unwrap().positions.len(), 3);
+        let table = "ply\nformat ascii 1.0\nelement junk 18000000000000000000\nend_header\n";
+        assert_eq!(parse_ply_table(table.as_bytes(), Path::new(FILE)).unwrap().rows(), 0);
         let noz = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n";
         check(noz.as_bytes(), &["x, y or z"]);
         // Truncated binary data.

@@ -33,11 +33,16 @@ impl Node {
         self.props.iter().any(|p| p.name == name)
     }
 
-    /// A float (an integer is accepted and converted, as Mitsuba does).
+    /// A float (an integer is accepted and converted, as Mitsuba does);
+    /// NaN and infinities are errors, whatever gave the value.
     pub fn get_float(&self, name: &str) -> Result<Option<f64>> {
         match self.find(name) {
             None => Ok(None),
             Some(p) => match p.value {
+                Value::Float(v) if !v.is_finite() => Err(LoadError::at(
+                    &p.loc,
+                    format!("parameter '{}' of {} is {v}, which is not a finite number", p.name, self.describe()),
+                )),
                 Value::Float(v) => Ok(Some(v)),
                 Value::Integer(v) => Ok(Some(v as f64)),
                 _ => Err(self.type_error(p, "a float")),
@@ -98,17 +103,33 @@ impl Node {
     /// all others as reflectances (see [`crate::spectrum`]).
     pub fn get_rgb(&self, name: &str) -> Result<Option<[f64; 3]>> {
         let usage = ColorUse::of(self.kind, name);
-        match self.find(name) {
-            None => Ok(None),
-            Some(p) => match &p.value {
-                Value::Rgb(v) => Ok(Some(*v)),
-                Value::Float(v) => Ok(Some([*v; 3])),
-                Value::Integer(v) => Ok(Some([*v as f64; 3])),
-                Value::SpectrumConstant(v) => Ok(Some(spectrum::constant_to_srgb(*v, usage))),
-                Value::SpectrumSampled(pairs) => Ok(Some(spectrum::sampled_to_srgb(pairs, usage))),
-                _ => Err(self.type_error(p, "an rgb colour, a spectrum or a float")),
-            },
+        let Some(p) = self.find(name) else {
+            return Ok(None);
+        };
+        let rgb = match &p.value {
+            Value::Rgb(v) => *v,
+            Value::Float(v) => [*v; 3],
+            Value::Integer(v) => [*v as f64; 3],
+            Value::SpectrumConstant(v) => spectrum::constant_to_srgb(*v, usage),
+            Value::SpectrumSampled(pairs) => spectrum::sampled_to_srgb(pairs, usage),
+            _ => return Err(self.type_error(p, "an rgb colour, a spectrum or a float")),
+        };
+        // Rendering is in single precision: a colour past its range would
+        // become infinite there, and then NaN.
+        if rgb.iter().any(|c| !c.is_finite() || c.abs() > f32::MAX as f64) {
+            return Err(LoadError::at(
+                &p.loc,
+                format!(
+                    "parameter '{}' of {} is the colour ({}, {}, {}), which is not finite in single precision",
+                    p.name,
+                    self.describe(),
+                    rgb[0],
+                    rgb[1],
+                    rgb[2]
+                ),
+            ));
         }
+        Ok(Some(rgb))
     }
 
     /// A point (`<point>`; a `<vector>` is accepted too).

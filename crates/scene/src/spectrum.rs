@@ -114,6 +114,11 @@ pub fn sampled_to_srgb(pairs: &[(f64, f64)], usage: ColorUse) -> [f64; 3] {
 /// be at least two.
 pub fn read_spd(path: &Path) -> Result<Vec<(f64, f64)>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read spectrum file: {e}"))?;
+    parse_spd(bytes)
+}
+
+/// [`read_spd`] of a file's bytes.
+pub fn parse_spd(bytes: Vec<u8>) -> Result<Vec<(f64, f64)>, String> {
     let text = crate::error::utf8_text(bytes).map_err(|e| format!("spectrum file is {e}"))?;
     let mut pairs = Vec::new();
     for (n, line) in text.lines().enumerate() {
@@ -123,7 +128,10 @@ pub fn read_spd(path: &Path) -> Result<Vec<(f64, f64)>, String> {
         }
         let mut fields = line.split_whitespace().map(|t| t.trim_matches(',').parse::<f64>());
         match (fields.next(), fields.next()) {
-            (Some(Ok(w)), Some(Ok(v))) => pairs.push((w, v)),
+            (Some(Ok(w)), Some(Ok(v))) if w.is_finite() && v.is_finite() => pairs.push((w, v)),
+            (Some(Ok(_)), Some(Ok(_))) => {
+                return Err(format!("line {}: \"{line}\" holds a number that is not finite", n + 1))
+            }
             _ => return Err(format!("line {}: expected \"wavelength value\", found \"{line}\"", n + 1)),
         }
     }
@@ -135,6 +143,11 @@ pub fn read_spd(path: &Path) -> Result<Vec<(f64, f64)>, String> {
 pub fn check_sampled(pairs: &[(f64, f64)]) -> Result<(), String> {
     if pairs.len() < 2 {
         return Err(format!("a sampled spectrum needs at least two wavelength:value pairs, got {}", pairs.len()));
+    }
+    if let Some((w, v)) = pairs.iter().find(|(w, v)| !(w.is_finite() && v.is_finite())) {
+        return Err(format!(
+            "the pair {w} nm: {v} is not finite (a spectrum's wavelengths and values must be finite numbers)"
+        ));
     }
     if let Some(w) = pairs.windows(2).find(|w| w[1].0 <= w[0].0) {
         return Err(format!(
@@ -225,6 +238,14 @@ pub fn plugin_value(node: &crate::desc::Node) -> crate::error::Result<crate::des
                 let l = nm * 1e-9;
                 1e-9 * 2.0 * h * c * c / (l.powi(5) * ((h * c / (k * l * t)).exp() - 1.0))
             };
+            // One sample per nm: a range of more than 10^5 nm would allocate without bound.
+            if hi - lo > 1e5 {
+                return Err(node.error(format!(
+                    "spectrum 'blackbody': the range {lo} to {hi} nm would take {} samples (one per nm); \
+                     at most 100000 are allowed",
+                    (hi - lo).ceil()
+                )));
+            }
             let n = ((hi - lo).ceil() as usize).max(1);
             sampled((0..=n).map(|i| lo + (hi - lo) * i as f64 / n as f64).map(|l| (l, planck(l))).collect())?
         }

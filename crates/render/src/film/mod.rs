@@ -229,7 +229,7 @@ impl Film {
 
     /// An empty film accumulating `layers`.
     pub fn with_layers(width: u32, height: u32, layers: &FilmLayers) -> Film {
-        let n = (width * height) as usize;
+        let n = width as usize * height as usize;
         Film {
             width,
             height,

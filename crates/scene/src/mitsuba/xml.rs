@@ -205,7 +205,11 @@ impl Elem<'_, '_> {
 
     fn float(&self, text: &str, what: &str) -> Result<f64> {
         parse_float(text).ok_or_else(|| {
-            self.err(format!("could not parse {what} \"{text}\" of {} as a finite number", self.describe()))
+            self.err(format!(
+                "could not parse {what} \"{text}\" of {} as a finite number (at most {:e} in magnitude)",
+                self.describe(),
+                f32::MAX
+            ))
         })
     }
 }
@@ -217,9 +221,11 @@ fn tokenize(text: &str) -> Vec<&str> {
 
 /// A finite floating point number that must make up the whole string:
 /// "nan" and "inf", which Rust's parser accepts, would render silently
-/// wrong images (a NaN colour, an infinite radius), so they are refused.
+/// wrong images (a NaN colour, an infinite radius), so they are refused,
+/// and so are numbers past the single-precision range (`1e39`), which
+/// become infinite when the scene is built.
 fn parse_float(text: &str) -> Option<f64> {
-    text.trim().parse().ok().filter(|v: &f64| v.is_finite())
+    text.trim().parse().ok().filter(|v: &f64| v.abs() <= f32::MAX as f64)
 }
 
 /// `major.minor.patch`, all three required (Mitsuba's `util::Version`).
