@@ -135,7 +135,7 @@ def test_bad_dict_names_the_key():
     with pytest.raises(penumbra.Error, match=r"dict\['ball'\]\['radius'\]: nan is not a finite number"):
         penumbra.load_dict(dict(FURNACE, ball=dict(FURNACE["ball"], radius=float("nan"))))
     with pytest.raises(penumbra.Error, match="not one Penumbra builds"):
-        penumbra.load_dict(dict(FURNACE, sky={"type": "sunsky"}))
+        penumbra.load_dict(dict(FURNACE, pol={"type": "polarizer"}))
     # A medium is one (a top-level declaration, unused here).
     penumbra.load_dict(dict(FURNACE, fog={"type": "homogeneous", "sigma_t": 0.5}))
 
