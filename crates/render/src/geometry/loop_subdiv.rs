@@ -231,6 +231,12 @@ pub fn loop_subdivide(levels: u32, positions: &[Vec3], triangles: &[[u32; 3]]) -
             }
         }
     }
+    let mut faces_at = vec![0usize; verts.len()];
+    for t in triangles {
+        for &v in t {
+            faces_at[v as usize] += 1;
+        }
+    }
     let mut m = Mesh { verts, faces };
     // Boundary and regularity, walking each fan with a bound on its length.
     let n_faces = m.faces.len();
@@ -257,7 +263,7 @@ pub fn loop_subdivide(levels: u32, positions: &[Vec3], triangles: &[[u32; 3]]) -
         m.verts[v as usize].boundary = f == NONE;
         let valence = m.valence(v);
         // Every face at the vertex must be on its one fan.
-        let used = triangles.iter().filter(|t| t.contains(&v)).count();
+        let used = faces_at[v as usize];
         let fan = if f == NONE { valence - 1 } else { valence };
         if fan != used {
             return Err(format!(
