@@ -5,10 +5,12 @@
 //! (`builder::GeometryCache`), so a parameter sweep does not reload meshes.
 
 use crate::load_error;
-use numpy::{PyArray2, PyReadonlyArray2};
+use numpy::{PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use penumbra_render::material::Material;
 use penumbra_render::render::RenderJob;
 use penumbra_scene::builder::{self, GeometryCache};
 use penumbra_scene::desc::{Node, Override, SceneDesc, Value};
+use penumbra_scene::scene_builder::{Emission, MeshData, ShapeDesc};
 use penumbra_scene::{mitsuba, LoadError, Overrides};
 use pyo3::exceptions::{PyKeyError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -35,9 +37,48 @@ pub struct Scene {
     /// Values set with `set`, in order.
     overrides: Vec<Override>,
     cache: GeometryCache,
+    /// Meshes added from arrays (`add_mesh`), placed after the file's shapes.
+    meshes: Vec<ArrayMesh>,
     /// The job with the scene's own spp, seed and integrator, for the
     /// attributes below.
     job: RenderJob,
+}
+
+/// A mesh given as arrays (`Scene.add_mesh`), with what it is made of.
+#[derive(Clone)]
+struct ArrayMesh {
+    data: MeshData,
+    /// The id of a top-level `<bsdf>` of the scene; `None`: Mitsuba's default
+    /// diffuse (reflectance 0.5).
+    bsdf: Option<String>,
+    /// Diffuse emitted radiance (an area light), if any.
+    emission: Option<[f32; 3]>,
+    to_world: glam::Mat4,
+    /// Where errors point: `add_mesh #k` of the scene's file.
+    loc: penumbra_scene::FileLoc,
+}
+
+impl ArrayMesh {
+    /// Adds the mesh to the scene being built.
+    fn add(&self, b: &mut penumbra_scene::SceneBuilder) -> penumbra_scene::Result<()> {
+        use penumbra_render::bsdf::DiffuseParams;
+        use penumbra_render::math::Spectrum;
+        let material = match &self.bsdf {
+            Some(id) => b.material(id).ok_or_else(|| {
+                penumbra_scene::LoadError::at(
+                    &self.loc,
+                    format!("no top-level <bsdf id=\"{id}\"> in the scene for this mesh; declare it at the top level"),
+                )
+            })?,
+            None => b.add_material(Material::Diffuse(DiffuseParams { reflectance: Spectrum::splat(0.5).into() })),
+        };
+        let geometry = self.data.clone().into_geometry(&self.to_world, false, false, &self.loc)?;
+        let mut desc = ShapeDesc::new(geometry, material);
+        desc.emission = self.emission.map(|e| Emission::Diffuse(Spectrum::from_array(e).into()));
+        let id = b.add_shape(desc, &self.loc)?;
+        b.place_shape(id);
+        Ok(())
+    }
 }
 
 /// The description of `source` with `overrides` applied.
@@ -60,7 +101,9 @@ impl Scene {
     /// The render job for `ov`, with the values set so far.
     pub(crate) fn job(&mut self, ov: &Overrides) -> Result<RenderJob, LoadError> {
         let desc = self.parse()?;
-        builder::build_cached(&desc, ov, &mut self.cache).map_err(|e| desc.explain(e))
+        let meshes = &self.meshes;
+        builder::build_cached_with(&desc, ov, &mut self.cache, &mut |b| meshes.iter().try_for_each(|m| m.add(b)))
+            .map_err(|e| desc.explain(e))
     }
 
     /// The bytes that identify the scene's text (checkpoint identity).
@@ -78,7 +121,23 @@ impl Scene {
 
     /// The values set, as text (checkpoint identity).
     pub(crate) fn overrides_text(&self) -> String {
-        self.overrides.iter().map(|o| format!("{}.{}={:?}", o.id, o.name, o.value)).collect::<Vec<_>>().join(" ")
+        let mut text =
+            self.overrides.iter().map(|o| format!("{}.{}={:?}", o.id, o.name, o.value)).collect::<Vec<_>>().join(" ");
+        // Meshes from arrays: their whole content (a checkpoint resumes only the same scene).
+        for m in &self.meshes {
+            text.push_str(&format!(
+                " mesh({:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?})",
+                m.data.positions,
+                m.data.indices,
+                m.data.normals,
+                m.data.uvs,
+                m.data.colors,
+                m.bsdf,
+                m.emission,
+                m.to_world
+            ));
+        }
+        text
     }
 
     fn load(py: Python<'_>, source: Source, defines: Vec<(String, String)>) -> PyResult<Scene> {
@@ -86,7 +145,7 @@ impl Scene {
         let job = parse(&source, &defines, &[])
             .and_then(|desc| builder::build_cached(&desc, &Overrides::default(), &mut cache))
             .map_err(|e| load_error(py, &e))?;
-        Ok(Scene { source, defines, overrides: Vec::new(), cache, job })
+        Ok(Scene { source, defines, overrides: Vec::new(), cache, meshes: Vec::new(), job })
     }
 }
 
@@ -127,6 +186,67 @@ pub fn load_string(
 ) -> PyResult<Scene> {
     let path = base_dir.unwrap_or_default().join(name);
     Scene::load(py, Source::Text { text, path }, defines_of(params)?)
+}
+
+/// The rows of a `(rows, N)` array, each finite; `what` names it in errors.
+/// `a` as a 2D array of `dtype` (any array-like numpy converts; integer
+/// arrays only for `int64`, so that float indices are not truncated).
+fn as_array<'py, T: numpy::Element>(
+    a: &Bound<'py, PyAny>,
+    dtype: &str,
+    what: &str,
+) -> PyResult<PyReadonlyArray2<'py, T>> {
+    let np = a.py().import("numpy")?;
+    let arr = np.call_method1("asarray", (a,))?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    let ok =
+        if dtype == "int64" { matches!(kind.as_str(), "i" | "u") } else { matches!(kind.as_str(), "f" | "i" | "u") };
+    let ndim: usize = arr.getattr("ndim")?.extract()?;
+    if !ok || ndim != 2 {
+        let shape = arr.getattr("shape")?.str()?.to_string();
+        return Err(PyValueError::new_err(format!(
+            "{what}: a 2D array of {} numbers, not shape {shape} of dtype kind '{kind}'",
+            if dtype == "int64" { "integer" } else { "real" }
+        )));
+    }
+    let kw = PyDict::new(a.py());
+    kw.set_item("dtype", dtype)?;
+    let out = np.call_method("ascontiguousarray", (arr,), Some(&kw))?;
+    out.extract::<PyReadonlyArray2<'py, T>>().map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
+}
+
+trait Finite: numpy::Element + Copy + std::fmt::Display {
+    fn finite(self) -> bool;
+}
+impl Finite for f64 {
+    fn finite(self) -> bool {
+        self.is_finite()
+    }
+}
+impl Finite for i64 {
+    fn finite(self) -> bool {
+        true
+    }
+}
+
+fn rows<const N: usize, T: Finite>(a: &PyReadonlyArray2<'_, T>, what: &str) -> PyResult<Vec<[T; N]>> {
+    let shape = a.shape();
+    if shape[1] != N {
+        return Err(PyValueError::new_err(format!("{what}: shape ({}, {}), expected (n, {N})", shape[0], shape[1])));
+    }
+    let a = a.as_array();
+    let mut out = Vec::with_capacity(shape[0]);
+    for (i, row) in a.rows().into_iter().enumerate() {
+        let mut r = [row[0]; N];
+        for (j, &v) in row.iter().enumerate() {
+            if !v.finite() {
+                return Err(PyValueError::new_err(format!("{what}: row {i} holds {v}")));
+            }
+            r[j] = v;
+        }
+        out.push(r);
+    }
+    Ok(out)
 }
 
 /// A Python value as a scene value: bool, int, float, str, a 3-sequence
@@ -305,6 +425,130 @@ impl Scene {
             }
             Err(e) => {
                 self.overrides.pop();
+                Err(load_error(py, &e))
+            }
+        }
+    }
+
+    /// Adds a triangle mesh given as arrays (float64 `(N, 3)` positions,
+    /// `(M, 3)` vertex indices, optional `(N, 3)` normals, `(N, 2)` uvs and
+    /// `(N, 3)` linear RGB colours, the latter read as the `vertex_color`
+    /// mesh attribute), made of the scene's top-level `<bsdf id=...>` `bsdf`
+    /// (default: diffuse 0.5), emitting `emission` (RGB radiance) if given,
+    /// placed by `to_world` (4x4). It goes straight into the scene builder,
+    /// as a PLY file's mesh would, and stays in every later render.
+    #[pyo3(signature = (positions, indices, normals=None, uvs=None, colors=None, bsdf=None, emission=None, to_world=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_mesh(
+        &mut self,
+        py: Python<'_>,
+        positions: &Bound<'_, PyAny>,
+        indices: &Bound<'_, PyAny>,
+        normals: Option<&Bound<'_, PyAny>>,
+        uvs: Option<&Bound<'_, PyAny>>,
+        colors: Option<&Bound<'_, PyAny>>,
+        bsdf: Option<String>,
+        emission: Option<[f64; 3]>,
+        to_world: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let k = self.meshes.len();
+        let what = |name: &str| format!("add_mesh #{k}: {name}");
+        let positions = as_array::<f64>(positions, "float64", &what("positions"))?;
+        let indices = as_array::<i64>(indices, "int64", &what("indices"))?;
+        let normals = normals.map(|a| as_array::<f64>(a, "float64", &what("normals"))).transpose()?;
+        let uvs = uvs.map(|a| as_array::<f64>(a, "float64", &what("uvs"))).transpose()?;
+        let colors = colors.map(|a| as_array::<f64>(a, "float64", &what("colors"))).transpose()?;
+        let to_world = to_world.map(|a| as_array::<f64>(a, "float64", &what("to_world"))).transpose()?;
+        let positions = rows::<3, _>(&positions, &what("positions"))?;
+        let n = positions.len();
+        let mut idx = Vec::with_capacity(indices.shape()[0]);
+        for (f, t) in rows::<3, _>(&indices, &what("indices"))?.into_iter().enumerate() {
+            let mut tri = [0u32; 3];
+            for (j, &i) in t.iter().enumerate() {
+                if i < 0 || i as usize >= n {
+                    return Err(PyValueError::new_err(format!(
+                        "{}: triangle {f} has vertex index {i}, outside 0..{n}",
+                        what("indices")
+                    )));
+                }
+                tri[j] = i as u32;
+            }
+            idx.push(tri);
+        }
+        let v3 = |r: [f64; 3]| glam::Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32);
+        let per_vertex = |a: &Option<PyReadonlyArray2<'_, f64>>, name: &str| -> PyResult<()> {
+            match a {
+                Some(a) if a.shape()[0] != n => {
+                    Err(PyValueError::new_err(format!("{}: {} rows for {n} vertices", what(name), a.shape()[0])))
+                }
+                _ => Ok(()),
+            }
+        };
+        per_vertex(&normals, "normals")?;
+        per_vertex(&uvs, "uvs")?;
+        per_vertex(&colors, "colors")?;
+        let normals = match &normals {
+            Some(a) => rows::<3, _>(a, &what("normals"))?.into_iter().map(v3).collect(),
+            None => Vec::new(),
+        };
+        let uvs = match &uvs {
+            Some(a) => {
+                rows::<2, _>(a, &what("uvs"))?.into_iter().map(|r| glam::Vec2::new(r[0] as f32, r[1] as f32)).collect()
+            }
+            None => Vec::new(),
+        };
+        let colors = match &colors {
+            Some(a) => rows::<3, _>(a, &what("colors"))?.into_iter().map(v3).collect(),
+            None => Vec::new(),
+        };
+        let to_world = match &to_world {
+            Some(m) => {
+                let r = rows::<4, _>(m, &what("to_world"))?;
+                if r.len() != 4 {
+                    return Err(PyValueError::new_err(format!(
+                        "{}: a 4x4 matrix, not {}x4",
+                        what("to_world"),
+                        r.len()
+                    )));
+                }
+                // Rows as written; glam is column-major.
+                glam::DMat4::from_cols_array_2d(&[r[0], r[1], r[2], r[3]]).transpose().as_mat4()
+            }
+            None => glam::Mat4::IDENTITY,
+        };
+        if let Some(e) = emission {
+            if e.iter().any(|c| !c.is_finite() || *c < 0.0) {
+                return Err(PyValueError::new_err(format!(
+                    "{}: {e:?} is not a finite radiance >= 0",
+                    what("emission")
+                )));
+            }
+        }
+        let file = match &self.source {
+            Source::File(p) => p.clone(),
+            Source::Text { path, .. } => path.clone(),
+        };
+        self.meshes.push(ArrayMesh {
+            data: MeshData {
+                positions: positions.into_iter().map(v3).collect(),
+                indices: idx,
+                normals,
+                uvs,
+                colors,
+                ..Default::default()
+            },
+            bsdf,
+            emission: emission.map(|e| e.map(|c| c as f32)),
+            to_world,
+            loc: penumbra_scene::FileLoc::with_place(std::sync::Arc::new(file), format!("add_mesh #{k}")),
+        });
+        match self.job(&Overrides::default()) {
+            Ok(job) => {
+                self.job = job;
+                Ok(())
+            }
+            Err(e) => {
+                self.meshes.pop();
                 Err(load_error(py, &e))
             }
         }

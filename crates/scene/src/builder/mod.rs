@@ -115,6 +115,20 @@ pub fn build(desc: &SceneDesc, ov: &Overrides) -> Result<RenderJob> {
 /// [`build`] makes. A shape's geometry is cached under its node's position,
 /// plugin and properties.
 pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache) -> Result<RenderJob> {
+    build_cached_with(desc, ov, cache, &mut |_| Ok(()))
+}
+
+/// [`build_cached`], with `extra` adding shapes (or lights) of its own to
+/// the scene after those of the file, before the scene is finished: the
+/// Python package's in-memory meshes. Top-level `<bsdf id="...">`
+/// declarations are named in the builder, so `extra` can find them with
+/// [`SceneBuilder::material`].
+pub fn build_cached_with(
+    desc: &SceneDesc,
+    ov: &Overrides,
+    cache: &mut GeometryCache,
+    extra: &mut dyn FnMut(&mut SceneBuilder) -> Result<()>,
+) -> Result<RenderJob> {
     let root = &desc.root;
     let mut b = Builder::new(SceneBuilder::with_cache(root.loc.clone(), cache));
     let mut sensor = None;
@@ -152,7 +166,10 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
             }
             // Declared for later reference; built (and checked) when used.
             Kind::Bsdf => {
-                b.bsdf(node)?;
+                let i = b.bsdf(node)?;
+                if let Some(id) = &node.id {
+                    b.scene.name_material(id, i);
+                }
             }
             Kind::Texture => {
                 b.textures.build(node)?;
@@ -209,6 +226,7 @@ pub fn build_cached(desc: &SceneDesc, ov: &Overrides, cache: &mut GeometryCache)
         (None, Some(node)) => build_integrator(node)?,
         (None, None) => (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform),
     };
+    extra(&mut b.scene)?;
     b.textures.finish_mesh_attributes(b.scene.shape_count());
     // What the declared lights need of the sensor (timed_sunsky: its shutter).
     let _ = b.sensor_cx.set(SensorContext {
