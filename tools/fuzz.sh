@@ -8,8 +8,8 @@
 #   tools/fuzz.sh merge TARGET          minimise the corpus and what the runs
 #                                       found into fuzz/corpus/TARGET
 #
-# Targets: xml obj ply serialized vol spd pfm image (see
-# crates/scene/src/fuzzing.rs). A crash is written to
+# Targets: xml xml_include obj ply serialized vol spd pfm image pbrt tensor
+# (crates/scene/src/fuzzing.rs), checkpoint part (crates/cli/src/fuzzing.rs). A crash is written to
 # $CARGO_TARGET_DIR/fuzz-artifacts/TARGET/; fix it, and add the input to the
 # corpus as regression-NAME (merge keeps those) so that the replay test
 # (crates/scene/tests/fuzz_corpus.rs) keeps checking it.

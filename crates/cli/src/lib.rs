@@ -12,6 +12,7 @@ pub mod checkpoint;
 pub mod denoise;
 pub mod driver;
 pub mod exrmeta;
+pub mod fuzzing;
 pub mod imgtool;
 pub mod info;
 pub mod layers;

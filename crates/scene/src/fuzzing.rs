@@ -19,6 +19,9 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("spd", spd),
     ("pfm", pfm),
     ("image", image),
+    ("xml_include", xml_include),
+    ("pbrt", pbrt),
+    ("tensor", tensor),
 ];
 
 /// A Mitsuba XML scene: parsed, then built (meshes, textures and includes
@@ -78,6 +81,40 @@ pub fn image(data: &[u8]) {
     with_file(rest, ext, |p| {
         let _ = crate::image_io::read_image(p);
     });
+}
+
+/// Two Mitsuba XML files, the bytes before the first NUL and those after
+/// it: `scene.xml`, which may include `inc.xml` (or itself, a cycle), and
+/// `inc.xml`, which may include either.
+pub fn xml_include(data: &[u8]) {
+    let cut = data.iter().position(|&b| b == 0).unwrap_or(data.len());
+    let (main, inc) = (&data[..cut], data.get(cut + 1..).unwrap_or(&[]));
+    let dir = std::env::temp_dir().join(
+        format!("penumbra-fuzz-inc-{}-{:?}", std::process::id(), std::thread::current().id()).replace(['(', ')'], ""),
+    );
+    if std::fs::create_dir_all(&dir).is_ok()
+        && std::fs::write(dir.join("scene.xml"), main).is_ok()
+        && std::fs::write(dir.join("inc.xml"), inc).is_ok()
+    {
+        if let Ok(desc) = crate::mitsuba::parse_file(&dir.join("scene.xml"), &[("res".into(), "4".into())]) {
+            let _ = crate::builder::build(&desc, &crate::Overrides::default());
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A pbrt-v4 scene: tokenized and parsed (files it includes are missing).
+pub fn pbrt(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else { return };
+    let _ =
+        crate::pbrt::parse_str(text, Path::new("/nonexistent-fuzz-dir/scene.pbrt"), Path::new("/nonexistent-fuzz-dir"));
+}
+
+/// A tensor file (the `measured` BSDF's `.bsdf`), and its tables when it parses.
+pub fn tensor(data: &[u8]) {
+    if let Ok(t) = crate::tensor::TensorFile::parse(data.to_vec()) {
+        let _ = crate::tensor::measured_tables(&t);
+    }
 }
 
 /// Runs `f` on a temporary file holding `data` (readers that take paths).

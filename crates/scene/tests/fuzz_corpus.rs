@@ -13,14 +13,11 @@ const LIMIT: Duration = Duration::from_secs(20);
 #[test]
 fn the_fuzzing_corpus_replays_without_a_panic_or_a_hang() {
     let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus");
-    let mut dirs: Vec<String> = std::fs::read_dir(&corpus)
-        .unwrap_or_else(|e| panic!("{}: {e}", corpus.display()))
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    dirs.sort();
-    let mut names: Vec<&str> = TARGETS.iter().map(|t| t.0).collect();
-    names.sort();
-    assert_eq!(dirs, names, "fuzz/corpus/ must hold one directory per target");
+    // Every target has its corpus (crates/cli/tests/fuzz_corpus.rs checks
+    // that every directory belongs to a target of this crate or of the CLI's).
+    for (name, _) in TARGETS {
+        assert!(corpus.join(name).is_dir(), "fuzz/corpus/{name} is missing");
+    }
     let mut failures = Vec::new();
     let mut count = 0;
     for (name, run) in TARGETS {
