@@ -205,9 +205,15 @@ pub struct BenchArgs {
     /// (build and render a mesh of `--triangles` triangles, default 10
     /// million, and report peak memory), or `packets` (the Cornell box's and
     /// envmap_sun's recorded rays traced one at a time against packets of 8
-    /// and 16).
-    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "efficiency", "scale", "packets"])]
+    /// and 16), or `soak` (a render of the first given scene, default the
+    /// Cornell box, sized to last --soak-minutes, killed at random and
+    /// resumed until it completes; its image must be bitwise the
+    /// uninterrupted render's).
+    #[arg(long, default_value = "all", value_parser = ["all", "scenes", "rays", "efficiency", "scale", "packets", "soak"])]
     pub suite: String,
+    /// Minutes of rendering in the `soak` suite (the uninterrupted render's length).
+    #[arg(long, default_value_t = 10.0)]
+    pub soak_minutes: f64,
     /// Render seconds per renderer and scene in the `efficiency` suite.
     #[arg(long, default_value_t = 4.0)]
     pub budget: f64,

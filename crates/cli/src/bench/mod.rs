@@ -8,6 +8,7 @@ mod embree;
 mod packets;
 mod rays;
 mod scale;
+mod soak;
 mod trace_only;
 
 use crate::args::BenchArgs;
@@ -97,6 +98,10 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     }
     if a.suite == "packets" {
         packets::table(&pool)?;
+    }
+    if a.suite == "soak" {
+        let scene = a.scenes.first().cloned().unwrap_or_else(|| PathBuf::from("scenes/cornell-box.xml"));
+        soak::run(&scene, a.soak_minutes, pool.current_num_threads())?;
     }
     if a.suite == "scale" {
         scale::run(a.triangles.unwrap_or(10_000_000), pool.current_num_threads())?;
