@@ -314,28 +314,53 @@ pub(crate) struct Stretched {
 
 /// Beckmann visible slopes for α = 1, x component (in the incidence plane):
 /// numerical inversion of its CDF in the erf domain (Jakob's improved
-/// routine, as Mitsuba). The x and y slopes are independent.
+/// routine, as Mitsuba's `sample_visible_11`), in f32 with the lanes' `erf`,
+/// `erfinv`, `exp` and `ln`: Newton steps on the normalised CDF, kept inside
+/// a bisection bracket, until it is within 1e-6 of `ux` (at most
+/// [`BECKMANN_NEWTON_STEPS`]). The x and y slopes are independent.
 pub(crate) fn beckmann_slope_x(cos_theta_i: f32, ux: f32) -> f32 {
-    let ci = cos_theta_i as f64;
+    use crate::simd::{erf, erfinv, exp, ln};
+    let ci = cos_theta_i;
     let tan_i = (1.0 - ci * ci).max(0.0).sqrt() / ci;
     let cot_i = 1.0 / tan_i;
-    let maxval = erf(cot_i);
-    let ux = (ux as f64).clamp(1e-6, 1.0 - 1e-6);
-    let mut x = maxval - (maxval + 1.0) * erf((-ux.ln()).sqrt());
-    let tail = if tan_i == 0.0 { 0.0 } else { INV_SQRT_PI * tan_i * (-cot_i * cot_i).exp() };
-    let target = ux * (1.0 + maxval + tail);
-    for _ in 0..3 {
+    let maxval = if tan_i == 0.0 { 1.0 } else { erf(cot_i) };
+    let ux = ux.clamp(1e-6, 1.0 - 1e-6);
+    let k = INV_SQRT_PI as f32 * tan_i;
+    let tail = if tan_i == 0.0 { 0.0 } else { k * exp(-cot_i * cot_i) };
+    let norm = 1.0 / (1.0 + maxval + tail);
+    // Start: the CDF at normal incidence, inverted in closed form.
+    let mut x = maxval - (maxval + 1.0) * erf((-ln(ux)).sqrt());
+    let (mut lo, mut hi) = (-1.0f32, maxval);
+    for _ in 0..BECKMANN_NEWTON_STEPS {
+        // Outside the bracket (or NaN): bisect instead.
+        if !(x >= lo && x <= hi) {
+            x = 0.5 * (lo + hi);
+        }
         let slope = erfinv(x);
-        let value = 1.0 + x + INV_SQRT_PI * tan_i * (-slope * slope).exp() - target;
-        let derivative = 1.0 - slope * tan_i;
-        x -= value / derivative;
+        let value = norm * (1.0 + x + k * exp(-slope * slope)) - ux;
+        if value.abs() < 1e-6 {
+            break;
+        }
+        if value > 0.0 {
+            hi = x;
+        } else {
+            lo = x;
+        }
+        x -= value / (norm * (1.0 - slope * tan_i));
     }
-    erfinv(x) as f32
+    if !(x >= lo && x <= hi) {
+        x = 0.5 * (lo + hi);
+    }
+    erfinv(x)
 }
+
+/// The most Newton steps of [`beckmann_slope_x`] (it converges in 1-3 but
+/// at grazing incidence).
+const BECKMANN_NEWTON_STEPS: usize = 10;
 
 /// Beckmann visible slopes for α = 1, y component (a standard normal / √2).
 pub(crate) fn beckmann_slope_y(uy: f32) -> f32 {
-    erfinv(2.0 * (uy as f64).clamp(1e-6, 1.0 - 1e-6) - 1.0) as f32
+    crate::simd::erfinv(2.0 * uy.clamp(1e-6, 1.0 - 1e-6) - 1.0)
 }
 
 /// Mirror reflection of `v` about the microfacet normal `m`.
@@ -386,6 +411,43 @@ mod tests {
             let (exact, fast) = (beckmann_lambda(a), beckmann_lambda_f32(a as f32) as f64);
             assert!((fast - exact).abs() <= 1e-5 * exact, "a = {a}: {fast} vs {exact}");
         }
+    }
+
+    /// The f32 slope sampling inverts the visible-slope CDF: against the
+    /// same CDF inverted by bisection in f64, at incidences from normal to
+    /// 89.9°, the slopes agree to 2e-4 (1 + |slope|).
+    #[test]
+    fn beckmann_slopes_invert_the_cdf() {
+        let mut worst: f64 = 0.0;
+        for ci in [1.0f32, 0.9, 0.5, 0.2, 0.05, 0.01, 0.0017] {
+            let c = ci as f64;
+            let tan_i = (1.0 - c * c).max(0.0).sqrt() / c;
+            let (maxval, k) = (if tan_i == 0.0 { 1.0 } else { erf(1.0 / tan_i) }, INV_SQRT_PI * tan_i);
+            let cdf = |x: f64| {
+                let s = erfinv(x);
+                (1.0 + x + k * (-s * s).exp()) / (1.0 + maxval + k * (-1.0 / (tan_i * tan_i)).exp())
+            };
+            for i in 0..400 {
+                let u = (i as f64 + 0.5) / 400.0;
+                let (mut lo, mut hi) = (-1.0, maxval);
+                for _ in 0..100 {
+                    let mid = 0.5 * (lo + hi);
+                    if cdf(mid) < u {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+                let want = erfinv(0.5 * (lo + hi));
+                let got = beckmann_slope_x(ci, u as f32) as f64;
+                let e = (got - want).abs() / (1.0 + want.abs());
+                assert!(e < 2e-4, "cos θ = {ci}, u = {u}: {got} vs {want}");
+                worst = worst.max(e);
+            }
+        }
+        let y = beckmann_slope_y(0.8) as f64;
+        assert!((y - erfinv(0.6)).abs() < 1e-6, "{y}");
+        println!("largest relative slope error {worst:e}");
     }
 
     fn kinds() -> [MicrofacetType; 2] {

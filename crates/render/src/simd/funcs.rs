@@ -226,6 +226,48 @@ pub fn erf<F: Float>(x: F) -> F {
     F::select(t.cmp_gt(c(0.927734375)), tail, near)
 }
 
+/// erf⁻¹ y on (−1, 1), odd; ±∞ at ±1, NaN outside. M. Giles'
+/// single-precision approximation ("Approximating the erfinv function",
+/// GPU Computing Gems, 2010): with w = −ln((1 − y)(1 + y)), y·P(w − 2.5)
+/// for w < 5, else y·Q(√w − 3), both of degree 8, fused; the logarithm
+/// this file's [`ln`]. Residual |erf(erfinv y) − y| below 4e-7 (test).
+#[inline(always)]
+#[allow(clippy::excessive_precision)] // Giles' published values, verbatim
+pub fn erfinv<F: Float>(y: F) -> F {
+    let w = -ln((c::<F>(1.0) - y) * (c::<F>(1.0) + y));
+    let central = horner(
+        w - c(2.5),
+        &[
+            2.81022636e-08,
+            3.43273939e-07,
+            -3.5233877e-06,
+            -4.39150654e-06,
+            0.00021858087,
+            -0.00125372503,
+            -0.00417768164,
+            0.246640727,
+            1.50140941,
+        ],
+    );
+    let tail = horner(
+        w.sqrt() - c(3.0),
+        &[
+            -0.000200214257,
+            0.000100950558,
+            0.00134934322,
+            -0.00367342844,
+            0.00573950773,
+            -0.0076224613,
+            0.00943887047,
+            1.00167406,
+            2.83297682,
+        ],
+    );
+    let r = F::select(w.cmp_lt(c(5.0)), central, tail) * y;
+    // At ±1 the polynomial in √w − 3 = ∞ has the wrong sign: ±∞ there.
+    F::select(y.abs().cmp_eq(c(1.0)), y * c(f32::INFINITY), r)
+}
+
 /// arctan x, odd; ±π/2 for ±∞, NaN for NaN.
 ///
 /// Cephes `atanf` as [`crate::math::fast::atan`], bitwise: reduced to
@@ -337,6 +379,13 @@ mod tests {
             erf(a)
         }
     }
+    struct Erfinv;
+    impl Kernel for Erfinv {
+        const NAME: &'static str = "erfinv";
+        fn eval<F: Float>(a: F, _: F, _: F) -> F {
+            erfinv(a)
+        }
+    }
     struct Atan;
     impl Kernel for Atan {
         const NAME: &'static str = "atan";
@@ -420,6 +469,7 @@ mod tests {
         ran.push(check_kernel::<Exp>(&unary_args(N, 4, -110.0, 95.0, &EDGES)));
         ran.push(check_kernel::<Ln>(&unary_args(N, 5, 0.0, 4.0, &EDGES)));
         ran.push(check_kernel::<Erf>(&unary_args(N, 6, -5.0, 5.0, &EDGES)));
+        ran.push(check_kernel::<Erfinv>(&unary_args(N, 10, -1.0, 1.0, &EDGES)));
         ran.push(check_kernel::<Atan>(&unary_args(N, 7, -20.0, 20.0, &EDGES)));
         ran.push(check_kernel::<Atan2>(&atan2_args(N, 8)));
         ran.push(check_kernel::<Acos>(&unary_args(N, 9, -1.1, 1.1, &EDGES)));
@@ -445,6 +495,27 @@ mod tests {
             let (y, x) = (a[0], a[1]);
             assert!(same(atan2(y, x), fast::atan2(y, x), false), "atan2({y:e}, {x:e})");
         }
+    }
+
+    /// erfinv inverts erf: the residual |erf(erfinv y) − y| (erf in f64)
+    /// stays below 4e-7 over (−1, 1), and the ends are ±∞.
+    #[test]
+    fn erfinv_inverts_erf() {
+        let mut rng = Rng::new(21);
+        let mut worst: f64 = 0.0;
+        for i in 0..200_000 {
+            let y = if i % 2 == 0 { rng.uniform(-1.0, 1.0) } else { 1.0 - (rng.log_uniform().abs() as f32).min(1.0) };
+            if y <= -1.0 || y >= 1.0 {
+                continue;
+            }
+            let x = erfinv(y);
+            assert!(x.is_finite(), "erfinv({y:e}) = {x}");
+            worst = worst.max((erf_ref(x as f64) - y as f64).abs());
+        }
+        assert!(worst < 4e-7, "largest residual {worst:e}");
+        assert_eq!(erfinv(1.0f32), f32::INFINITY);
+        assert_eq!(erfinv(-1.0f32), f32::NEG_INFINITY);
+        assert!(same(erfinv(-0.3f32), -erfinv(0.3f32), true));
     }
 
     /// The largest ulp error of `f` against `reference` over `xs`, and where.

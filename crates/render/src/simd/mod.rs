@@ -49,7 +49,7 @@ pub(crate) mod check;
 pub use avx2::{F32x8, I32x8, M32x8};
 #[cfg(all(target_arch = "x86_64", any(doc, target_feature = "avx512f")))]
 pub use avx512::{F32x16, I32x16, M32x16};
-pub use funcs::{acos, atan, atan2, cos, erf, exp, ln, sin, sin_cos, SIN_COS_MAX};
+pub use funcs::{acos, atan, atan2, cos, erf, erfinv, exp, ln, sin, sin_cos, SIN_COS_MAX};
 
 use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
