@@ -1,0 +1,312 @@
+//! pbrt-v4 scenes rendered through the translator against the same scenes
+//! written as Mitsuba XML (independently seeded renders that must agree
+//! within noise), the image's orientation, and bad input.
+
+mod common;
+
+use common::{assert_agree, compare, injected_errors, render_with_variance};
+use penumbra_scene::{load_scene, Overrides};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("penumbra-pbrt-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Quads (four corners, counter-clockwise seen from the side they face).
+type Quad = [[f32; 3]; 4];
+
+/// The box: floor, ceiling, back wall, left (red) and right (green) walls.
+const WHITE: &[Quad] = &[
+    [[-1.0, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]],
+    [[-1.0, 2.0, -1.0], [1.0, 2.0, -1.0], [1.0, 2.0, 1.0], [-1.0, 2.0, 1.0]],
+    [[-1.0, 0.0, 1.0], [-1.0, 2.0, 1.0], [1.0, 2.0, 1.0], [1.0, 0.0, 1.0]],
+];
+const RED: Quad = [[-1.0, 0.0, -1.0], [-1.0, 2.0, -1.0], [-1.0, 2.0, 1.0], [-1.0, 0.0, 1.0]];
+const GREEN: Quad = [[1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [1.0, 2.0, 1.0], [1.0, 2.0, -1.0]];
+/// The lamp, facing down.
+const LAMP: Quad = [[-0.3, 1.98, -0.3], [0.3, 1.98, -0.3], [0.3, 1.98, 0.3], [-0.3, 1.98, 0.3]];
+
+/// An ASCII PLY of quads (two triangles each).
+fn ply(quads: &[Quad]) -> String {
+    let mut s = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        4 * quads.len(),
+        2 * quads.len()
+    );
+    for q in quads {
+        for v in q {
+            writeln!(s, "{} {} {}", v[0], v[1], v[2]).unwrap();
+        }
+    }
+    for i in 0..quads.len() {
+        let b = 4 * i;
+        writeln!(s, "3 {} {} {}\n3 {} {} {}", b, b + 1, b + 2, b, b + 2, b + 3).unwrap();
+    }
+    s
+}
+
+/// A `trianglemesh` of quads.
+fn trianglemesh(quads: &[Quad]) -> String {
+    let p: Vec<String> = quads.iter().flatten().map(|v| format!("{} {} {}", v[0], v[1], v[2])).collect();
+    let i: Vec<String> =
+        (0..quads.len()).map(|q| format!("{0} {1} {2} {0} {2} {3}", 4 * q, 4 * q + 1, 4 * q + 2, 4 * q + 3)).collect();
+    format!("Shape \"trianglemesh\" \"point3 P\" [{}] \"integer indices\" [{}]", p.join(" "), i.join(" "))
+}
+
+/// An octahedron of radius `r` at the origin (the PLY mesh and the instanced object).
+fn octahedron(r: f32) -> String {
+    let v = [[r, 0.0, 0.0], [-r, 0.0, 0.0], [0.0, r, 0.0], [0.0, -r, 0.0], [0.0, 0.0, r], [0.0, 0.0, -r]];
+    let f = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+    let mut s = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 8\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    for p in v {
+        writeln!(s, "{} {} {}", p[0], p[1], p[2]).unwrap();
+    }
+    for t in f {
+        writeln!(s, "3 {} {} {}", t[0], t[1], t[2]).unwrap();
+    }
+    s
+}
+
+const SIZE: u32 = 48;
+
+/// The box as pbrt-v4 and as Mitsuba XML, in `dir`.
+fn write_box(dir: &Path) -> (PathBuf, PathBuf) {
+    std::fs::write(dir.join("white.ply"), ply(WHITE)).unwrap();
+    std::fs::write(dir.join("red.ply"), ply(&[RED])).unwrap();
+    std::fs::write(dir.join("green.ply"), ply(&[GREEN])).unwrap();
+    std::fs::write(dir.join("lamp.ply"), ply(&[LAMP])).unwrap();
+    std::fs::write(dir.join("octa.ply"), octahedron(0.25)).unwrap();
+    let pbrt = format!(
+        r#"# A Cornell-like box: diffuse walls, a conductor and a dielectric sphere,
+# an area light, a point light, an instanced object and a PLY mesh.
+LookAt 0 1 -3.2  0 1 0  0 1 0
+Camera "perspective" "float fov" 45
+Film "rgb" "integer xresolution" {SIZE} "integer yresolution" {SIZE}
+Sampler "independent" "integer pixelsamples" 16
+Integrator "path" "integer maxdepth" 5
+WorldBegin
+LightSource "point" "point3 from" [0.5 1.6 -0.8] "rgb I" [0.6 0.6 0.6]
+MakeNamedMaterial "white" "string type" "diffuse" "rgb reflectance" [0.7 0.7 0.7]
+NamedMaterial "white"
+{white}
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.7 0.1 0.1]
+  {red}
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.1 0.6 0.1]
+  {green}
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [8 8 8]
+  Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+  {lamp}
+AttributeEnd
+AttributeBegin
+  Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
+  Translate -0.45 0.35 0.3
+  Shape "sphere" "float radius" 0.35
+AttributeEnd
+AttributeBegin
+  Material "dielectric" "float eta" 1.5
+  Translate 0.45 0.3 -0.2
+  Shape "sphere" "float radius" 0.3
+AttributeEnd
+ObjectBegin "octa"
+  Material "diffuse" "rgb reflectance" [0.2 0.3 0.7]
+  Shape "plymesh" "string filename" "octa.ply"
+ObjectEnd
+AttributeBegin
+  Translate 0.5 1.3 0.6
+  ObjectInstance "octa"
+AttributeEnd
+AttributeBegin
+  Translate -0.5 1.4 0.5
+  Scale 0.8 0.8 0.8
+  ObjectInstance "octa"
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.8 0.7 0.2]
+  Translate 0 0.25 0.5
+  Shape "plymesh" "string filename" "octa.ply"
+AttributeEnd
+"#,
+        white = trianglemesh(WHITE),
+        red = trianglemesh(&[RED]),
+        green = trianglemesh(&[GREEN]),
+        lamp = trianglemesh(&[LAMP]),
+    );
+    let diffuse = |r: f32, g: f32, b: f32| {
+        format!(
+            r#"<bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="{r} {g} {b}"/></bsdf></bsdf>"#
+        )
+    };
+    let ply_shape = |file: &str, bsdf: String, extra: &str| {
+        format!(r#"<shape type="ply"><string name="filename" value="{file}"/>{bsdf}{extra}</shape>"#)
+    };
+    // Gold as the pbrt side converts pbrt-v4's metal-Au tables.
+    let xml = format!(
+        r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="6"/></integrator>
+<sensor type="perspective">
+  <float name="fov" value="45"/><string name="fov_axis" value="smaller"/>
+  <transform name="to_world"><scale x="-1"/><lookat origin="0 1 -3.2" target="0 1 0" up="0 1 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/></film>
+</sensor>
+<emitter type="point"><point name="position" value="0.5 1.6 -0.8"/><rgb name="intensity" value="0.6"/></emitter>
+{white}
+{red}
+{green}
+{lamp}
+<shape type="sphere"><point name="center" value="-0.45 0.35 0.3"/><float name="radius" value="0.35"/>
+  <bsdf type="twosided"><bsdf type="conductor">
+    <rgb name="eta" value="0.07987072 0.40465155 1.558967"/><rgb name="k" value="3.386737 2.5007045 1.768913"/>
+  </bsdf></bsdf></shape>
+<shape type="sphere"><point name="center" value="0.45 0.3 -0.2"/><float name="radius" value="0.3"/>
+  <bsdf type="dielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1"/></bsdf></shape>
+<shape type="shapegroup" id="octa">{octa}</shape>
+<shape type="instance"><ref id="octa"/><transform name="to_world"><translate x="0.5" y="1.3" z="0.6"/></transform></shape>
+<shape type="instance"><ref id="octa"/><transform name="to_world"><scale value="0.8"/><translate x="-0.5" y="1.4" z="0.5"/></transform></shape>
+{octa2}
+</scene>"#,
+        white = ply_shape("white.ply", diffuse(0.7, 0.7, 0.7), ""),
+        red = ply_shape("red.ply", diffuse(0.7, 0.1, 0.1), ""),
+        green = ply_shape("green.ply", diffuse(0.1, 0.6, 0.1), ""),
+        lamp = ply_shape(
+            "lamp.ply",
+            diffuse(0.5, 0.5, 0.5),
+            r#"<emitter type="area"><rgb name="radiance" value="8"/></emitter>"#
+        ),
+        octa = ply_shape("octa.ply", diffuse(0.2, 0.3, 0.7), ""),
+        octa2 = ply_shape(
+            "octa.ply",
+            diffuse(0.8, 0.7, 0.2),
+            r#"<transform name="to_world"><translate x="0" y="0.25" z="0.5"/></transform>"#
+        ),
+    );
+    let (p, x) = (dir.join("box.pbrt"), dir.join("box.xml"));
+    std::fs::write(&p, pbrt).unwrap();
+    std::fs::write(&x, xml).unwrap();
+    (p, x)
+}
+
+/// The box rendered from its pbrt-v4 file and from its XML twin: the same
+/// image within noise; and the comparison catches the injected errors (a
+/// wider lobe, a mirrored image, a brighter region).
+#[test]
+fn pbrt_box_matches_its_mitsuba_xml_twin() {
+    let dir = temp_dir("box");
+    let (pbrt, xml) = write_box(&dir);
+    let a = render_with_variance(&pbrt, 512, 16, None, 1);
+    let b = render_with_variance(&xml, 512, 16, None, 2);
+    assert_agree("pbrt box vs XML", &a, &b, 0.02);
+    for (what, bad) in injected_errors(&a) {
+        let v = compare(&format!("injected {what}"), &bad, &b, 0.02);
+        assert!(!v.failures.is_empty(), "the comparison misses an injected error: {what}");
+    }
+    if std::env::var_os("PENUMBRA_KEEP_PBRT_BOX").is_none() {
+        std::fs::remove_dir_all(&dir).unwrap();
+    } else {
+        eprintln!("kept {}", dir.display());
+    }
+}
+
+/// pbrt-v4's camera puts world +x at the right of the image when it looks
+/// along +z with +y up (left-handed screen space): a red sphere at +x lands
+/// in the image's right half.
+#[test]
+fn pbrt_image_is_not_mirrored() {
+    let dir = temp_dir("orient");
+    let scene = r#"LookAt 0 0 -4  0 0 0  0 1 0
+Camera "perspective" "float fov" 50
+Film "rgb" "integer xresolution" 32 "integer yresolution" 16
+Sampler "independent" "integer pixelsamples" 4
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Material "diffuse" "rgb reflectance" [0.9 0 0]
+Translate 1.2 0.6 0
+Shape "sphere" "float radius" 0.5
+"#;
+    let path = dir.join("o.pbrt");
+    std::fs::write(&path, scene).unwrap();
+    let mut job = load_scene(&path, &[], &Overrides::default()).unwrap();
+    let mut film = penumbra_render::film::Film::new(job.width, job.height);
+    job.stream = false;
+    job.render_into(&mut film, 0..4, &|_| {});
+    let img = film.develop();
+    // Red minus green per quadrant: the sphere (red, green 0) against the white sky.
+    let redness = |x0: u32, x1: u32, y0: u32, y1: u32| {
+        let mut s = 0.0;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let p = img[(y * 32 + x) as usize];
+                s += (p[0] - p[1]) as f64;
+            }
+        }
+        s
+    };
+    let (top_right, top_left) = (redness(16, 32, 0, 8), redness(0, 16, 0, 8));
+    let bottom = redness(0, 32, 8, 16);
+    assert!(top_right > 10.0 * (top_left.abs() + bottom.abs() + 1e-3), "{top_right} {top_left} {bottom}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Bad input: an error naming the file, line and column, never a panic.
+#[test]
+fn bad_pbrt_input_is_an_error_at_its_position() {
+    let dir = temp_dir("bad");
+    let head = "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n";
+    let cases = [
+        ("Shape \"curve\" \"point3 P\" [0 0 0]", "b.pbrt:3:1", "shape \"curve\" is not supported"),
+        ("Material \"coateddiffuse\"\nShape \"sphere\"", "b.pbrt:3:1", "not supported yet"),
+        ("Shape \"sphere\" \"float zmax\" 0.5", "b.pbrt:3:1", "partial shape"),
+        ("Shape \"sphere\" \"float radiu\" 1", "b.pbrt:3:", "\"float radiu\""),
+        ("Material \"conductor\" \"spectrum eta\" \"metal-Zz-eta\"\nShape \"sphere\"", "b.pbrt:3:", "metal-Cu-eta"),
+        ("LightSource \"spot\"", "b.pbrt:3:1", "smoothstep"),
+        ("AreaLightSource \"diffuse\" \"bool twosided\" true\nShape \"sphere\"", "b.pbrt:3:1", "twosided"),
+        ("NamedMaterial \"nope\"\nShape \"sphere\"", "b.pbrt:3:15", "no material named \"nope\""),
+        (
+            "Material \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"",
+            "b.pbrt:3:",
+            "no spectrum texture named \"t\"",
+        ),
+        ("Shape \"plymesh\" \"string filename\" \"missing.ply\"", "b.pbrt:3:1", "cannot read PLY file"),
+        (
+            "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 5]",
+            "b.pbrt:3:1",
+            "out of range",
+        ),
+        ("Material \"diffuse\" \"rgb reflectance\" [2 0 0]\nShape \"sphere\"", "b.pbrt:3:", "above 1"),
+        ("LightSource \"infinite\" \"string filename\" \"sky.png\"", "b.pbrt:3:1", "infinite light image"),
+    ];
+    for (body, at, what) in cases {
+        let path = dir.join("b.pbrt");
+        std::fs::write(&path, format!("{head}{body}\n")).unwrap();
+        let e = match load_scene(&path, &[], &Overrides::default()) {
+            Ok(_) => panic!("accepted: {body}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(at) && e.contains(what), "{body:?}: {e}");
+    }
+    // Options the translator refuses before the world block.
+    for (pre, at, what) in [
+        ("Integrator \"bdpt\"\n", "b.pbrt:1:1", "Integrator \"bdpt\" is not supported"),
+        ("Integrator \"path\" \"bool regularize\" true\n", "b.pbrt:1:1", "regularize"),
+        ("PixelFilter \"sinc\"\n", "b.pbrt:1:1", "PixelFilter \"sinc\""),
+        ("Camera \"realistic\"\n", "b.pbrt:1:1", "Camera \"realistic\""),
+    ] {
+        let path = dir.join("b.pbrt");
+        std::fs::write(&path, format!("{pre}{head}Shape \"sphere\"\n")).unwrap();
+        let e = load_scene(&path, &[], &Overrides::default()).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains(at) && e.contains(what), "{pre:?}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
