@@ -310,3 +310,155 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scene of the other features, as pbrt-v4 and as Mitsuba XML: a
+/// non-square image (pbrt's fov spans the shorter axis), a checkerboard and
+/// an image texture (pbrt looks images up at (s, 1 - t)), rough conductor
+/// and dielectric (α = √roughness, GGX), a mix of two materials, a
+/// bilinear patch with constant alpha, a cylinder, a disk area light, a
+/// reversed area light, a distant light and a uniform infinite light.
+fn write_features(dir: &Path) -> (PathBuf, PathBuf) {
+    // An asymmetric 4x3 image, so that a flipped lookup shows.
+    let pixels =
+        (0..12).map(|i| [(i % 4) as f32 / 3.0, (i / 4) as f32 / 2.0, if i == 0 { 1.0 } else { 0.1 }]).collect();
+    let img = penumbra_scene::image_io::RgbImage { width: 4, height: 3, pixels };
+    penumbra_scene::image_io::write_image(&dir.join("tex.png"), &img).unwrap();
+    // The floor (with uv) and the textured back wall, as PLY for the XML side.
+    let floor_ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+        property float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+        -2 0 -2 0 0\n-2 0 2 0 1\n2 0 2 1 1\n2 0 -2 1 0\n3 0 1 2\n3 0 2 3\n";
+    let wall_ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+        property float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+        -1.5 0 1.5 1 0\n-1.5 2 1.5 1 1\n1.5 2 1.5 0 1\n1.5 0 1.5 0 0\n3 0 1 2\n3 0 2 3\n";
+    let quad_ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+        element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+        -0.3 0.1 -0.6\n0.3 0.1 -0.6\n0.3 0.7 -0.6\n-0.3 0.7 -0.6\n3 0 1 2\n3 0 2 3\n";
+    // Facing up (+y); ReverseOrientation (XML: flip_normals) turns it down.
+    let lamp_ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+        element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+        0.6 1.9 -0.2\n0.6 1.9 0.2\n1.0 1.9 0.2\n1.0 1.9 -0.2\n3 0 1 2\n3 0 2 3\n";
+    for (n, s) in [("floor.ply", floor_ply), ("wall.ply", wall_ply), ("quad.ply", quad_ply), ("lamp.ply", lamp_ply)] {
+        std::fs::write(dir.join(n), s).unwrap();
+    }
+    let pbrt = r#"LookAt 0 1.1 -3.5  0 0.8 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 56 "integer yresolution" 40
+Sampler "independent" "integer pixelsamples" 16
+Integrator "path" "integer maxdepth" 4
+WorldBegin
+LightSource "distant" "point3 from" [1 3 -2] "point3 to" [0 0 0] "rgb L" [0.8 0.7 0.6]
+LightSource "infinite" "rgb L" [0.15 0.2 0.3]
+Texture "checks" "spectrum" "checkerboard" "float uscale" 4 "float vscale" 4
+  "rgb tex1" [0.8 0.8 0.8] "rgb tex2" [0.2 0.3 0.2]
+Texture "img" "spectrum" "imagemap" "string filename" "tex.png"
+Material "diffuse" "texture reflectance" "checks"
+Shape "trianglemesh" "point3 P" [-2 0 -2  -2 0 2  2 0 2  2 0 -2] "integer indices" [0 1 2 0 2 3]
+  "point2 uv" [0 0  0 1  1 1  1 0]
+Material "diffuse" "texture reflectance" "img"
+Shape "trianglemesh" "point3 P" [-1.5 0 1.5  -1.5 2 1.5  1.5 2 1.5  1.5 0 1.5] "integer indices" [0 1 2 0 2 3]
+  "point2 uv" [1 0  1 1  0 1  0 0]
+AttributeBegin
+  Material "conductor" "rgb eta" [0.2 0.9 1.1] "rgb k" [3.9 2.4 2.2] "float roughness" 0.1
+  Translate -0.8 0.4 0.4
+  Shape "sphere" "float radius" 0.4
+AttributeEnd
+AttributeBegin
+  Material "dielectric" "float eta" 1.4 "float roughness" 0.05
+  Translate 0.2 0.35 -0.1
+  Shape "sphere" "float radius" 0.35
+AttributeEnd
+MakeNamedMaterial "a" "string type" "diffuse" "rgb reflectance" [0.9 0.2 0.1]
+MakeNamedMaterial "b" "string type" "diffuse" "rgb reflectance" [0.1 0.3 0.9]
+MakeNamedMaterial "ab" "string type" "mix" "string materials" ["a" "b"] "float amount" 0.3
+AttributeBegin
+  NamedMaterial "ab"
+  Translate 0.9 0 0.6
+  Rotate -90 1 0 0
+  Shape "cylinder" "float radius" 0.25 "float zmin" 0 "float zmax" 0.8
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.3 0.8 0.3]
+  Shape "bilinearmesh" "point3 P" [-0.3 0.1 -0.6  0.3 0.1 -0.6  -0.3 0.7 -0.6  0.3 0.7 -0.6]
+    "integer indices" [0 1 2 3] "float alpha" 0.5
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [6 5 4]
+  Material "diffuse" "rgb reflectance" [0 0 0]
+  Translate -0.5 1.9 0
+  Rotate 90 1 0 0
+  Shape "disk" "float radius" 0.25
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [3 4 6]
+  Material "diffuse" "rgb reflectance" [0 0 0]
+  ReverseOrientation
+  Shape "trianglemesh" "point3 P" [0.6 1.9 -0.2  0.6 1.9 0.2  1.0 1.9 0.2  1.0 1.9 -0.2] "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+"#;
+    let ts = |bsdf: &str| format!(r#"<bsdf type="twosided">{bsdf}</bsdf>"#);
+    let xml = format!(
+        r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="5"/></integrator>
+<sensor type="perspective">
+  <float name="fov" value="40"/><string name="fov_axis" value="smaller"/>
+  <transform name="to_world"><scale x="-1"/><lookat origin="0 1.1 -3.5" target="0 0.8 0" up="0 1 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="56"/><integer name="height" value="40"/></film>
+</sensor>
+<emitter type="directional"><vector name="direction" value="-1 -3 2"/><rgb name="irradiance" value="0.8 0.7 0.6"/></emitter>
+<emitter type="constant"><rgb name="radiance" value="0.15 0.2 0.3"/></emitter>
+<shape type="ply"><string name="filename" value="floor.ply"/>{floor}</shape>
+<shape type="ply"><string name="filename" value="wall.ply"/>{wall}</shape>
+<shape type="sphere"><point name="center" value="-0.8 0.4 0.4"/><float name="radius" value="0.4"/>
+  {conductor}</shape>
+<shape type="sphere"><point name="center" value="0.2 0.35 -0.1"/><float name="radius" value="0.35"/>
+  <bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.2236068"/>
+    <float name="int_ior" value="1.4"/><float name="ext_ior" value="1"/></bsdf></shape>
+<shape type="cylinder"><point name="p0" value="0 0 0"/><point name="p1" value="0 0 0.8"/><float name="radius" value="0.25"/>
+  <transform name="to_world"><rotate x="1" angle="-90"/><translate x="0.9" y="0" z="0.6"/></transform>
+  {mix}</shape>
+<shape type="ply"><string name="filename" value="quad.ply"/>
+  <bsdf type="mask"><float name="opacity" value="0.5"/>{green}</bsdf></shape>
+<shape type="disk"><transform name="to_world"><scale x="0.25" y="0.25"/><rotate x="1" angle="90"/><translate x="-0.5" y="1.9" z="0"/></transform>
+  {black}<emitter type="area"><rgb name="radiance" value="6 5 4"/></emitter></shape>
+<shape type="ply"><string name="filename" value="lamp.ply"/><boolean name="flip_normals" value="true"/>
+  {black}<emitter type="area"><rgb name="radiance" value="3 4 6"/></emitter></shape>
+</scene>"#,
+        floor = ts(r#"<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+            <rgb name="color0" value="0.8"/><rgb name="color1" value="0.2 0.3 0.2"/>
+            <transform name="to_uv"><scale x="2" y="2"/></transform></texture></bsdf>"#),
+        // pbrt looks the image up at (u, 1 - v).
+        wall = ts(r#"<bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+            <string name="filename" value="tex.png"/>
+            <transform name="to_uv"><scale y="-1"/><translate y="1"/></transform></texture></bsdf>"#),
+        conductor = ts(r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+            <float name="alpha" value="0.31622777"/><rgb name="eta" value="0.2 0.9 1.1"/><rgb name="k" value="3.9 2.4 2.2"/></bsdf>"#),
+        mix = ts(r#"<bsdf type="blendbsdf"><float name="weight" value="0.3"/>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.9 0.2 0.1"/></bsdf>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.1 0.3 0.9"/></bsdf></bsdf>"#),
+        green = ts(r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.3 0.8 0.3"/></bsdf>"#),
+        black = ts(r#"<bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>"#),
+    );
+    let (p, x) = (dir.join("features.pbrt"), dir.join("features.xml"));
+    std::fs::write(&p, pbrt).unwrap();
+    std::fs::write(&x, xml).unwrap();
+    (p, x)
+}
+
+#[test]
+fn pbrt_features_match_their_mitsuba_xml_twin() {
+    let dir = temp_dir("features");
+    let (pbrt, xml) = write_features(&dir);
+    let a = render_with_variance(&pbrt, 512, 32, None, 3);
+    let b = render_with_variance(&xml, 512, 32, None, 4);
+    assert_agree("pbrt features vs XML", &a, &b, 0.02);
+    for (what, bad) in injected_errors(&a) {
+        let v = compare(&format!("injected {what}"), &bad, &b, 0.02);
+        assert!(!v.failures.is_empty(), "the comparison misses an injected error: {what}");
+    }
+    if std::env::var_os("PENUMBRA_KEEP_PBRT_BOX").is_none() {
+        std::fs::remove_dir_all(&dir).unwrap();
+    } else {
+        eprintln!("kept {}", dir.display());
+    }
+}
