@@ -270,7 +270,8 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
         ("Shape \"sphere\" \"float zmax\" 0.5", "b.pbrt:3:1", "partial shape"),
         ("Shape \"sphere\" \"float radiu\" 1", "b.pbrt:3:", "\"float radiu\""),
         ("Material \"conductor\" \"spectrum eta\" \"metal-Zz-eta\"\nShape \"sphere\"", "b.pbrt:3:", "metal-Cu-eta"),
-        ("LightSource \"spot\"", "b.pbrt:3:1", "smoothstep"),
+        ("LightSource \"goniometric\"", "b.pbrt:3:1", "not supported yet"),
+        ("LightSource \"spot\" \"float conedeltaangle\" 40", "b.pbrt:3:1", "conedeltaangle"),
         ("AreaLightSource \"diffuse\" \"bool twosided\" true\nShape \"sphere\"", "b.pbrt:3:1", "twosided"),
         ("NamedMaterial \"nope\"\nShape \"sphere\"", "b.pbrt:3:15", "no material named \"nope\""),
         (
@@ -316,7 +317,7 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
 /// an image texture (pbrt looks images up at (s, 1 - t)), rough conductor
 /// and dielectric (α = √roughness, GGX), a mix of two materials, a
 /// bilinear patch with constant alpha, a cylinder, a disk area light, a
-/// reversed area light, a distant light and a uniform infinite light.
+/// mirrored area light (pbrt-v4's handedness rule), a distant light and a uniform infinite light.
 fn write_features(dir: &Path) -> (PathBuf, PathBuf) {
     // An asymmetric 4x3 image, so that a flipped lookup shows.
     let pixels =
@@ -391,8 +392,10 @@ AttributeEnd
 AttributeBegin
   AreaLightSource "diffuse" "rgb L" [3 4 6]
   Material "diffuse" "rgb reflectance" [0 0 0]
-  ReverseOrientation
-  Shape "trianglemesh" "point3 P" [0.6 1.9 -0.2  0.6 1.9 0.2  1.0 1.9 0.2  1.0 1.9 -0.2] "integer indices" [0 1 2 0 2 3]
+  # Mirrored, the world-space winding faces up; pbrt-v4 reverses the
+  # orientation of a shape whose transform swaps handedness: it emits down.
+  Scale -1 1 1
+  Shape "trianglemesh" "point3 P" [-0.6 1.9 -0.2  -0.6 1.9 0.2  -1.0 1.9 0.2  -1.0 1.9 -0.2] "integer indices" [0 1 2 0 2 3]
 AttributeEnd
 "#;
     let ts = |bsdf: &str| format!(r#"<bsdf type="twosided">{bsdf}</bsdf>"#);
@@ -461,4 +464,95 @@ fn pbrt_features_match_their_mitsuba_xml_twin() {
     } else {
         eprintln!("kept {}", dir.display());
     }
+}
+
+/// pbrt-v4's spot light: placed at `from`, aimed at `to`, pbrt's
+/// smoothstep falloff, `power` as pbrt-v4 normalises it.
+#[test]
+fn pbrt_spot_light_is_pbrts() {
+    use penumbra_render::light::Light;
+    let dir = temp_dir("spot");
+    let path = dir.join("s.pbrt");
+    std::fs::write(
+        &path,
+        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\n\
+         LightSource \"spot\" \"point3 from\" [0 2 0] \"point3 to\" [0 0 0] \"float coneangle\" 30 \
+         \"float conedeltaangle\" 10 \"rgb I\" [1 1 1] \"float power\" 100\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let job = load_scene(&path, &[], &Overrides::default()).unwrap();
+    let Light::Spot(s) = &job.scene.lights[0] else { panic!("not a spot light") };
+    assert!((s.position - glam::Vec3::new(0.0, 2.0, 0.0)).length() < 1e-6);
+    // Flux as asked for: pbrt-v4's k_e is the smoothstep falloff's exact flux.
+    assert!((s.power().y - 100.0).abs() < 0.2, "{}", s.power());
+    // Straight down: full intensity; 25 degrees off the axis: the smoothstep's middle.
+    let below = s.sample_li(glam::Vec3::new(0.0, 1.0, 0.0)).unwrap();
+    let side = 25f32.to_radians().tan();
+    let off = s.sample_li(glam::Vec3::new(side, 1.0, 0.0)).unwrap();
+    let ratio = off.li.y * (1.0 + side * side) / below.li.y;
+    let (a, b) = (30f32.to_radians().cos(), 20f32.to_radians().cos());
+    let t = (25f32.to_radians().cos() - a) / (b - a);
+    assert!((ratio - t * t * (3.0 - 2.0 * t)).abs() < 1e-4, "{ratio}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The box seen by an orthographic camera through a crop window, and by a
+/// thin lens, against the same cameras in XML.
+#[test]
+fn pbrt_cameras_match_their_mitsuba_xml_twins() {
+    let dir = temp_dir("cameras");
+    let (pbrt, xml) = write_box(&dir);
+    let (p, x) = (std::fs::read_to_string(&pbrt).unwrap(), std::fs::read_to_string(&xml).unwrap());
+    let pbrt_cam = "Camera \"perspective\" \"float fov\" 45";
+    let xml_cam = r#"<sensor type="perspective">
+  <float name="fov" value="45"/><string name="fov_axis" value="smaller"/>"#;
+    let film = format!(
+        r#"<film type="hdrfilm"><integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/></film>"#
+    );
+    let cases = [
+        (
+            "orthographic, cropped",
+            "Camera \"orthographic\"\nFilm \"rgb\" \"float cropwindow\" [0.25 0.75 0 0.5]",
+            r#"<sensor type="orthographic">"#.to_string(),
+            format!(
+                r#"<film type="hdrfilm"><integer name="width" value="{SIZE}"/><integer name="height" value="{SIZE}"/>
+                <integer name="crop_offset_x" value="12"/><integer name="crop_width" value="24"/>
+                <integer name="crop_offset_y" value="0"/><integer name="crop_height" value="24"/></film>"#
+            ),
+        ),
+        (
+            "thin lens",
+            "Camera \"perspective\" \"float fov\" 45 \"float lensradius\" 0.1 \"float focaldistance\" 2.5",
+            r#"<sensor type="thinlens"><float name="aperture_radius" value="0.1"/><float name="focus_distance" value="2.5"/>
+  <float name="fov" value="45"/><string name="fov_axis" value="smaller"/>"#
+                .to_string(),
+            film.clone(),
+        ),
+    ];
+    for (i, (name, pc, xc, xf)) in cases.into_iter().enumerate() {
+        // The first Film line of the box is replaced where the case sets its own.
+        let mut pp = p.replace(pbrt_cam, pc);
+        if pc.contains("Film") {
+            pp = pp.replacen(
+                &format!("Film \"rgb\" \"integer xresolution\" {SIZE} \"integer yresolution\" {SIZE}\n"),
+                "",
+                1,
+            );
+            pp = pp.replace(
+                "Film \"rgb\" \"float cropwindow\"",
+                &format!(
+                    "Film \"rgb\" \"integer xresolution\" {SIZE} \"integer yresolution\" {SIZE} \"float cropwindow\""
+                ),
+            );
+        }
+        let xx = x.replace(xml_cam, &xc).replace(&film, &xf);
+        assert!(pp != p && xx != x, "{name}: the cameras were not replaced");
+        let (pf, xf) = (dir.join(format!("c{i}.pbrt")), dir.join(format!("c{i}.xml")));
+        std::fs::write(&pf, pp).unwrap();
+        std::fs::write(&xf, xx).unwrap();
+        let a = render_with_variance(&pf, 256, 16, None, 10 + 2 * i as u64);
+        let b = render_with_variance(&xf, 256, 16, None, 11 + 2 * i as u64);
+        assert_agree(&format!("pbrt {name} vs XML"), &a, &b, 0.03);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
