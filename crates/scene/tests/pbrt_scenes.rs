@@ -271,6 +271,16 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
         ("Shape \"sphere\" \"float radiu\" 1", "b.pbrt:3:", "\"float radiu\""),
         ("Material \"conductor\" \"spectrum eta\" \"metal-Zz-eta\"\nShape \"sphere\"", "b.pbrt:3:", "metal-Cu-eta"),
         ("LightSource \"goniometric\"", "b.pbrt:3:1", "not supported yet"),
+        (
+            "AreaLightSource \"diffuse\"\nShape \"sphere\" \"float alpha\" 0.5",
+            "b.pbrt:4:1",
+            "\"alpha\" on an area light",
+        ),
+        (
+            "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nMediumInterface \"fog\" \"\"\nShape \"sphere\"",
+            "b.pbrt:5:1",
+            "participating media",
+        ),
         ("LightSource \"spot\" \"float conedeltaangle\" 40", "b.pbrt:3:1", "conedeltaangle"),
         ("AreaLightSource \"diffuse\" \"bool twosided\" true\nShape \"sphere\"", "b.pbrt:3:1", "twosided"),
         ("NamedMaterial \"nope\"\nShape \"sphere\"", "b.pbrt:3:15", "no material named \"nope\""),

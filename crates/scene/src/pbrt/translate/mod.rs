@@ -144,6 +144,10 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
         };
         let geometry = shapes::geometry(s)?;
         s.entity.params.check_unused(&format!("Shape \"{}\"", s.entity.kind))?;
+        if alpha.is_some() && s.area_light.is_some() {
+            // pbrt-v4 cuts the emission out too; Penumbra's area lights emit everywhere on the shape.
+            return Err(LoadError::at(&s.entity.loc, "\"alpha\" on an area light's shape is not supported"));
+        }
         let material = material_id(&mut b, s, alpha)?;
         let emission = match &s.area_light {
             None => None,
