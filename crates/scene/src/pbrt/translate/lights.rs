@@ -9,7 +9,7 @@
 //! | spot        | I, scale, power, from (0 0 0), to (0 0 1), coneangle (30), conedeltaangle (5): pbrt-v4's smoothstep falloff |
 //! | distant     | L, scale, illuminance, from (0 0 0), to (0 0 1)                   |
 //! | infinite    | L (uniform) or filename (a square equal-area octahedral image: .exr, .pfm, .hdr, .png), scale, illuminance (with L only) |
-//! | area diffuse | L, scale, power, twosided (false only)                           |
+//! | area diffuse | L, scale, power, twosided                                       |
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 
@@ -169,8 +169,9 @@ fn infinite(e: &Entity, m: &DMat4) -> Result<Light> {
     }
 }
 
-/// An `AreaLightSource "diffuse"`'s radiance on a shape of world-space `area`.
-pub fn area_radiance(e: &Entity, area: f32, at_shape: &FileLoc) -> Result<Vec3> {
+/// An `AreaLightSource "diffuse"`'s radiance on a shape of world-space
+/// `area`, and whether it emits from both sides.
+pub fn area_radiance(e: &Entity, area: f32, at_shape: &FileLoc) -> Result<(Vec3, bool)> {
     let (p, at) = (&e.params, &e.loc);
     if e.kind != "diffuse" {
         return Err(LoadError::at(at, format!("area light \"{}\" is not supported; only \"diffuse\"", e.kind)));
@@ -178,21 +179,15 @@ pub fn area_radiance(e: &Entity, area: f32, at_shape: &FileLoc) -> Result<Vec3> 
     if p.type_of("filename").is_some() {
         return Err(LoadError::at(at, "area light \"filename\" (an image) is not supported yet"));
     }
-    if p.bool("twosided", false)? {
-        return Err(LoadError::at(
-            at,
-            "area light \"twosided\" true is not supported yet (Penumbra's area lights emit from the front only); \
-             place two one-sided shapes",
-        ));
-    }
+    let two_sided = p.bool("twosided", false)?;
     let l = illuminant(e, "L")?;
     let mut scale = p.float("scale", 1.0)?;
     if let Some(phi) = positive_or_unset(e, "power")? {
         if !(area > 0.0) {
             return Err(LoadError::at(at_shape, "an area light with \"power\" on a shape of zero area"));
         }
-        scale *= phi / (area as f64 * std::f64::consts::PI);
+        scale *= phi / (if two_sided { 2.0 } else { 1.0 } * area as f64 * std::f64::consts::PI);
     }
     p.check_unused("AreaLightSource \"diffuse\"")?;
-    Ok(l * scale as f32)
+    Ok((l * scale as f32, two_sided))
 }

@@ -152,8 +152,9 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
         let emission = match &s.area_light {
             None => None,
             Some(al) => {
-                let l = lights::area_radiance(al, geometry.0.area(), &s.entity.loc)?;
-                Some(Emission::Diffuse(Texture::Constant(l)))
+                let (l, two_sided) = lights::area_radiance(al, geometry.0.area(), &s.entity.loc)?;
+                let l = Texture::Constant(l);
+                Some(if two_sided { Emission::DiffuseTwoSided(l) } else { Emission::Diffuse(l) })
             }
         };
         let desc = ShapeDesc { emission, ..ShapeDesc::new(geometry, material) };
