@@ -10,7 +10,7 @@
 //! | Film        | rgb: xresolution (1280), yresolution (720), cropwindow, filename (not used: the output is Penumbra's `-o`), sensor cie1931, iso 100, exposuretime 1, whitebalance 0, savefp16, diagonal |
 //! | PixelFilter | gaussian (sigma 0.5; truncated at 4σ, pbrt-v4 at its radius 1.5), box (radius 0.5), triangle (radius), mitchell (radius 2, B, C) |
 //! | Sampler     | pixelsamples (16), seed; independent, stratified (xsamples × ysamples, jittered); zsobol, sobol, paddedsobol, halton, pmj02bn: Owen-scrambled Sobol' (the same expected image) |
-//! | Integrator  | path, volpath: maxdepth (5 bounces = Mitsuba's max_depth 6), lightsampler (bvh, power, uniform), regularize false |
+//! | Integrator  | path, volpath: maxdepth (5 bounces = Mitsuba's max_depth 6), lightsampler (bvh, power, uniform), regularize false; `--integrator` replaces it as for XML scenes (max_depth carried over) |
 //! | Option      | seed                                                               |
 //! | ColorSpace  | srgb                                                               |
 //!
@@ -464,12 +464,6 @@ fn sampler(e: Option<&Entity>, option_seed: i64, ov: &Overrides, notes: &mut Vec
 }
 
 fn integrator(e: Option<&Entity>, file: &FileLoc, ov: &Overrides) -> Result<(Integrator, LightSelection, FileLoc)> {
-    if let Some(i) = &ov.integrator {
-        return Err(LoadError::new(
-            None,
-            format!("--integrator {i} is not supported for pbrt-v4 scenes (give Integrator in the file)"),
-        ));
-    }
     let empty = ParamList::default();
     let (p, at) = match e {
         Some(e) => {
@@ -501,6 +495,28 @@ fn integrator(e: Option<&Entity>, file: &FileLoc, ov: &Overrides) -> Result<(Int
     if let Some(e) = e {
         e.params.check_unused(&format!("Integrator \"{}\"", e.kind))?;
     }
-    let term = Termination { max_depth: (maxdepth as u32).saturating_add(1), ..Termination::default() };
+    let max_depth = (maxdepth as u32).saturating_add(1);
+    if let Some(spec) = &ov.integrator {
+        // `--integrator NAME[:key=value,...]`: as for XML scenes, the file's
+        // path length (in Mitsuba's count) carries over.
+        let scene = crate::desc::Node {
+            kind: crate::desc::Kind::Integrator,
+            plugin: "path".into(),
+            id: None,
+            name: None,
+            props: vec![crate::desc::Property {
+                name: "max_depth".into(),
+                value: crate::desc::Value::Integer(max_depth as i64),
+                loc: at.clone(),
+                used: Default::default(),
+            }],
+            children: Vec::new(),
+            loc: at.clone(),
+        };
+        let node = crate::builder::integrator_from_spec(spec, Some(&scene))?;
+        let (integrator, selection) = crate::builder::build_integrator(&node)?;
+        return Ok((integrator, selection, at));
+    }
+    let term = Termination { max_depth, ..Termination::default() };
     Ok((Integrator::Path(PathIntegrator { term, ..PathIntegrator::default() }), selection, at))
 }
