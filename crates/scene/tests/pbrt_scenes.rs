@@ -676,3 +676,47 @@ fn pbrt_two_sided_area_light_is_two_back_to_back() {
     assert_agree("two-sided: ptracer vs path", &ep, &ea, 0.02);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An image on a sphere: pbrt-v4's (u, v) (v from the -z pole to the +z
+/// pole, the image's top row at +z), against Mitsuba's sphere, whose v runs
+/// the other way and whose bitmap puts its top row at v = 0: the same image.
+#[test]
+fn pbrt_textured_sphere_matches_xml() {
+    let dir = temp_dir("sphere");
+    let pixels =
+        (0..12).map(|i| [(i % 4) as f32 / 3.0, (i / 4) as f32 / 2.0, if i == 0 { 1.0 } else { 0.1 }]).collect();
+    let img = penumbra_scene::image_io::RgbImage { width: 4, height: 3, pixels };
+    penumbra_scene::image_io::write_image(&dir.join("tex.png"), &img).unwrap();
+    let pbrt = "LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+        Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n\
+        Sampler \"independent\" \"integer pixelsamples\" 16\nWorldBegin\n\
+        LightSource \"infinite\" \"rgb L\" [1 1 1]\n\
+        Texture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"tex.png\"\n\
+        Material \"diffuse\" \"texture reflectance\" \"img\"\n\
+        Rotate 30 0 1 0\nRotate -70 1 0 0\nShape \"sphere\" \"float radius\" 1.2\n";
+    let xml = r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="6"/></integrator>
+<sensor type="perspective">
+  <float name="fov" value="40"/><string name="fov_axis" value="smaller"/>
+  <transform name="to_world"><scale x="-1"/><lookat origin="0 0 -4" target="0 0 0" up="0 1 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film>
+</sensor>
+<emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+<shape type="sphere"><float name="radius" value="1.2"/>
+  <transform name="to_world"><rotate x="1" angle="-70"/><rotate y="1" angle="30"/></transform>
+  <bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+    <string name="filename" value="tex.png"/></texture></bsdf></bsdf></shape>
+</scene>"#;
+    let (p, x) = (dir.join("s.pbrt"), dir.join("s.xml"));
+    std::fs::write(&p, pbrt).unwrap();
+    std::fs::write(&x, xml).unwrap();
+    let a = render_with_variance(&p, 256, 16, None, 40);
+    let b = render_with_variance(&x, 256, 16, None, 41);
+    assert_agree("textured sphere vs XML", &a, &b, 0.02);
+    for (what, bad) in injected_errors(&a) {
+        let v = compare(&format!("injected {what}"), &bad, &b, 0.02);
+        assert!(!v.failures.is_empty(), "the comparison misses an injected error: {what}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -16,7 +16,8 @@
 //! | cylinder     | radius (1), zmin (-1), zmax (1); phimax 360 only                  |
 //! | (any)        | alpha (1; a float or a float texture): a cut-out mask             |
 //!
-//! Analytic shapes take Mitsuba's (u, v) parameterisation, not pbrt-v4's.
+//! A sphere's (u, v) is pbrt-v4's; disks and cylinders take Mitsuba's
+//! (a disk's u and v are swapped, a cylinder's φ starts elsewhere).
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 
@@ -195,7 +196,10 @@ pub fn geometry(s: &ShapeEntity) -> Result<Geometry> {
                     "sphere: the transform must scale uniformly (an ellipsoid is not supported)",
                 ));
             }
-            let rot = DMat3::from_mat4(mm) * (1.0 / axes[0]);
+            // pbrt-v4's v runs from the -z pole (0) to the +z pole (1),
+            // Mitsuba's from +z (0) to -z (1), u alike: the local frame is
+            // mirrored in z, which maps one onto the other.
+            let rot = DMat3::from_mat4(mm) * (1.0 / axes[0]) * DMat3::from_diagonal(DVec3::new(1.0, 1.0, -1.0));
             let center = mm.transform_point3(DVec3::ZERO).as_vec3();
             let flip = rev ^ swaps_handedness(m);
             (Shape::sphere_rotated(center, axes[0] as f32, rot.as_mat3(), flip), Vec::new())
