@@ -16,8 +16,9 @@
 //! | cylinder     | radius (1), zmin (-1), zmax (1); phimax 360 only                  |
 //! | (any)        | alpha (1; a float or a float texture): a cut-out mask             |
 //!
-//! A sphere's (u, v) is pbrt-v4's; disks and cylinders take Mitsuba's
-//! (a disk's u and v are swapped, a cylinder's φ starts elsewhere).
+//! Spheres and cylinders have pbrt-v4's (u, v) (a cylinder's, Mitsuba's
+//! with p0 and p1 on the z axis, is the same); a disk takes Mitsuba's
+//! (r, φ / 2π), where pbrt-v4 has (φ / 2π, 1 − r).
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 
