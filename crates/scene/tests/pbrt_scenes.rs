@@ -313,6 +313,7 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
         ("Integrator \"path\" \"bool regularize\" true\n", "b.pbrt:1:1", "regularize"),
         ("PixelFilter \"sinc\"\n", "b.pbrt:1:1", "PixelFilter \"sinc\""),
         ("Camera \"realistic\"\n", "b.pbrt:1:1", "Camera \"realistic\""),
+        ("Sampler \"lowdiscrepancy\"\n", "b.pbrt:1:1", "Sampler \"lowdiscrepancy\" is not supported"),
     ] {
         let path = dir.join("b.pbrt");
         std::fs::write(&path, format!("{pre}{head}Shape \"sphere\"\n")).unwrap();
@@ -607,7 +608,7 @@ fn pbrt_other_kinds_load() {
     let path = dir.join("k.pbrt");
     std::fs::write(
         &path,
-        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\n\
+        "Film \"gbuffer\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\n\
          Material \"thindielectric\" \"float eta\" 1.3\n\
          Shape \"loopsubdiv\" \"integer levels\" 2 \"point3 P\" [0 0 0 1 0 0 0 1 0 0 0 1] \
          \"integer indices\" [0 2 1 0 1 3 0 3 2 1 2 3]\n\
@@ -718,5 +719,16 @@ fn pbrt_textured_sphere_matches_xml() {
         let v = compare(&format!("injected {what}"), &bad, &b, 0.02);
         assert!(!v.failures.is_empty(), "the comparison misses an injected error: {what}");
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A film Penumbra does not render is an error at its directive.
+#[test]
+fn pbrt_spectral_film_is_refused() {
+    let dir = temp_dir("film");
+    let path = dir.join("f.pbrt");
+    std::fs::write(&path, "Film \"spectral\"\nWorldBegin\nShape \"sphere\"\n").unwrap();
+    let e = load_scene(&path, &[], &Overrides::default()).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("f.pbrt:1:1") && e.contains("Film \"spectral\" is not supported"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -7,7 +7,7 @@
 //! | directive   | kinds and parameters read                                          |
 //! |-------------|--------------------------------------------------------------------|
 //! | Camera      | perspective: fov (90, along the shorter image axis), lensradius (0: a pinhole; else a thin lens), focaldistance (10⁶), shutteropen, shutterclose; orthographic: screenwindow (centred), lensradius 0 |
-//! | Film        | rgb: xresolution (1280), yresolution (720), cropwindow, filename (not used: the output is Penumbra's `-o`), sensor cie1931, iso 100, exposuretime 1, whitebalance 0, savefp16, diagonal |
+//! | Film        | rgb (gbuffer: the same, `coordinatesystem` read; its channels are `--aov`): xresolution (1280), yresolution (720), cropwindow, filename (not used: the output is Penumbra's `-o`), sensor cie1931, iso 100, exposuretime 1, whitebalance 0, savefp16, diagonal |
 //! | PixelFilter | gaussian (sigma 0.5; truncated at 4σ, pbrt-v4 at its radius 1.5), box (radius 0.5), triangle (radius), mitchell (radius 2, B, C) |
 //! | Sampler     | pixelsamples (16), seed; independent, stratified (xsamples × ysamples, jittered); zsobol, sobol, paddedsobol, halton, pmj02bn: Owen-scrambled Sobol' (the same expected image) |
 //! | Integrator  | path, volpath: maxdepth (5 bounces = Mitsuba's max_depth 6), lightsampler (bvh, power, uniform), regularize false; `--integrator` replaces it as for XML scenes (max_depth carried over) |
@@ -218,8 +218,19 @@ fn film(e: Option<&Entity>, notes: &mut Vec<String>) -> Result<(Film, (u32, u32)
     let empty = ParamList::default();
     let (p, at) = match e {
         Some(e) => {
-            if e.kind != "rgb" {
-                return Err(LoadError::at(&e.loc, format!("Film \"{}\" is not supported; only \"rgb\"", e.kind)));
+            match e.kind.as_str() {
+                "rgb" => {}
+                // The RGB film plus geometric channels (Penumbra's --aov).
+                "gbuffer" => {
+                    e.params.string("coordinatesystem")?;
+                    notes.push("Film \"gbuffer\" renders as \"rgb\"; its extra channels are Penumbra's --aov".into());
+                }
+                other => {
+                    return Err(LoadError::at(
+                        &e.loc,
+                        format!("Film \"{other}\" is not supported; supported: rgb, gbuffer"),
+                    ))
+                }
             }
             (&e.params, e.loc.clone())
         }
@@ -267,7 +278,7 @@ fn film(e: Option<&Entity>, notes: &mut Vec<String>) -> Result<(Film, (u32, u32)
         film = Film { size: (w, h), crop_offset: (ax, ay), crop_size: (bx - ax, by - ay) };
     }
     if let Some(e) = e {
-        e.params.check_unused("Film \"rgb\"")?;
+        e.params.check_unused(&format!("Film \"{}\"", e.kind))?;
     }
     Ok((film, (w, h)))
 }
