@@ -732,3 +732,37 @@ fn pbrt_spectral_film_is_refused() {
     assert!(e.contains("f.pbrt:1:1") && e.contains("Film \"spectral\" is not supported"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Materials that use the same image texture share one bitmap.
+#[test]
+fn pbrt_shared_image_texture_is_built_once() {
+    use penumbra_render::material::Material;
+    use penumbra_render::texture::Texture;
+    let dir = temp_dir("share");
+    let img = penumbra_scene::image_io::RgbImage { width: 2, height: 2, pixels: vec![[0.5, 0.2, 0.1]; 4] };
+    penumbra_scene::image_io::write_image(&dir.join("t.png"), &img).unwrap();
+    let path = dir.join("s.pbrt");
+    std::fs::write(
+        &path,
+        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\n\
+         Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"t.png\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n\
+         Material \"diffusetransmission\" \"texture reflectance\" \"t\"\nShape \"disk\"\n",
+    )
+    .unwrap();
+    let job = load_scene(&path, &[], &Overrides::default()).unwrap();
+    let bitmap = |m: &Material| match m {
+        Material::TwoSided(front, _) => match front.as_ref() {
+            Material::Diffuse(d) => d.reflectance.clone(),
+            _ => panic!("not diffuse"),
+        },
+        Material::DiffuseTransmission(d) => d.reflectance.clone(),
+        _ => panic!("unexpected material"),
+    };
+    let (Texture::Bitmap(a), Texture::Bitmap(b)) = (bitmap(&job.scene.materials[0]), bitmap(&job.scene.materials[1]))
+    else {
+        panic!("not bitmaps")
+    };
+    assert!(std::sync::Arc::ptr_eq(&a, &b));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

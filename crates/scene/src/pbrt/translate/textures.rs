@@ -23,7 +23,7 @@ use crate::scene_builder::image_texture;
 use glam::{Affine2, Mat2, Vec2, Vec3};
 use penumbra_render::texture::{Checkerboard, FilterType, Texture, WrapMode};
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// A texture before it becomes Penumbra's: what `scale` and `mix` fold over.
 #[derive(Clone)]
@@ -31,7 +31,16 @@ pub enum PTex {
     /// The same value everywhere (a float texture in all three channels).
     Const([f32; 3]),
     /// An image (linear RGB, top row first) looked up at `to_uv`(uv).
-    Image { image: Arc<RgbImage>, filter: FilterType, wrap: WrapMode, to_uv: Affine2, scale: [f32; 3] },
+    Image {
+        image: Arc<RgbImage>,
+        filter: FilterType,
+        wrap: WrapMode,
+        to_uv: Affine2,
+        scale: [f32; 3],
+        /// Penumbra's texture, once built: materials sharing this texture
+        /// share one bitmap.
+        built: Arc<OnceLock<Texture>>,
+    },
     /// pbrt's 2D checkerboard: `tex1` where ⌊s⌋ + ⌊t⌋ is even.
     Checker { tex1: Box<PTex>, tex2: Box<PTex>, to_st: Affine2 },
 }
@@ -42,8 +51,8 @@ impl PTex {
         let mul = |a: [f32; 3]| [a[0] * k[0], a[1] * k[1], a[2] * k[2]];
         match self {
             PTex::Const(c) => PTex::Const(mul(c)),
-            PTex::Image { image, filter, wrap, to_uv, scale } => {
-                PTex::Image { image, filter, wrap, to_uv, scale: mul(scale) }
+            PTex::Image { image, filter, wrap, to_uv, scale, .. } => {
+                PTex::Image { image, filter, wrap, to_uv, scale: mul(scale), built: Default::default() }
             }
             PTex::Checker { tex1, tex2, to_st } => {
                 PTex::Checker { tex1: Box::new(tex1.scaled(k)), tex2: Box::new(tex2.scaled(k)), to_st }
@@ -55,10 +64,10 @@ impl PTex {
     pub fn map(self, f: &dyn Fn(f32) -> f32) -> PTex {
         match self {
             PTex::Const(c) => PTex::Const(c.map(f)),
-            PTex::Image { image, filter, wrap, to_uv, scale } => {
+            PTex::Image { image, filter, wrap, to_uv, scale, .. } => {
                 let pixels = image.pixels.iter().map(|p| [0, 1, 2].map(|c| f(p[c] * scale[c]))).collect();
                 let image = Arc::new(RgbImage { width: image.width, height: image.height, pixels });
-                PTex::Image { image, filter, wrap, to_uv, scale: [1.0; 3] }
+                PTex::Image { image, filter, wrap, to_uv, scale: [1.0; 3], built: Default::default() }
             }
             PTex::Checker { tex1, tex2, to_st } => {
                 PTex::Checker { tex1: Box::new(tex1.map(f)), tex2: Box::new(tex2.map(f)), to_st }
@@ -78,10 +87,15 @@ impl PTex {
     pub fn build(&self, at: &FileLoc) -> Result<Texture> {
         Ok(match self {
             PTex::Const(c) => Texture::Constant(Vec3::from_array(*c)),
-            PTex::Image { image, filter, wrap, to_uv, scale } => {
+            PTex::Image { image, filter, wrap, to_uv, scale, built } => {
+                if let Some(t) = built.get() {
+                    return Ok(t.clone());
+                }
                 let pixels = image.pixels.iter().map(|p| [p[0] * scale[0], p[1] * scale[1], p[2] * scale[2]]).collect();
                 let img = RgbImage { width: image.width, height: image.height, pixels };
-                image_texture(img, *filter, *wrap, *to_uv, at)?
+                let t = image_texture(img, *filter, *wrap, *to_uv, at)?;
+                let _ = built.set(t.clone());
+                t
             }
             // Mitsuba's checkerboard alternates on squares of side ½ in its
             // uv: colour 0 where the fractional parts of u and v lie on the
@@ -281,5 +295,5 @@ fn imagemap(p: &ParamList, spectrum: bool, at: &FileLoc) -> Result<PTex> {
     // Penumbra's bitmaps put the first row at v = 0.
     let flip = Affine2::from_mat2_translation(Mat2::from_diagonal(Vec2::new(1.0, -1.0)), Vec2::new(0.0, 1.0));
     let to_uv = flip * uv_mapping(p, at)?;
-    Ok(PTex::Image { image: Arc::new(image), filter, wrap, to_uv, scale: [scale; 3] })
+    Ok(PTex::Image { image: Arc::new(image), filter, wrap, to_uv, scale: [scale; 3], built: Default::default() })
 }
