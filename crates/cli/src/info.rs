@@ -10,6 +10,9 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 pub fn run(a: &InfoArgs) -> Result<()> {
+    if penumbra_scene::is_pbrt(&a.scene) {
+        return run_pbrt(a);
+    }
     let desc = penumbra_scene::mitsuba::parse_file(&a.scene, &a.define).map_err(|e| anyhow!(e))?;
     let mut out = String::new();
     writeln!(out, "scene: {} (format version {})", a.scene.display(), desc.version)?;
@@ -25,45 +28,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     let notes = approximations(&desc);
     let built = penumbra_scene::builder::build(&desc, &Overrides::default()).map_err(|e| desc.explain(e));
     if let Ok(job) = &built {
-        let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
-        for shape in &job.scene.shapes {
-            match shape {
-                Shape::Mesh(m) => {
-                    meshes += 1;
-                    triangles += m.mesh.indices.len();
-                }
-                Shape::Sphere(_) => *analytic.entry("sphere").or_default() += 1,
-                _ => *analytic.entry("other").or_default() += 1,
-            }
-        }
-        let mut geometry = format!("{triangles} triangles in {meshes} meshes");
-        for (kind, n) in &analytic {
-            write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
-        }
-        // Shape-group members are counted once above, however often placed.
-        let n = job.scene.instances.len();
-        if n > 0 {
-            write!(geometry, ", {n} instance{}", if n == 1 { "" } else { "s" })?;
-        }
-        writeln!(out, "geometry: {geometry}")?;
-        let mut lights = BTreeMap::<&str, usize>::new();
-        for l in &job.scene.lights {
-            // `Light::name` matches every kind of light, so a new one is counted by its own name.
-            *lights.entry(l.name()).or_default() += 1;
-        }
-        let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
-        writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;
-        let (w, h) = job.full_size;
-        let crop = if (job.width, job.height) != (w, h) {
-            format!(", crop {}x{} at ({}, {})", job.width, job.height, job.crop_offset.0, job.crop_offset.1)
-        } else {
-            String::new()
-        };
-        writeln!(
-            out,
-            "image: {w}x{h}{crop}, {} samples per pixel ({:?} sampler, seed {})",
-            job.sampler.spp, job.sampler.kind, job.sampler.seed
-        )?;
+        describe_job(job, &mut out)?;
     }
     if notes.is_empty() {
         writeln!(out, "approximations: none")?;
@@ -81,6 +46,84 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         }
         Err(e) => Err(anyhow!("the scene cannot be rendered by Penumbra: {e}")),
     }
+}
+
+/// A pbrt-v4 scene: what its translation holds, and what Penumbra renders
+/// differently from pbrt-v4.
+fn run_pbrt(a: &InfoArgs) -> Result<()> {
+    let mut out = String::new();
+    writeln!(out, "scene: {} (pbrt-v4)", a.scene.display())?;
+    let built = penumbra_scene::load_scene_noted(&a.scene, &a.define, &Overrides::default());
+    if let Ok((job, notes)) = &built {
+        let integrator = match &job.integrator {
+            penumbra_render::integrator::Integrator::Path(p) => {
+                format!("path (Mitsuba's max_depth = {}: pbrt's maxdepth + 1)", p.term.max_depth)
+            }
+            _ => "other".to_string(),
+        };
+        writeln!(out, "integrator: {integrator}")?;
+        describe_job(job, &mut out)?;
+        if notes.is_empty() {
+            writeln!(out, "approximations: none")?;
+        } else {
+            writeln!(out, "approximations:")?;
+            for n in notes {
+                writeln!(out, "  - {n}")?;
+            }
+        }
+    }
+    print!("{out}");
+    match built {
+        Ok(_) => {
+            println!("status: ready to render");
+            Ok(())
+        }
+        Err(e) => Err(anyhow!("the scene cannot be rendered by Penumbra: {e}")),
+    }
+}
+
+/// Geometry, emitters and image of a built scene.
+fn describe_job(job: &penumbra_render::render::RenderJob, out: &mut String) -> Result<()> {
+    let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
+    for shape in &job.scene.shapes {
+        match shape {
+            Shape::Mesh(m) => {
+                meshes += 1;
+                triangles += m.mesh.indices.len();
+            }
+            Shape::Sphere(_) => *analytic.entry("sphere").or_default() += 1,
+            _ => *analytic.entry("other").or_default() += 1,
+        }
+    }
+    let mut geometry = format!("{triangles} triangles in {meshes} meshes");
+    for (kind, n) in &analytic {
+        write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
+    }
+    // Shape-group members are counted once above, however often placed.
+    let n = job.scene.instances.len();
+    if n > 0 {
+        write!(geometry, ", {n} instance{}", if n == 1 { "" } else { "s" })?;
+    }
+    writeln!(out, "geometry: {geometry}")?;
+    let mut lights = BTreeMap::<&str, usize>::new();
+    for l in &job.scene.lights {
+        // `Light::name` matches every kind of light, so a new one is counted by its own name.
+        *lights.entry(l.name()).or_default() += 1;
+    }
+    let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;
+    let (w, h) = job.full_size;
+    let crop = if (job.width, job.height) != (w, h) {
+        format!(", crop {}x{} at ({}, {})", job.width, job.height, job.crop_offset.0, job.crop_offset.1)
+    } else {
+        String::new()
+    };
+    writeln!(
+        out,
+        "image: {w}x{h}{crop}, {} samples per pixel ({:?} sampler, seed {})",
+        job.sampler.spp, job.sampler.kind, job.sampler.seed
+    )?;
+    Ok(())
 }
 
 /// Every object of the scene, counted by kind and plugin (shared objects once).

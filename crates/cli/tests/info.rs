@@ -59,3 +59,29 @@ fn lists_what_it_can_and_fails_on_unsupported_plugins() {
     assert!(!err.contains("panicked"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A pbrt-v4 scene (chosen by its extension): its translation and notes;
+/// an unsupported directive fails with its position.
+#[test]
+fn describes_a_pbrt_scene() {
+    let (ok, out, err) = info(&root().join("scenes/pbrt/cornell.pbrt"), &[]);
+    assert!(ok, "{err}");
+    for needle in [
+        "(pbrt-v4)",
+        "integrator: path (Mitsuba's max_depth = 6: pbrt's maxdepth + 1)",
+        "2 analytic spheres, 2 instances",
+        "emitters: 2 (1 area, 1 point)",
+        "image: 160x160, 256 samples per pixel (Sobol sampler",
+        "rendered with Owen-scrambled Sobol'",
+        "status: ready to render",
+    ] {
+        assert!(out.contains(needle), "'{needle}' not in:\n{out}");
+    }
+    let dir = std::env::temp_dir().join(format!("penumbra-info-pbrt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.pbrt");
+    std::fs::write(&bad, "WorldBegin\nMaterial \"coatedconductor\"\nShape \"sphere\"\n").unwrap();
+    let (ok, _, err) = info(&bad, &[]);
+    assert!(!ok && err.contains("bad.pbrt:2:1") && err.contains("coatedconductor"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -368,7 +368,7 @@ mod tests {
         let lights = vec![
             Light::Point(PointLight { position: Vec3::X, intensity: Vec3::splat(1.0) }),
             Light::Point(PointLight { position: Vec3::Y, intensity: Vec3::splat(5.0) }),
-            Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(2.0).into() }),
+            Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(2.0).into(), two_sided: false }),
         ];
         Scene::new(shapes, info, materials, lights)
     }
@@ -417,7 +417,7 @@ mod tests {
         let shapes = vec![Shape::disk(light, false), Shape::disk(floor, false)];
         let info = vec![ShapeInfo { material: 0, light: Some(0) }, ShapeInfo { material: 0, light: None }];
         let materials = vec![Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Vec3::splat(0.5).into() })];
-        let lights = vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::ONE.into() })];
+        let lights = vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::ONE.into(), two_sided: false })];
         let scene = Scene::new(shapes, info, materials, lights);
         for x in [5.0f32, 20.0, 40.0] {
             let si = scene.intersect(&Ray::new(Vec3::new(x, 5.0, 0.0), -Vec3::Y, f32::INFINITY)).unwrap();

@@ -85,7 +85,7 @@ fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
         vec![Shape::sphere(Vec3::ZERO, 1.0, true)],
         vec![ShapeInfo { material: 0, light: Some(0) }],
         vec![Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Vec3::splat(rho).into() })],
-        vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le).into() })],
+        vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le).into(), two_sided: false })],
     );
     let spp = 256;
     let j = job(scene, Vec3::new(0.0, 0.0, 0.3), Vec3::new(0.0, 0.0, -1.0), 60.0, spp);

@@ -31,14 +31,31 @@ pub use scene_builder::{Location, SceneBuilder};
 use penumbra_render::render::RenderJob;
 use std::path::Path;
 
-/// Loads a Mitsuba 3 XML scene with `-D name=value` definitions.
+/// Whether `path` names a pbrt-v4 scene (`.pbrt`, `.pbrt.gz`); other
+/// files are read as Mitsuba 3 XML.
+pub fn is_pbrt(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_ascii_lowercase();
+    name.ends_with(".pbrt") || name.ends_with(".pbrt.gz")
+}
+
+/// Loads a scene, its format chosen by the file name ([`is_pbrt`]): a
+/// Mitsuba 3 XML scene with `-D name=value` definitions, or a pbrt-v4
+/// scene (which takes no definitions).
 pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<RenderJob> {
     load_scene_noted(path, defines, ov).map(|(job, _)| job)
 }
 
 /// As [`load_scene`], with the notes a user should see: the files of an
-/// older version that were upgraded, and what was renamed in them.
+/// older version that were upgraded, and what was renamed in them (XML),
+/// or what is rendered differently from pbrt-v4.
 pub fn load_scene_noted(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
+    if is_pbrt(path) {
+        if let Some((name, _)) = defines.first() {
+            return Err(LoadError::in_file(path, format!("-D {name}=...: pbrt-v4 scenes take no definitions")));
+        }
+        let scene = pbrt::parse_file(path)?;
+        return pbrt::translate::translate(&scene, path, ov);
+    }
     let desc = mitsuba::parse_file(path, defines)?;
     let job = builder::build(&desc, ov).map_err(|e| desc.explain(e))?;
     Ok((job, desc.upgrade_notes()))

@@ -184,6 +184,8 @@ pub enum Emission {
     /// Diffuse: `radiance` (a colour or a texture over the surface) into
     /// the hemisphere of the shape's normal.
     Diffuse(Texture),
+    /// Diffuse from both sides of the surface (pbrt-v4's `twosided`).
+    DiffuseTwoSided(Texture),
     /// Along the shape's normal only (Mitsuba's `directionalarea`).
     Directional(Spectrum),
 }
@@ -372,13 +374,21 @@ impl SceneBuilder {
                 return Err(LoadError::at(at, "the shape cannot carry an area light (points on it cannot be sampled)"))
             }
             Some(_) if shape.area() <= 0.0 => return Err(LoadError::at(at, "an area light's shape has zero area")),
-            Some(Emission::Diffuse(Texture::MeshAttribute(_))) => {
+            Some(Emission::Diffuse(Texture::MeshAttribute(_)))
+            | Some(Emission::DiffuseTwoSided(Texture::MeshAttribute(_))) => {
                 return Err(LoadError::at(at, "an area light's radiance cannot be a mesh attribute"))
             }
-            Some(Emission::Diffuse(Texture::Constant(c))) | Some(Emission::Directional(c)) if c.min_element() < 0.0 => {
+            Some(Emission::Diffuse(Texture::Constant(c)))
+            | Some(Emission::DiffuseTwoSided(Texture::Constant(c)))
+            | Some(Emission::Directional(c))
+                if c.min_element() < 0.0 =>
+            {
                 return Err(LoadError::at(at, "an area light's radiance must not be negative"))
             }
-            Some(Emission::Diffuse(radiance)) => Some(Light::Area(AreaLight { shape: id, radiance })),
+            Some(Emission::Diffuse(radiance)) => Some(Light::Area(AreaLight { shape: id, radiance, two_sided: false })),
+            Some(Emission::DiffuseTwoSided(radiance)) => {
+                Some(Light::Area(AreaLight { shape: id, radiance, two_sided: true }))
+            }
             Some(Emission::Directional(radiance)) => {
                 Some(Light::DirectionalArea(DirectionalAreaLight { shape: id, radiance }))
             }

@@ -202,8 +202,11 @@ fn bad_input_is_an_error_at_the_location_given() {
     assert_eq!(e, "scene.pbrt:12:1: material 7 does not exist");
     let e = s.add_instance(3, Mat4::IDENTITY, &at).unwrap_err().to_string();
     assert_eq!(e, "scene.pbrt:12:1: group 3 does not exist");
-    let light =
-        penumbra_render::light::Light::Area(penumbra_render::light::AreaLight { shape: 0, radiance: Vec3::ONE.into() });
+    let light = penumbra_render::light::Light::Area(penumbra_render::light::AreaLight {
+        shape: 0,
+        radiance: Vec3::ONE.into(),
+        two_sided: false,
+    });
     let e = s.add_light(light, &at).unwrap_err().to_string();
     assert!(e.contains("an area light is given with its shape"), "{e}");
     let negative = self::tile().into_geometry(&Mat4::IDENTITY, false, false, &at).unwrap();

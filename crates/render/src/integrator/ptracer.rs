@@ -184,10 +184,13 @@ impl ParticleTracer {
                 Light::Area(a) => {
                     let shape = &scene.shapes[a.shape as usize];
                     let s = shape.sample_point(u_pos);
-                    let (p, n, pdf) = (s.p, s.n, s.pdf);
+                    let (p, mut n, pdf) = (s.p, s.n, s.pdf);
                     if let Some(c) = cam.connect(p, u_lens) {
                         let to_cam = c.at - p;
-                        let cos = n.dot(to_cam.normalize());
+                        let mut cos = n.dot(to_cam.normalize());
+                        if a.two_sided && cos < 0.0 {
+                            (cos, n) = (-cos, -n);
+                        }
                         if cos > 0.0 && pdf > 0.0 && self.visible(scene, p, n, c.at, stats) {
                             let value = a.radiance_at(shape, &s) * (n_lights as f32 * c.weight * cos / pdf);
                             out.push(Splat { pos: c.pos, value });
@@ -306,10 +309,16 @@ fn emit(scene: &Scene, light: &Light, u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, 
             if !(pdf > 0.0) {
                 return None;
             }
+            // A two-sided emitter: either side with probability ½, u reused.
+            let (n, u_dir, sides) = match (a.two_sided, u_dir.x < 0.5) {
+                (false, _) => (n, u_dir, 1.0),
+                (true, true) => (n, Vec2::new(2.0 * u_dir.x, u_dir.y), 2.0),
+                (true, false) => (-n, Vec2::new(2.0 * u_dir.x - 1.0, u_dir.y), 2.0),
+            };
             let local = warp::sample_cosine_hemisphere(u_dir);
             let frame = crate::math::Frame::from_normal(n);
             let d = frame.to_world(local);
-            Some((Ray::new(offset_origin(p, n, d), d, f32::INFINITY), a.radiance_at(shape, &s) * (PI / pdf)))
+            Some((Ray::new(offset_origin(p, n, d), d, f32::INFINITY), a.radiance_at(shape, &s) * (sides * PI / pdf)))
         }
         Light::Point(l) => {
             let d = warp::sample_uniform_sphere(u_dir);

@@ -1,7 +1,8 @@
 //! Mitsuba `area`: a diffuse emitter attached to a shape, emitting
 //! `radiance` from the shape's front side only (the side its shading normal
 //! points to). Sampled by the shape's `sample_direction` (the subtended cone
-//! for spheres seen from outside, the area otherwise).
+//! for spheres seen from outside, the area otherwise). `two_sided` (pbrt-v4's
+//! `twosided`, not a Mitsuba parameter) emits the same radiance from the back.
 //!
 //! | parameter | type                 | default |
 //! |-----------|----------------------|---------|
@@ -33,6 +34,9 @@ pub struct AreaLight {
     /// Emitted radiance (W/(m² sr)), the same in every front-facing
     /// direction; a texture makes it vary with the surface's uv.
     pub radiance: Texture,
+    /// Emits from both sides (pbrt-v4's `twosided`); Mitsuba's area
+    /// emitters emit from the front only.
+    pub two_sided: bool,
 }
 
 impl AreaLight {
@@ -40,7 +44,7 @@ impl AreaLight {
     /// shape) towards `si.wo`: zero behind the shading normal.
     #[inline]
     pub fn emitted(&self, si: &SurfaceInteraction) -> Spectrum {
-        if si.sh_frame.n.dot(si.wo) > 0.0 {
+        if self.two_sided || si.sh_frame.n.dot(si.wo) > 0.0 {
             self.radiance.eval(si)
         } else {
             Spectrum::ZERO
@@ -63,7 +67,7 @@ impl AreaLight {
             return None;
         }
         let wi = d / dist;
-        if s.n.dot(wi) >= 0.0 {
+        if s.n.dot(wi) >= 0.0 && !(self.two_sided && s.n.dot(wi) > 0.0) {
             return None;
         }
         let li = match self.radiance.constant() {
@@ -103,20 +107,22 @@ impl AreaLight {
         shape.pdf_direction(p_ref, hit.p, hit.n)
     }
 
-    /// Φ = π A L for a one-sided diffuse emitter; a texture's mean value
-    /// over its uv domain stands in for L (it only weights light selection).
+    /// Φ = π A L for a one-sided diffuse emitter (twice that for a
+    /// two-sided one); a texture's mean value over its uv domain stands in
+    /// for L (it only weights light selection).
     pub fn power(&self, shape: &Shape) -> Spectrum {
         let l = match &self.radiance {
             Texture::Constant(c) => *c,
             t => Spectrum::splat(t.mean()),
         };
-        PI * shape.area() * l
+        PI * shape.area() * l * if self.two_sided { 2.0 } else { 1.0 }
     }
 
     /// The shape's box and the cone of its front-facing normals; diffuse
     /// emission spreads θ_e = π/2 around each normal.
     pub fn bounds(&self, shape: &Shape) -> LightBounds {
-        LightBounds::new(shape_bounds(shape), normal_cone(shape), 0.0, luminance(self.power(shape)))
+        let cone = if self.two_sided { DirectionCone::ENTIRE_SPHERE } else { normal_cone(shape) };
+        LightBounds::new(shape_bounds(shape), cone, 0.0, luminance(self.power(shape)))
     }
 }
 
@@ -178,6 +184,23 @@ mod tests {
         Shape::Mesh(Mesh::new(m, false))
     }
 
+    /// A two-sided emitter is reached, sampled and powered from its back
+    /// as from its front; a one-sided one is black from behind.
+    #[test]
+    fn two_sided_emits_from_the_back() {
+        let quad = mesh_shape(TriangleMesh::rectangle(), Mat4::IDENTITY);
+        let one = AreaLight { shape: 0, radiance: Spectrum::splat(2.0).into(), two_sided: false };
+        let two = AreaLight { two_sided: true, ..one.clone() };
+        let (front, back) = (Vec3::new(0.2, 0.1, 3.0), Vec3::new(0.2, 0.1, -3.0));
+        let u = Vec2::new(0.3, 0.7);
+        assert!(one.sample_li(back, u, &quad).is_none());
+        let (f, b) = (two.sample_li(front, u, &quad).unwrap(), two.sample_li(back, u, &quad).unwrap());
+        assert_eq!((f.li, f.pdf), (b.li, b.pdf));
+        assert_eq!(one.sample_li(front, u, &quad).unwrap().li, f.li);
+        assert_eq!(two.power(&quad), 2.0 * one.power(&quad));
+        assert_eq!(two.bounds(&quad).cos_theta_o, DirectionCone::ENTIRE_SPHERE.cos_theta);
+    }
+
     /// A textured emitter's sampled radiance is the texture where a ray
     /// along the sampled direction hits the shape (what `emitted` gives
     /// there), on a mesh, a disk and a sphere, so light sampling and hits
@@ -200,8 +223,9 @@ mod tests {
             Shape::sphere(Vec3::new(-3.0, 0.0, -2.0), 0.7, false),
         ];
         let info = (0..3).map(|i| ShapeInfo { material: 0, light: Some(i) }).collect();
-        let lights =
-            (0..3).map(|i| super::super::Light::Area(AreaLight { shape: i, radiance: checker.clone() })).collect();
+        let lights = (0..3)
+            .map(|i| super::super::Light::Area(AreaLight { shape: i, radiance: checker.clone(), two_sided: false }))
+            .collect();
         let material = Material::Diffuse(crate::bsdf::DiffuseParams { reflectance: Spectrum::ZERO.into() });
         let scene = Scene::new(shapes, info, vec![material], lights);
         let p_ref = Vec3::new(0.2, 0.1, 1.0);

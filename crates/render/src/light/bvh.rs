@@ -577,7 +577,11 @@ mod tests {
 
     fn area(shapes: &mut Vec<Shape>, shape: Shape, radiance: f32) -> Light {
         shapes.push(shape);
-        Light::Area(AreaLight { shape: shapes.len() as u32 - 1, radiance: Spectrum::splat(radiance).into() })
+        Light::Area(AreaLight {
+            shape: shapes.len() as u32 - 1,
+            radiance: Spectrum::splat(radiance).into(),
+            two_sided: false,
+        })
     }
 
     fn spot(pos: Vec3, target: Vec3, intensity: f32, cutoff_deg: f32) -> Light {
@@ -789,7 +793,7 @@ mod tests {
     #[test]
     fn one_sided_lights_are_unimportant_from_behind() {
         let shapes = vec![rectangle(Vec3::ZERO, Vec3::Z, Vec2::splat(0.5))];
-        let light = Light::Area(AreaLight { shape: 0, radiance: Spectrum::ONE.into() });
+        let light = Light::Area(AreaLight { shape: 0, radiance: Spectrum::ONE.into(), two_sided: false });
         let b = light.bounds(&shapes).unwrap();
         assert!((b.w - Vec3::Z).length() < 1e-5 && b.cos_theta_o > 0.99999 && !b.two_sided);
         let (front, back) = (Vec3::new(0.3, 0.2, 3.0), Vec3::new(0.3, 0.2, -3.0));

@@ -275,8 +275,8 @@ mod tests {
         let info = vec![ShapeInfo { material: 0, light: Some(0) }, ShapeInfo { material: 0, light: Some(1) }];
         let texels: Vec<[f32; 3]> = (0..8 * 5).map(|k| [1.0 + (k % 7) as f32, 0.5, 0.2 * (k / 8) as f32]).collect();
         let lights = vec![
-            Light::Area(AreaLight { shape: 0, radiance: Spectrum::splat(2.0).into() }),
-            Light::Area(AreaLight { shape: 1, radiance: Spectrum::ONE.into() }),
+            Light::Area(AreaLight { shape: 0, radiance: Spectrum::splat(2.0).into(), two_sided: false }),
+            Light::Area(AreaLight { shape: 1, radiance: Spectrum::ONE.into(), two_sided: false }),
             Light::Constant(ConstantLight { radiance: Spectrum::splat(0.5) }),
             Light::EnvMap(EnvMapLight::new(8, 5, texels, Mat4::from_rotation_y(0.3), 1.0).unwrap()),
             Light::EqualAreaEnv(

@@ -10,6 +10,11 @@
 //! | beam_width   | float     | 3/4 of cutoff_angle (degrees) |
 //!
 //! The angles must satisfy 0 ≤ beam_width < cutoff_angle ≤ 180.
+//!
+//! [`SpotLight::pbrt`] makes pbrt-v4's `spot` instead: the falloff is
+//! smoothstep(cos θ) from cos(coneangle) (0) to cos(coneangle −
+//! conedeltaangle) (1), a hard edge when the two coincide (pbrt-v4's
+//! `SpotLight::I` and `SmoothStep`).
 
 use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
@@ -36,6 +41,8 @@ pub struct SpotLight {
     pub cos_cutoff: f32,
     cos_beam: f32,
     inv_transition: f32,
+    /// pbrt-v4's smoothstep falloff in cos θ instead of Mitsuba's linear one in θ.
+    smooth: bool,
 }
 
 impl SpotLight {
@@ -51,12 +58,29 @@ impl SpotLight {
             cos_cutoff: cutoff.cos(),
             cos_beam: beam.cos(),
             inv_transition: 1.0 / (cutoff - beam),
+            smooth: false,
         }
+    }
+
+    /// pbrt-v4's `spot`: full intensity inside `cone_deg − delta_deg`, a
+    /// smoothstep in cos θ down to zero at `cone_deg` (angles in degrees,
+    /// 0 ≤ delta_deg ≤ cone_deg ≤ 180).
+    pub fn pbrt(world_from_light: Mat4, intensity: Spectrum, cone_deg: f32, delta_deg: f32) -> SpotLight {
+        SpotLight { smooth: true, ..SpotLight::new(world_from_light, intensity, cone_deg, cone_deg - delta_deg) }
     }
 
     /// Angular falloff at `cos_theta` from the beam axis (light-local z).
     #[inline]
     pub fn falloff(&self, cos_theta: f32) -> f32 {
+        if self.smooth {
+            // pbrt-v4's SmoothStep(cos_cutoff, cos_beam, cos θ).
+            let (a, b) = (self.cos_cutoff, self.cos_beam);
+            if a == b {
+                return if cos_theta < a { 0.0 } else { 1.0 };
+            }
+            let t = ((cos_theta - a) / (b - a)).clamp(0.0, 1.0);
+            return t * t * (3.0 - 2.0 * t);
+        }
         if cos_theta <= self.cos_cutoff {
             0.0
         } else if cos_theta >= self.cos_beam {
@@ -157,6 +181,28 @@ impl SpotLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pbrt_falloff_is_a_smoothstep_in_cos_and_its_power_closed_form() {
+        let s = SpotLight::pbrt(Mat4::IDENTITY, Spectrum::splat(2.0), 30.0, 10.0);
+        let (a, b) = (30f32.to_radians().cos(), 20f32.to_radians().cos());
+        assert_eq!(s.falloff(10f32.to_radians().cos()), 1.0);
+        assert_eq!(s.falloff(31f32.to_radians().cos()), 0.0);
+        for deg in [21.0f32, 25.0, 29.0] {
+            let t = (deg.to_radians().cos() - a) / (b - a);
+            let want = t * t * (3.0 - 2.0 * t);
+            assert!((s.falloff(deg.to_radians().cos()) - want).abs() < 1e-5, "{deg}");
+        }
+        // The smoothstep integrates to half its interval in cos θ: Φ = 2π I ((1 - b) + (b - a) / 2),
+        // the k_e pbrt-v4 divides `power` by. The numerical flux must agree.
+        let want = 2.0 * PI * 2.0 * ((1.0 - b) + (b - a) / 2.0);
+        let got = s.power().x;
+        assert!((got - want).abs() < 2e-3 * want, "{got} vs {want}");
+        // No transition: a hard edge.
+        let s = SpotLight::pbrt(Mat4::IDENTITY, Spectrum::ONE, 30.0, 0.0);
+        assert_eq!(s.falloff(29.9f32.to_radians().cos()), 1.0);
+        assert_eq!(s.falloff(30.1f32.to_radians().cos()), 0.0);
+    }
 
     #[test]
     fn falloff_matches_mitsubas_curve() {

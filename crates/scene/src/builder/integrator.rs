@@ -70,7 +70,7 @@ fn count(node: &Node, name: &str, default: i64) -> Result<u32> {
 }
 
 /// Builds an integrator and the light-selection strategy it asks for.
-pub(super) fn build_integrator(node: &Node) -> Result<(Integrator, LightSelection)> {
+pub(crate) fn build_integrator(node: &Node) -> Result<(Integrator, LightSelection)> {
     let result = plugin(INTEGRATORS, node)?(node)?;
     let nests = matches!(result.0, Integrator::Aov(_) | Integrator::Moment(_));
     node.check_all_used(if nests { &[Kind::Integrator] } else { &[] })?;

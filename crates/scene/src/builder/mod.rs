@@ -16,7 +16,7 @@ mod shape;
 mod texture;
 
 use bsdf::build_material;
-use integrator::build_integrator;
+pub(crate) use integrator::build_integrator;
 pub use integrator::integrator_from_spec;
 use sensor::build_sensor;
 pub use sensor::SAMPLER_OVERRIDES;

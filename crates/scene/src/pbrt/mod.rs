@@ -31,6 +31,7 @@
 pub mod lexer;
 pub mod params;
 pub mod parser;
+pub mod translate;
 
 pub use params::{ParamList, ParamType, SpectrumValue};
 pub use parser::{

@@ -330,6 +330,19 @@ impl ParamList {
         }
     }
 
+    /// All strings of a `string` array (or `None`).
+    pub fn strings(&self, name: &str) -> Result<Option<Vec<String>>> {
+        Ok(self.find(name, &[ParamType::String])?.map(|p| match &p.values {
+            Values::Strs(s) => s.clone(),
+            _ => unreachable!("strings hold strings"),
+        }))
+    }
+
+    /// The declared type of the parameter `name`, if given (not marked used).
+    pub fn type_of(&self, name: &str) -> Option<ParamType> {
+        self.params.iter().find(|p| p.name == name).map(|p| p.ty)
+    }
+
     /// All numbers of a `float` array (or `None`).
     pub fn floats(&self, name: &str) -> Result<Option<Vec<f64>>> {
         Ok(self.nums(name, ParamType::Float)?.map(|(v, _)| v.to_vec()))
