@@ -18,7 +18,7 @@
 //!   by ratio tracking (Novák et al. 2014), Π σ_n / σ̄.
 
 pub mod phase;
-pub mod volume;
+pub use crate::texture::volume;
 
 pub use phase::PhaseFunction;
 pub use volume::{Grid, GridVolume, Volume, VolumeFilter, WrapMode};

@@ -161,22 +161,29 @@ fn check_coefficient(node: &Node, name: &str, v: Spectrum) -> Result<()> {
     Ok(())
 }
 
+/// A nested `<volume>` used for colours or scalars (a medium's
+/// coefficients, the `volume` texture): constvolume, or a gridvolume of 1
+/// or 3 channels.
+pub(super) fn colour_volume(child: &crate::desc::Child, name: &str) -> Result<Volume> {
+    let v = plugin(VOLUMES, &child.node)?(&child.node)?;
+    child.node.check_all_used(&[])?;
+    if let Volume::Grid { grid, .. } = &v {
+        if grid.grid.channels == 6 {
+            return Err(LoadError::at(
+                &child.loc,
+                format!("{name}: a 6-channel gridvolume holds sggx parameters, not a colour; give 1 or 3 channels"),
+            ));
+        }
+    }
+    Ok(v)
+}
+
 /// The volume parameter `name` of `node`: a nested `<volume>`, or a
 /// float or colour (a constant over the unit cube, as Mitsuba's
 /// `get_volume` makes it).
 fn volume_param(node: &Node, name: &str, default: f32) -> Result<Volume> {
     if let Some(child) = node.children_of(Kind::Volume).find(|c| c.name.as_deref() == Some(name)) {
-        let v = plugin(VOLUMES, &child.node)?(&child.node)?;
-        child.node.check_all_used(&[])?;
-        if let Volume::Grid { grid, .. } = &v {
-            if grid.grid.channels == 6 {
-                return Err(LoadError::at(
-                    &child.loc,
-                    format!("{name}: a 6-channel gridvolume holds sggx parameters, not a colour; give 1 or 3 channels"),
-                ));
-            }
-        }
-        return Ok(v);
+        return colour_volume(child, name);
     }
     let v = node.get_rgb(name)?.map(|v| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32));
     let v = v.unwrap_or(Spectrum::splat(default));

@@ -11,8 +11,8 @@
 //! (Mitsuba's diffuse variant is disabled in its source and absent here.)
 
 use crate::math::{safe_sqrt, Frame, PI};
-use crate::medium::volume::GridVolume;
 use crate::sampling::warp::sample_cosine_hemisphere;
+use crate::texture::volume::GridVolume;
 use glam::{Vec2, Vec3};
 
 /// S_xx, S_yy, S_zz, S_xy, S_xz, S_yz.

@@ -1,8 +1,10 @@
 //! Volume data: Mitsuba 3's `constvolume` and `gridvolume`. A volume maps
 //! world points to RGB values through its `to_world` transform, which
-//! places the unit cube [0, 1]³ of the data in the scene.
+//! places the unit cube [0, 1]³ of the data in the scene. Media read them
+//! (re-exported as `medium::volume`), and so does the `volume` texture.
 
 use crate::geometry::Aabb;
+use crate::math::luminance;
 use crate::math::Spectrum;
 pub use crate::texture::WrapMode;
 use glam::{Mat4, Vec3};
@@ -177,6 +179,17 @@ impl Volume {
     pub fn bounds(&self) -> Aabb {
         match self {
             Volume::Constant { bounds, .. } | Volume::Grid { bounds, .. } => *bounds,
+        }
+    }
+
+    /// A scalar at `p` (Mitsuba's `eval_1`): the mean of a constant's
+    /// channels, a 1-channel grid's value, a 3-channel grid's luminance.
+    #[inline]
+    pub fn eval_1(&self, p: Vec3) -> f32 {
+        match self {
+            Volume::Constant { value, .. } => (value.x + value.y + value.z) / 3.0,
+            Volume::Grid { grid, .. } if grid.grid.channels == 1 => grid.eval(p).x,
+            Volume::Grid { grid, .. } => luminance(grid.eval(p)),
         }
     }
 
