@@ -57,11 +57,16 @@ impl Media {
         if let Some(&i) = self.index.get(&key) {
             return Ok(i);
         }
-        let kind = plugin(MEDIA, node)?(node)?;
+        let mut kind = plugin(MEDIA, node)?(node)?;
         let phase = match node.single_child(Kind::Phase)? {
             Some(p) => phase(&p)?,
             None => PhaseFunction::Isotropic,
         };
+        // sggx scales the extinction by its projected area (Mitsuba's
+        // heterogeneous.cpp), which may exceed 1: the majorant covers it.
+        if let MediumKind::Heterogeneous { majorant, .. } = &mut kind {
+            *majorant *= phase.projected_area_bound();
+        }
         let sample_emitters = node.bool("sample_emitters", true)?;
         // Spectrally varying extinction is always handled (RGB variants'
         // default); the flag cannot change the image.

@@ -85,6 +85,27 @@ impl PhaseFunction {
         }
     }
 
+    /// The microflakes' projected area σ(w) at `p` (Mitsuba's
+    /// `projected_area`): `sggx`'s sqrt(wᵀ S w), 1 for every other phase
+    /// function (a blend included, as in Mitsuba). Media multiply their
+    /// extinction by it.
+    #[inline]
+    pub fn projected_area(&self, p: Vec3, w: Vec3) -> f32 {
+        match self {
+            PhaseFunction::Sggx(s) => sggx::projected_area(w, &s.s.eval6(p)),
+            _ => 1.0,
+        }
+    }
+
+    /// An upper bound of [`PhaseFunction::projected_area`] over all points
+    /// and directions (1 where that is 1).
+    pub fn projected_area_bound(&self) -> f32 {
+        match self {
+            PhaseFunction::Sggx(s) => s.projected_area_bound(),
+            _ => 1.0,
+        }
+    }
+
     /// Samples `wo` given `wi`: the direction and its density (equal to the
     /// value, so the weight is 1). `u` chooses a component of a blend.
     pub fn sample(&self, p: Vec3, wi: Vec3, u: f32, u2: Vec2) -> (Vec3, f32) {

@@ -38,6 +38,20 @@ impl Sggx {
         eval(&self.s.eval6(p), wi, wo)
     }
 
+    /// An upper bound of σ(w) = sqrt(wᵀ S w) over all points and
+    /// directions: σ² ≤ λ_max(S), which is convex in S (so a trilinear
+    /// blend of voxels stays below the largest voxel's) and at most the
+    /// largest absolute row sum (Gershgorin).
+    pub fn projected_area_bound(&self) -> f32 {
+        let rows = self.s.grid.data.chunks_exact(6).map(|s| {
+            let r0 = s[XX].abs() + s[XY].abs() + s[XZ].abs();
+            let r1 = s[XY].abs() + s[YY].abs() + s[YZ].abs();
+            let r2 = s[XZ].abs() + s[YZ].abs() + s[ZZ].abs();
+            r0.max(r1).max(r2)
+        });
+        rows.fold(0.0f32, f32::max).sqrt()
+    }
+
     /// A direction reflected about a visible normal at `p`.
     #[inline]
     pub fn sample(&self, p: Vec3, wi: Vec3, u: Vec2) -> Vec3 {
