@@ -93,6 +93,7 @@ SPP = {
     "phase_tabphase": 32768,
     "phase_sggx": 32768,
     "volume_texture": 16384,
+    "batch_sensor": 16384,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

@@ -323,3 +323,9 @@ fn volume_texture_matches_mitsuba() {
     // The volume texture: a colour grid, a constvolume, a grid's luminance as roughness.
     compare("volume_texture", 256);
 }
+
+#[test]
+fn batch_sensor_matches_mitsuba() {
+    // Two sensors (perspective, thin lens) side by side on one film.
+    compare("batch_sensor", 256);
+}
