@@ -111,16 +111,18 @@ pub fn sample_visible_normal(s: &SggxParams, wi: Vec3, u: Vec2) -> Vec3 {
     };
     // S in the frame: s2[a][b] = e_a · S e_b.
     let se = [sw(e[0]), sw(e[1]), sw(e[2])];
-    let s2 = |a: usize, b: usize| e[a].dot(se[b]);
+    visible_normal_in_frame(&frame, |a, b| e[a].dot(se[b]), u)
+}
+
+/// The sampling of [`sample_visible_normal`] given S in `frame` as `s2`.
+fn visible_normal_in_frame(frame: &Frame, s2: impl Fn(usize, usize) -> f32, u: Vec2) -> Vec3 {
     let (k, j, i) = (0, 1, 2);
-    let det = {
-        let m = glam::Mat3::from_cols(
-            Vec3::new(s2(0, 0), s2(1, 0), s2(2, 0)),
-            Vec3::new(s2(0, 1), s2(1, 1), s2(2, 1)),
-            Vec3::new(s2(0, 2), s2(1, 2), s2(2, 2)),
-        );
-        m.determinant()
-    };
+    let det = glam::Mat3::from_cols(
+        Vec3::new(s2(0, 0), s2(1, 0), s2(2, 0)),
+        Vec3::new(s2(0, 1), s2(1, 1), s2(2, 1)),
+        Vec3::new(s2(0, 2), s2(1, 2), s2(2, 2)),
+    )
+    .determinant();
     let inv_sqrt_s_ii = 1.0 / safe_sqrt(s2(i, i));
     let tmp = safe_sqrt(s2(j, j) * s2(i, i) - s2(j, i) * s2(j, i));
     let m_k = Vec3::new(safe_sqrt(det.abs()) / tmp, 0.0, 0.0);
@@ -181,6 +183,23 @@ mod tests {
         let wrong = rotated(Vec3::new(1.0, 0.3, 0.05), Vec3::new(1.0, 2.0, -0.5), 1.0);
         let p = chi2_test(300_000, 1, |_, u| Some(sample(&s, wi, u)), |wo| eval(&wrong, wi, wo) as f64);
         assert!(p < a, "S rotated by 0.1 rad was not detected: p = {p}");
+        // Mitsuba 3.9.1's sggx_sample: S taken into the frame with the
+        // transposed rotation (s2 = E S Eᵀ, E's columns the frame's axes,
+        // where Eᵀ S E is meant) samples another density than its pdf.
+        let mitsuba = |wi: Vec3, u: Vec2| {
+            let f = Frame::from_normal(wi);
+            let e = glam::Mat3::from_cols(f.s, f.t, f.n);
+            let m = glam::Mat3::from_cols(
+                Vec3::new(s[XX], s[XY], s[XZ]),
+                Vec3::new(s[XY], s[YY], s[YZ]),
+                Vec3::new(s[XZ], s[YZ], s[ZZ]),
+            );
+            let s2 = e * m * e.transpose();
+            let n = visible_normal_in_frame(&f, |a, b| s2.col(b)[a], u);
+            (2.0 * wi.dot(n) * n - wi).normalize()
+        };
+        let p = chi2_test(300_000, 2, |_, u| Some(mitsuba(wi, u)), |wo| eval(&s, wi, wo) as f64);
+        assert!(p < a, "Mitsuba's transposed frame was not detected: p = {p}");
     }
 
     /// The phase function integrates to 1, and σ is D's projected area,
