@@ -94,6 +94,7 @@ SPP = {
     "phase_sggx": 32768,
     "volume_texture": 16384,
     "batch_sensor": 16384,
+    "phase_sggx_heterogeneous": 32768,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

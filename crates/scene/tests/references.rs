@@ -329,3 +329,9 @@ fn batch_sensor_matches_mitsuba() {
     // Two sensors (perspective, thin lens) side by side on one film.
     compare("batch_sensor", 256);
 }
+
+#[test]
+fn sggx_in_a_heterogeneous_medium_matches_mitsuba() {
+    // sggx's projected area scales the extinction at each tracked point.
+    compare("phase_sggx_heterogeneous", 256);
+}
