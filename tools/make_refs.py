@@ -89,6 +89,12 @@ SPP = {
     "sdfgrid": 32768,
     "linearcurve": 16384,
     "bsplinecurve": 16384,
+    "phase_rayleigh": 32768,
+    "phase_tabphase": 32768,
+    "phase_sggx": 32768,
+    "volume_texture": 16384,
+    "batch_sensor": 16384,
+    "phase_sggx_heterogeneous": 32768,
 }
 DEFAULT_SPP = 8192
 # Scenes whose reference is rendered with Mitsuba's `independent` sampler in

@@ -7,6 +7,14 @@ tests/scenes/volumes/smoke.vol: 24^3 voxels, one channel: a soft plume (two
 Gaussian blobs along a rising, bending axis) modulated by a fixed sum of
 sines, zero at the border, peak density 1. Mitsuba's .vol v3 format (see
 crates/scene/src/vol.rs); the header box is the unit cube.
+
+tests/scenes/volumes/sggx.vol: 4^3 voxels, six channels (S_xx, S_yy, S_zz,
+S_xy, S_xz, S_yz) for the `sggx` phase function: flakes with normal n and
+roughness r, S = n n^T + r^2 (I - n n^T), n turning from +y (x = 0) to +x
+(x = 1) and tilting towards z with z, r from 0.1 to 0.6 along y.
+
+tests/scenes/volumes/colors.vol: 4^3 voxels, three channels: a colour
+gradient (x red, y green, z blue, in [0.1, 0.9]) for the `volume` texture.
 """
 import math
 import os
@@ -37,6 +45,30 @@ def smoke(n=24):
     return [v / m for v in vals]
 
 
+def sggx(n=4):
+    vals = []
+    for z in range(n):
+        for y in range(n):
+            for x in range(n):
+                p = [(x + 0.5) / n, (y + 0.5) / n, (z + 0.5) / n]
+                a = 0.5 * math.pi * p[0]
+                t = 0.6 * (p[2] - 0.5)
+                nv = [math.sin(a) * math.cos(t), math.cos(a) * math.cos(t), math.sin(t)]
+                r2 = (0.1 + 0.5 * p[1]) ** 2
+                s = [[nv[i] * nv[j] + r2 * ((i == j) - nv[i] * nv[j]) for j in range(3)] for i in range(3)]
+                vals += [s[0][0], s[1][1], s[2][2], s[0][1], s[0][2], s[1][2]]
+    return vals
+
+
+def colors(n=4):
+    vals = []
+    for z in range(n):
+        for y in range(n):
+            for x in range(n):
+                vals += [0.1 + 0.8 * x / (n - 1), 0.1 + 0.8 * y / (n - 1), 0.1 + 0.8 * z / (n - 1)]
+    return vals
+
+
 def write_vol(path, n, channels, vals):
     with open(path, "wb") as f:
         f.write(b"VOL")
@@ -49,4 +81,6 @@ def write_vol(path, n, channels, vals):
 if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     write_vol(os.path.join(OUT, "smoke.vol"), 24, 1, smoke())
-    print("wrote", os.path.join(OUT, "smoke.vol"))
+    write_vol(os.path.join(OUT, "sggx.vol"), 4, 6, sggx())
+    write_vol(os.path.join(OUT, "colors.vol"), 4, 3, colors())
+    print("wrote smoke.vol, sggx.vol and colors.vol in", OUT)

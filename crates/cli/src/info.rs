@@ -188,7 +188,7 @@ fn short(v: &Value) -> String {
 /// Features Penumbra renders differently from Mitsuba's spectral variants
 /// or serves by another method, found in the scene description.
 fn approximations(desc: &SceneDesc) -> Vec<String> {
-    let (mut sampled, mut constant, mut visible, mut skies) = (0, 0, 0, 0);
+    let (mut sampled, mut constant, mut visible, mut skies, mut sggx) = (0, 0, 0, 0, 0);
     let mut seen = std::collections::HashSet::new();
     let mut stack: Vec<&Node> = vec![&desc.root];
     while let Some(node) = stack.pop() {
@@ -197,6 +197,9 @@ fn approximations(desc: &SceneDesc) -> Vec<String> {
         }
         if node.kind == Kind::Emitter && matches!(node.plugin.as_str(), "sunsky" | "timed_sunsky") {
             skies += 1;
+        }
+        if node.kind == Kind::Phase && node.plugin == "sggx" {
+            sggx += 1;
         }
         for p in &node.props {
             match &p.value {
@@ -232,6 +235,12 @@ fn approximations(desc: &SceneDesc) -> Vec<String> {
         notes.push(format!(
             "{skies} sunsky / timed_sunsky emitters: the Hosek-Wilkie RGB tables, as Mitsuba's *_rgb variants \
              (its spectral variants would differ slightly); a timed_sunsky at the sensor's one instant"
+        ));
+    }
+    if sggx > 0 {
+        notes.push(format!(
+            "{sggx} sggx phase functions sampled exactly; Mitsuba 3.9.1's sggx sampling does not follow its \
+             density, so paths that go on after an sggx scattering differ from Mitsuba's (see README)"
         ));
     }
     notes

@@ -39,6 +39,10 @@ fn describes_plugins_counts_and_approximations() {
     }
     // Nothing is rendered: no image appears.
     assert!(!err.contains("rendered"), "{err}");
+    // sggx: sampled exactly, unlike Mitsuba 3.9.1.
+    let (ok, out, err) = info(&root().join("tests/scenes/phase_sggx.xml"), &[]);
+    assert!(ok, "{err}");
+    assert!(out.contains("phase      sggx") && out.contains("1 sggx phase functions sampled exactly"), "{out}");
 }
 
 #[test]

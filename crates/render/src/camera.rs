@@ -84,6 +84,10 @@ pub enum Projection {
         /// Its radius, as Mitsuba widens it: max(ε, r (1 + ε)), ε the ray epsilon.
         radius: f32,
     },
+    /// Mitsuba `batch`: the sensors of [`Camera::batch`] side by side, each
+    /// over an equal vertical strip of the film (film x in [i/n, (i+1)/n)
+    /// is sensor i's x in [0, 1)), each built for the strip's size.
+    Batch,
 }
 
 /// A camera: placement, field of view, clip range and projection.
@@ -102,6 +106,8 @@ pub struct Camera {
     /// The shape an `irradiancemeter` measures over, or a `distant` sensor's
     /// target shape (world space; not part of the scene for `distant`).
     pub shape: Option<Arc<Shape>>,
+    /// The sensors of a `batch` (empty otherwise).
+    pub batch: Vec<Camera>,
 }
 
 /// Mitsuba's `math::RayEpsilon<float>`.
@@ -155,6 +161,7 @@ impl Camera {
             far_clip: far,
             projection: Projection::Pinhole,
             shape: None,
+            batch: Vec::new(),
         }
     }
 
@@ -189,6 +196,7 @@ impl Camera {
             far_clip: far,
             projection: Projection::Orthographic { inv_aspect: 1.0 / aspect },
             shape: None,
+            batch: Vec::new(),
         }
     }
 
@@ -202,6 +210,7 @@ impl Camera {
             far_clip: f32::INFINITY,
             projection: Projection::RadianceMeter,
             shape: None,
+            batch: Vec::new(),
         }
     }
 
@@ -214,6 +223,7 @@ impl Camera {
             far_clip: f32::INFINITY,
             projection: Projection::IrradianceMeter,
             shape: Some(Arc::new(shape)),
+            batch: Vec::new(),
         }
     }
 
@@ -229,13 +239,46 @@ impl Camera {
             far_clip: f32::INFINITY,
             projection: Projection::Distant { target, center: Vec3::ZERO, radius: RAY_EPS },
             shape: shape.map(Arc::new),
+            batch: Vec::new(),
         }
+    }
+
+    /// Mitsuba's `batch`: `sensors` side by side (each built for its strip
+    /// of the film, width / n by height), placed by `world_from_camera` (the
+    /// batch's own `to_world`, which no ray uses).
+    pub fn batch(world_from_camera: Mat4, sensors: Vec<Camera>) -> Self {
+        Camera {
+            world_from_camera,
+            tan_half: Vec2::ZERO,
+            near_clip: 0.0,
+            far_clip: f32::INFINITY,
+            projection: Projection::Batch,
+            shape: None,
+            batch: sensors,
+        }
+    }
+
+    /// The sensor that film position `s` falls to and `s` in its strip
+    /// (Mitsuba's batch.cpp: index ⌊x n⌋, clamped, and the fraction);
+    /// the camera itself and `s` unless it is a batch.
+    #[inline]
+    pub fn sensor_at(&self, s: Vec2) -> (&Camera, Vec2) {
+        if self.batch.is_empty() {
+            return (self, s);
+        }
+        let n = self.batch.len();
+        let x = s.x * n as f32;
+        let i = x as usize;
+        (&self.batch[i.min(n - 1)], Vec2::new(x - i as f32, s.y))
     }
 
     /// For a `distant` sensor: the scene's bounding box `[min, max]`, whose
     /// bounding sphere (Mitsuba's `bbox().bounding_sphere()`, widened as in
     /// its `set_scene`) places the rays' origins. Other cameras ignore it.
     pub fn set_scene_bounds(&mut self, min: Vec3, max: Vec3) {
+        for c in &mut self.batch {
+            c.set_scene_bounds(min, max);
+        }
         if let Projection::Distant { center, radius, .. } = &mut self.projection {
             let c = 0.5 * (min + max);
             let r = if (max - min).cmpge(Vec3::ZERO).all() { (max - c).length() } else { 0.0 };
@@ -244,11 +287,12 @@ impl Camera {
         }
     }
 
-    /// The weight of every camera ray's radiance: π for `irradiancemeter`
-    /// (cosine-weighted directions), 1 otherwise.
+    /// The weight of the radiance of a camera ray through film position `s`:
+    /// π for `irradiancemeter` (cosine-weighted directions), 1 otherwise.
     #[inline]
-    pub fn ray_weight(&self) -> f32 {
-        if self.projection == Projection::IrradianceMeter {
+    pub fn ray_weight(&self, s: Vec2) -> f32 {
+        let (c, _) = self.sensor_at(s);
+        if c.projection == Projection::IrradianceMeter {
             PI
         } else {
             1.0
@@ -261,7 +305,7 @@ impl Camera {
         matches!(
             self.projection,
             Projection::ThinLens { .. } | Projection::IrradianceMeter | Projection::Distant { .. }
-        )
+        ) || self.batch.iter().any(Camera::needs_aperture_sample)
     }
 
     /// Ray through film position `s` in [0, 1)² (x right, y down), drawing
@@ -282,6 +326,10 @@ impl Camera {
     #[inline]
     pub fn generate_ray_with_aperture(&self, s: Vec2, a: Vec2) -> Ray {
         match self.projection {
+            Projection::Batch => {
+                let (c, s) = self.sensor_at(s);
+                c.generate_ray_with_aperture(s, a)
+            }
             Projection::Pinhole => {
                 let local = Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0)
                     .normalize();

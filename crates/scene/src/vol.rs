@@ -45,8 +45,10 @@ pub fn parse(bytes: &[u8]) -> Result<VolFile, String> {
         *r = v as u32;
     }
     let channels = i32_at(20);
-    if channels != 1 && channels != 3 {
-        return Err(format!("byte 20: {channels} channels; Penumbra reads volumes with 1 or 3 channels"));
+    if channels != 1 && channels != 3 && channels != 6 {
+        return Err(format!(
+            "byte 20: {channels} channels; Mitsuba 3 and Penumbra read volumes with 1, 3 or 6 channels"
+        ));
     }
     let b: Vec<f32> = (0..6).map(|k| f32_at(24 + 4 * k)).collect();
     if b.iter().any(|v| !v.is_finite()) {

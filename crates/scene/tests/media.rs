@@ -94,6 +94,59 @@ fn grid_volumes_load_and_place_their_unit_cube() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The phase functions of Mitsuba 3.9.1 with their parameters: rayleigh,
+/// tabphase's string of values, sggx's 6-channel grid.
+#[test]
+fn rayleigh_tabphase_and_sggx_load() {
+    let dir = std::env::temp_dir().join(format!("penumbra-phase-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bbox = penumbra_render::geometry::Aabb { min: glam::Vec3::ZERO, max: glam::Vec3::ONE };
+    // One voxel: S = [[1, 0.2, -0.1], [0.2, 0.5, 0], [-0.1, 0, 0.3]] (off-diagonals may be negative).
+    let s = vec![1.0, 0.5, 0.3, 0.2, -0.1, 0.0];
+    let grid = penumbra_render::medium::Grid { res: [1, 1, 1], channels: 6, data: s.clone() };
+    std::fs::write(dir.join("s.vol"), penumbra_scene::vol::encode(&grid, &bbox)).unwrap();
+    let grey = penumbra_render::medium::Grid { res: [1, 1, 1], channels: 1, data: vec![1.0] };
+    std::fs::write(dir.join("grey.vol"), penumbra_scene::vol::encode(&grey, &bbox)).unwrap();
+    let body = r#"<medium type="homogeneous" id="a"><phase type="rayleigh"/></medium>
+<medium type="homogeneous" id="b"><phase type="tabphase"><string name="values" value="0.5, 1,2 4"/></phase></medium>
+<medium type="homogeneous" id="c"><phase type="sggx"><volume type="gridvolume" name="S"><string name="filename" value="s.vol"/><string name="filter_type" value="nearest"/></volume></phase></medium>
+<shape type="sphere"><bsdf type="null"/><ref name="interior" id="a"/></shape>
+<shape type="sphere"><bsdf type="null"/><ref name="interior" id="b"/></shape>
+<shape type="sphere"><bsdf type="null"/><ref name="interior" id="c"/></shape>"#;
+    let job = load_in(body, "", &dir).unwrap();
+    let media = &job.scene.media;
+    assert_eq!(media[0].phase, PhaseFunction::Rayleigh);
+    let (wi, o) = (glam::Vec3::Z, glam::Vec3::ZERO);
+    match &media[1].phase {
+        // Values at cos = -1, -1/3, 1/3, 1; ∫ = (2/3)·(0.75 + 1.5 + 3) = 3.5.
+        PhaseFunction::Tabulated(t) => {
+            let forward = t.eval(wi, -wi);
+            assert!((forward - 4.0 / 3.5 / (2.0 * std::f32::consts::PI)).abs() < 1e-6, "{forward}");
+        }
+        p => panic!("{p:?}"),
+    }
+    match &media[2].phase {
+        PhaseFunction::Sggx(g) => assert_eq!(g.s.eval6(o).to_vec(), s),
+        p => panic!("{p:?}"),
+    }
+    // A 6-channel grid is no colour; a 1-channel grid is no S.
+    let e = load_in(
+        r#"<medium type="heterogeneous" id="m"><volume type="gridvolume" name="sigma_t"><string name="filename" value="s.vol"/></volume></medium>"#,
+        "",
+        &dir,
+    )
+    .unwrap_err();
+    assert!(e.contains("media.xml:4:") && e.contains("6-channel"), "{e}");
+    let e = load_in(
+        r#"<medium type="homogeneous" id="m"><phase type="sggx"><volume type="gridvolume" name="S"><string name="filename" value="grey.vol"/></volume></phase></medium>"#,
+        "",
+        &dir,
+    )
+    .unwrap_err();
+    assert!(e.contains("media.xml:4:") && e.contains("1 channel(s)"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Each malformed medium is refused with its file, line and the reason.
 #[test]
 fn malformed_media_are_errors_naming_the_position() {
@@ -114,7 +167,33 @@ fn malformed_media_are_errors_naming_the_position() {
         (r#"<medium type="homogeneous" id="m"><float name="sigma_t" value="-1"/></medium>"#, "not negative"),
         (r#"<medium type="homogeneous" id="m"><float name="density" value="1"/></medium>"#, "parameter 'density'"),
         (r#"<medium type="fog" id="m"/>"#, "supported medium plugins: homogeneous, heterogeneous"),
-        (r#"<medium type="homogeneous" id="m"><phase type="rayleigh"/></medium>"#, "supported phase plugins"),
+        (r#"<medium type="homogeneous" id="m"><phase type="mie"/></medium>"#, "supported phase plugins"),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="rayleigh"><float name="g" value="0.5"/></phase></medium>"#,
+            "parameter 'g'",
+        ),
+        (r#"<medium type="homogeneous" id="m"><phase type="tabphase"/></medium>"#, "tabphase needs 'values'"),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="tabphase"><string name="values" value="1, 2, x"/></phase></medium>"#,
+            "'x' (entry 2) is not a number",
+        ),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="tabphase"><string name="values" value="1, -2"/></phase></medium>"#,
+            "value 1 (-2)",
+        ),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="tabphase"><string name="values" value="3"/></phase></medium>"#,
+            "at least two",
+        ),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="tabphase"><string name="values" value="0, 0, 0"/></phase></medium>"#,
+            "no mass",
+        ),
+        (r#"<medium type="homogeneous" id="m"><phase type="sggx"/></medium>"#, "sggx needs 'S'"),
+        (
+            r#"<medium type="homogeneous" id="m"><phase type="sggx"><volume type="constvolume" name="S"/></phase></medium>"#,
+            "6-channel gridvolume",
+        ),
         (
             r#"<medium type="homogeneous" id="m"><volume type="gridvolume" name="sigma_t"><string name="filename" value="nowhere.vol"/></volume></medium>"#,
             "not found",

@@ -299,3 +299,39 @@ fn particle_tracer_matches_mitsuba() {
 fn old_format_scene_matches_mitsuba() {
     compare("old_format", 256);
 }
+
+#[test]
+fn rayleigh_phase_matches_mitsuba() {
+    // A homogeneous sphere of Rayleigh-scattering medium, lit from behind.
+    compare("phase_rayleigh", 256);
+}
+
+#[test]
+fn tabulated_phase_matches_mitsuba() {
+    // tabphase: a forward peak, a backward bump (the sign of cos θ matters).
+    compare("phase_tabphase", 256);
+}
+
+#[test]
+fn sggx_phase_matches_mitsuba() {
+    // sggx with S from a 6-channel gridvolume, varying over the medium.
+    compare("phase_sggx", 256);
+}
+
+#[test]
+fn volume_texture_matches_mitsuba() {
+    // The volume texture: a colour grid, a constvolume, a grid's luminance as roughness.
+    compare("volume_texture", 256);
+}
+
+#[test]
+fn batch_sensor_matches_mitsuba() {
+    // Two sensors (perspective, thin lens) side by side on one film.
+    compare("batch_sensor", 256);
+}
+
+#[test]
+fn sggx_in_a_heterogeneous_medium_matches_mitsuba() {
+    // sggx's projected area scales the extinction at each tracked point.
+    compare("phase_sggx_heterogeneous", 256);
+}

@@ -471,3 +471,81 @@ fn irradiancemeter_matches_mitsuba() {
     let job = job_of(&xml).unwrap();
     check_meter("irradiancemeter", meter_estimate(&job, 4096), None, Some(MITSUBA_IRRADIANCEMETER));
 }
+
+/// Mitsuba's `batch`: nested sensors side by side, each built for its
+/// strip of the film (width / n), the batch's film and sampler used; the
+/// left strip of a batch renders what the nested sensor alone renders on
+/// a film of the strip's size; errors at file:line.
+#[test]
+fn batch_sensor_places_its_sensors_side_by_side() {
+    let persp = |origin: &str| {
+        format!(
+            r#"<sensor type="perspective"><float name="fov" value="50"/>
+<transform name="to_world"><lookat origin="{origin}" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>"#
+        )
+    };
+    let body = |subs: &str, width: u32, extra: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+<integrator type="path"><integer name="max_depth" value="1"/></integrator>
+<sensor type="batch">{extra}
+{subs}
+  <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="8"/><rfilter type="box"/></film>
+</sensor>
+<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+</scene>"#
+        )
+    };
+    let two = format!("{}{}", persp("0.5, 0, 4"), persp("-1, 0.3, 3"));
+    let job = job_of(&body(&two, 16, "")).unwrap();
+    assert_eq!(job.camera.projection, Projection::Batch);
+    assert_eq!(job.camera.batch.len(), 2);
+    // Each strip is 8x8: the fov (along x) spans 8 pixels, aspect 1.
+    let t = (25f32).to_radians().tan();
+    for c in &job.camera.batch {
+        assert!((c.tan_half.x - t).abs() < 1e-6 && (c.tan_half.y - t).abs() < 1e-6, "{:?}", c.tan_half);
+    }
+    // The left strip is the first sensor alone on an 8x8 film, bitwise.
+    let alone = job_of(
+        &scene(
+            "perspective",
+            &persp("0.5, 0, 4").replace("<sensor type=\"perspective\">", "").replace("</sensor>", ""),
+            "",
+        )
+        .replace("value=\"16\"", "value=\"8\""),
+    )
+    .unwrap();
+    let (a, b) = (render(&job, 16), render(&alone, 16));
+    assert_eq!(alone.width, 8);
+    for y in 0..8 {
+        for x in 0..8 {
+            assert_eq!(a[y * 16 + x], b[y * 8 + x], "pixel ({x}, {y})");
+        }
+    }
+    // The right strip sees the square from elsewhere: a different image.
+    assert!((0..8).any(|y| (0..8).any(|x| a[y * 16 + 8 + x] != b[y * 8 + x])));
+
+    let err = |xml: String| job_of(&xml).map(|_| ()).unwrap_err().to_string();
+    let e = err(body(&two, 15, ""));
+    assert!(e.contains("sensors.xml:3") && e.contains("divisible"), "{e}");
+    let e = err(body("", 16, ""));
+    assert!(e.contains("sensors.xml:3") && e.contains("at least one nested sensor"), "{e}");
+    let e = err(body(&two, 16, r#"<spectrum name="srf" value="1"/>"#));
+    assert!(e.contains("sensors.xml:3") && e.contains("srf"), "{e}");
+    let e = err(body(&two, 16, r#"<float name="fov" value="30"/>"#));
+    assert!(e.contains("sensors.xml:3") && e.contains("'fov'"), "{e}");
+    let e = err(body(
+        &two.replacen("<float name=\"fov\" value=\"50\"/>", "<float name=\"fovv\" value=\"50\"/>", 1),
+        16,
+        "",
+    ));
+    assert!(e.contains("sensors.xml:4") && e.contains("'fovv'"), "{e}");
+    let with_medium = persp("0, 0, 4").replace("</sensor>", r#"<medium type="homogeneous"/></sensor>"#);
+    let e = err(body(&with_medium, 16, ""));
+    assert!(e.contains("sensors.xml:5") && e.contains("medium"), "{e}");
+    let e = err(body(&two, 16, "").replace(
+        r#"<integrator type="path"><integer name="max_depth" value="1"/></integrator>"#,
+        r#"<integrator type="ptracer"/>"#,
+    ));
+    assert!(e.contains("ptracer"), "{e}");
+}

@@ -372,3 +372,54 @@ fn directionalarea_parameters_and_errors() {
     let e = scene(r#"<emitter type="point"/>"#, "").unwrap_err();
     assert!(e.contains("only 'area' and 'directionalarea'"), "{e}");
 }
+
+/// Mitsuba's `volume` texture: a volume looked up at the world-space
+/// surface point (constvolume, gridvolume of 1 or 3 channels; eval_1 the
+/// luminance of a colour grid), and its errors at file:line.
+#[test]
+fn volume_texture_looks_up_the_surface_point() {
+    let scene = temp_scene("volume");
+    let dir = scene.parent().unwrap();
+    let bbox = penumbra_render::geometry::Aabb { min: Vec3::ZERO, max: Vec3::ONE };
+    // 2 × 1 × 1 RGB voxels: red, then blue; and a 6-channel grid.
+    let rgb = penumbra_render::medium::Grid { res: [2, 1, 1], channels: 3, data: vec![1.0, 0.0, 0.0, 0.0, 0.0, 1.0] };
+    std::fs::write(dir.join("rgb.vol"), penumbra_scene::vol::encode(&rgb, &bbox)).unwrap();
+    let six = penumbra_render::medium::Grid { res: [1, 1, 1], channels: 6, data: vec![1.0; 6] };
+    std::fs::write(dir.join("six.vol"), penumbra_scene::vol::encode(&six, &bbox)).unwrap();
+    let at = |x: f32| SurfaceInteraction { p: Vec3::new(x, 0.0, 0.0), ..si(0.5, 0.5) };
+    // Placed over [-1, 1] along x: voxel centres at x = -0.5 and 0.5.
+    let j = job(
+        &scene,
+        r#"<texture type="volume" name="reflectance"><volume type="gridvolume" name="volume">
+<string name="filename" value="rgb.vol"/><string name="filter_type" value="nearest"/>
+<transform name="to_world"><scale x="2" y="1" z="1"/><translate x="-1" y="-0.5" z="-0.5"/></transform></volume></texture>"#,
+    )
+    .unwrap();
+    let t = reflectance(&j);
+    assert_eq!(t.eval(&at(-0.5)).to_array(), [1.0, 0.0, 0.0]);
+    assert_eq!(t.eval(&at(0.5)).to_array(), [0.0, 0.0, 1.0]);
+    assert!((t.eval_1(&at(0.5)) - penumbra_render::math::luminance(Vec3::Z)).abs() < 1e-7);
+    assert!(!t.has_mean() && !t.has_gradient());
+    let j = job(
+        &scene,
+        r#"<texture type="volume" name="reflectance"><volume type="constvolume" name="volume"><rgb name="value" value="0.1, 0.2, 0.6"/></volume></texture>"#,
+    )
+    .unwrap();
+    let t = reflectance(&j);
+    assert_eq!(t.eval(&at(3.0)).to_array(), [0.1, 0.2, 0.6]);
+    assert!((t.eval_1(&at(3.0)) - 0.3).abs() < 1e-7, "a constant's channel mean");
+
+    let file = scene.display().to_string();
+    let err = |texture: &str| job(&scene, texture).map(|_| ()).unwrap_err().to_string();
+    let e = err(r#"<texture type="volume" name="reflectance"><float name="volume" value="0.5"/></texture>"#);
+    assert!(e.contains("nested <volume name=\"volume\">") && e.contains(&format!("{file}:5")), "{e}");
+    let e = err(r#"<texture type="volume" name="reflectance"/>"#);
+    assert!(e.contains("nested <volume") && e.contains(&format!("{file}:5")), "{e}");
+    let e = err(r#"<texture type="volume" name="reflectance">
+<volume type="gridvolume" name="volume"><string name="filename" value="six.vol"/></volume></texture>"#);
+    assert!(e.contains("6-channel") && e.contains(&format!("{file}:6")), "{e}");
+    let e = err(r#"<texture type="volume" name="reflectance">
+<volume type="constvolume" name="volume"><float name="scale" value="2"/></volume></texture>"#);
+    assert!(e.contains("'scale'") && e.contains(&format!("{file}:6")), "{e}");
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -103,7 +103,7 @@ impl VolPathIntegrator {
                         if med.sample_emitters {
                             let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
                             if let Some(ls) = scene.sample_light(p, Vec3::ZERO, u_sel, u_light) {
-                                let f = med.phase.eval(wi, ls.wi);
+                                let f = med.phase.eval(p, wi, ls.wi);
                                 if f > 0.0 && ls.pdf > 0.0 {
                                     let w = if ls.delta { 1.0 } else { power_heuristic(ls.pdf, f) };
                                     // Stop short of the light's own surface.
@@ -114,7 +114,7 @@ impl VolPathIntegrator {
                                 }
                             }
                         }
-                        let (wo, pdf) = med.phase.sample(wi, rng.next_1d(), rng.next_2d());
+                        let (wo, pdf) = med.phase.sample(p, wi, rng.next_1d(), rng.next_2d());
                         if pdf <= 0.0 || pdf.is_nan() {
                             break;
                         }

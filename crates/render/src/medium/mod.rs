@@ -18,7 +18,7 @@
 //!   by ratio tracking (Novák et al. 2014), Π σ_n / σ̄.
 
 pub mod phase;
-pub mod volume;
+pub use crate::texture::volume;
 
 pub use phase::PhaseFunction;
 pub use volume::{Grid, GridVolume, Volume, VolumeFilter, WrapMode};
@@ -47,7 +47,8 @@ pub enum MediumKind {
         albedo: Box<Volume>,
         /// Multiplier of `sigma_t`.
         scale: f32,
-        /// σ̄ = scale · max(sigma_t), an upper bound of σ_t in every channel.
+        /// σ̄ = scale · max(sigma_t) (times the phase function's bound of its
+        /// projected area, 1 unless it is `sggx`), an upper bound of σ_t in every channel.
         majorant: f32,
     },
 }
@@ -137,16 +138,29 @@ impl Medium {
         matches!(self.kind, MediumKind::Homogeneous { .. })
     }
 
-    /// σ_s and σ_t at `p` (heterogeneous media) or anywhere (homogeneous).
+    /// σ_s and σ_t at `p` of a heterogeneous medium for light travelling
+    /// along `d`: σ_t times the microflakes' projected area along `d`
+    /// (1 unless the phase function is `sggx`; Mitsuba's heterogeneous.cpp).
     #[inline]
-    fn coefficients(&self, p: Vec3) -> (Spectrum, Spectrum) {
+    fn coefficients(&self, p: Vec3, d: Vec3) -> (Spectrum, Spectrum) {
         match &self.kind {
             MediumKind::Homogeneous { sigma_t, albedo } => (*sigma_t * *albedo, *sigma_t),
             MediumKind::Heterogeneous { sigma_t, albedo, scale, .. } => {
-                let st = sigma_t.eval(p) * *scale;
+                let st = sigma_t.eval(p) * *scale * self.phase.projected_area(p, -d);
                 (st * albedo.eval(p), st)
             }
         }
+    }
+
+    /// A homogeneous medium's extinction along `d`: σ_t times the
+    /// microflakes' projected area along `d` (1 unless the phase function
+    /// is `sggx`). As in Mitsuba 3.9.1's homogeneous.cpp, S is read at the
+    /// world origin: Mitsuba evaluates this majorant before the interaction
+    /// has a position (medium.cpp's `sample_interaction`), and a
+    /// homogeneous medium's extinction is this majorant everywhere.
+    #[inline]
+    fn homogeneous_sigma_t(&self, sigma_t: Spectrum, d: Vec3) -> Spectrum {
+        sigma_t * self.phase.projected_area(Vec3::ZERO, -d)
     }
 
     /// Samples where along `ray` (unit direction), before `t_end` (the
@@ -154,12 +168,13 @@ impl Medium {
     /// distances with the extinction of channel `hero`.
     pub fn sample_flight(&self, ray: &Ray, t_end: f32, hero: usize, rng: &mut SampleStream) -> Flight {
         match &self.kind {
-            MediumKind::Homogeneous { sigma_t, .. } => {
+            MediumKind::Homogeneous { sigma_t, albedo } => {
+                let sigma_t = &self.homogeneous_sigma_t(*sigma_t, ray.d);
                 let t = exp_step(sigma_t[hero], rng.next_1d());
                 if t < t_end {
                     let transmittance = tr(*sigma_t, t);
                     let pdf = *sigma_t * transmittance;
-                    let (sigma_s, _) = self.coefficients(ray.o);
+                    let sigma_s = *sigma_t * *albedo;
                     let ph = pdf[hero];
                     Flight::Scatter { t, weight: sigma_s * transmittance / ph, ratio: pdf / ph }
                 } else {
@@ -191,7 +206,7 @@ impl Medium {
                         return Flight::Pass { weight, ratio };
                     }
                     t = next;
-                    let (sigma_s, st) = self.coefficients(ray.at(t));
+                    let (sigma_s, st) = self.coefficients(ray.at(t), ray.d);
                     let sigma_n = Spectrum::splat(m) - st;
                     let p_null = mean(sigma_n) / m;
                     if rng.next_1d() < p_null {
@@ -209,7 +224,7 @@ impl Medium {
     /// (possibly ∞): exact for homogeneous media, ratio tracking otherwise.
     pub fn transmittance(&self, ray: &Ray, t_end: f32, rng: &mut SampleStream) -> Spectrum {
         match &self.kind {
-            MediumKind::Homogeneous { sigma_t, .. } => tr(*sigma_t, t_end),
+            MediumKind::Homogeneous { sigma_t, .. } => tr(self.homogeneous_sigma_t(*sigma_t, ray.d), t_end),
             MediumKind::Heterogeneous { sigma_t, majorant, .. } => {
                 let m = *majorant;
                 let Some((t0, t1)) = clip(&sigma_t.bounds(), ray.o, ray.d, t_end).filter(|_| m > 0.0) else {
@@ -223,7 +238,7 @@ impl Medium {
                         return transmittance;
                     }
                     t = next;
-                    let (_, st) = self.coefficients(ray.at(t));
+                    let (_, st) = self.coefficients(ray.at(t), ray.d);
                     transmittance *= (Spectrum::splat(m) - st) / m;
                     if transmittance == Spectrum::ZERO {
                         return transmittance;
@@ -389,5 +404,52 @@ mod tests {
         // A ray missing the box sees vacuum.
         let miss = Ray::new(Vec3::new(-0.5, 2.0, 0.3), Vec3::X, f32::INFINITY);
         assert_eq!(m.transmittance(&miss, 10.0, &mut streams(1).next().unwrap()), Spectrum::ONE);
+    }
+
+    /// With `sggx`, extinction is σ_t times the flakes' projected area
+    /// along the ray, sqrt(dᵀ S d) (Mitsuba's media): a homogeneous medium
+    /// reads S at the world origin, a heterogeneous one at each point, and
+    /// its majorant covers a projected area above 1.
+    #[test]
+    fn sggx_scales_extinction_by_the_projected_area() {
+        // S = diag(4, 0.25, 1) in the voxel at x < 0.5, diag(0.25, 4, 1) beyond.
+        let data = vec![4.0, 0.25, 1.0, 0.0, 0.0, 0.0, 0.25, 4.0, 1.0, 0.0, 0.0, 0.0];
+        let grid = Arc::new(Grid { res: [2, 1, 1], channels: 6, data });
+        let gv = GridVolume {
+            grid,
+            to_local: Mat4::IDENTITY,
+            filter: VolumeFilter::Nearest,
+            wrap: WrapMode::Clamp,
+            max: 4.0,
+        };
+        let sggx = PhaseFunction::Sggx(Arc::new(phase::Sggx { s: gv }));
+        assert_eq!(sggx.projected_area_bound(), 2.0);
+        let mut m = homogeneous(Spectrum::new(0.5, 1.0, 3.0), Spectrum::splat(0.9));
+        m.phase = sggx.clone();
+        let mut rng = streams(1).next().unwrap();
+        let d = 0.7;
+        // Along x: σ = sqrt(S_xx) = 2 at the origin's voxel, wherever the ray is.
+        let along_x = Ray::new(Vec3::new(0.9, 0.5, 0.5), Vec3::X, f32::INFINITY);
+        assert_eq!(m.transmittance(&along_x, d, &mut rng), tr(Spectrum::new(1.0, 2.0, 6.0), d));
+        let along_y = Ray::new(Vec3::new(0.9, 0.5, 0.5), -Vec3::Y, f32::INFINITY);
+        assert_eq!(m.transmittance(&along_y, d, &mut rng), tr(Spectrum::new(0.25, 0.5, 1.5), d));
+        // Heterogeneous, density 1 everywhere: along y through both voxels'
+        // S_yy (0.25 then 4), σ = 0.5 then 2; the majorant is 2.
+        let mut h = grid_medium(|_, _, _| 1.0, 1.0);
+        h.phase = sggx;
+        if let MediumKind::Heterogeneous { majorant, .. } = &mut h.kind {
+            *majorant *= h.phase.projected_area_bound();
+            assert_eq!(*majorant, 2.0);
+        }
+        for (x, sigma) in [(0.25, 0.5f32), (0.75, 2.0)] {
+            let ray = Ray::new(Vec3::new(x, -0.5, 0.5), Vec3::Y, f32::INFINITY);
+            let want = Spectrum::splat((-sigma).exp());
+            assert_close("ratio tracking", estimate(100_000, |rng| h.transmittance(&ray, 10.0, rng)), want);
+            let pass = estimate(100_000, |rng| match h.sample_flight(&ray, 10.0, 0, rng) {
+                Flight::Pass { weight, .. } => weight,
+                Flight::Scatter { .. } => Spectrum::ZERO,
+            });
+            assert_close("delta tracking", pass, want);
+        }
     }
 }

@@ -184,25 +184,17 @@ impl RenderJob {
         (m.min(cx), m.min(cy), m.min(self.full_size.0 - cx - self.width), m.min(self.full_size.1 - cy - self.height))
     }
 
-    /// Where a camera ray leaves the camera: back along it to the lens plane
-    /// (z = 0 in camera space; rays start on the near clip plane), or its
-    /// origin for orthographic cameras.
-    fn eye(&self, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
-        if matches!(
-            self.camera.projection,
-            crate::camera::Projection::Orthographic { .. }
-                | crate::camera::Projection::RadianceMeter
-                | crate::camera::Projection::IrradianceMeter
-                | crate::camera::Projection::Distant { .. }
-        ) {
-            return ray.o;
+    /// Where a camera ray through film position `s` leaves the camera:
+    /// back along it to the lens plane (z = 0 in camera space; rays start on
+    /// the near clip plane), or its origin for orthographic cameras; for a
+    /// batch, as the strip's own sensor.
+    fn eye(&self, s: Vec2, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
+        if self.camera.projection == crate::camera::Projection::Batch {
+            // Only AOV queries ask: the strip sensor's inverse per call.
+            let (c, _) = self.camera.sensor_at(s);
+            return eye(c, ray, &c.world_from_camera.inverse());
         }
-        let (o, d) = (camera_from_world.transform_point3(ray.o), camera_from_world.transform_vector3(ray.d));
-        if d.z.abs() > 0.0 {
-            ray.o - ray.d * (o.z / d.z)
-        } else {
-            ray.o
-        }
+        eye(&self.camera, ray, camera_from_world)
     }
 
     /// Renders the pixels [x0, x0+w) × [y0, y0+h) (image coordinates; may
@@ -282,10 +274,16 @@ impl RenderJob {
     /// A camera sample of full-film pixel `global`: its position `u` in the
     /// pixel and the camera ray (the first random numbers of `rng`).
     #[inline]
-    pub(crate) fn camera_sample(&self, (gx, gy): (u32, u32), rng: &mut SampleStream) -> (Vec2, Ray) {
-        let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
+    pub(crate) fn camera_sample(&self, global: (u32, u32), rng: &mut SampleStream) -> (Vec2, Ray) {
         let u = rng.next_2d();
-        (u, self.camera.sample_ray((Vec2::new(gx as f32, gy as f32) + u) * inv, rng))
+        (u, self.camera.sample_ray(self.film_position(global, u), rng))
+    }
+
+    /// Full-film pixel `(gx, gy)` plus `u` in [0, 1)² of the film.
+    #[inline]
+    fn film_position(&self, (gx, gy): (u32, u32), u: Vec2) -> Vec2 {
+        let inv = Vec2::new(1.0 / self.full_size.0 as f32, 1.0 / self.full_size.1 as f32);
+        (Vec2::new(gx as f32, gy as f32) + u) * inv
     }
 
     /// The differentials of camera ray `ray` through `u` in full-film pixel
@@ -335,7 +333,7 @@ impl RenderJob {
         ch: &[f32],
     ) {
         tile.stats.samples += 1;
-        let l = l * self.camera.ray_weight();
+        let l = l * self.camera.ray_weight(self.film_position(p.global, u));
         if !l.is_finite() {
             tile.stats.non_finite += 1;
             return;
@@ -357,7 +355,7 @@ impl RenderJob {
                 &self.scene,
                 &self.integrator,
                 ray,
-                self.eye(ray, &tile.camera_from_world),
+                self.eye(self.film_position(p.global, u), ray, &tile.camera_from_world),
                 &mut aov_rng,
                 &tile.scratch,
             );
@@ -367,6 +365,25 @@ impl RenderJob {
         // The pixel's place in the tile film (margin included).
         let (x, y) = p.local;
         tile.film.splat((x + tile.margin) as i32, (y + tile.margin) as i32, u, l, aov, &self.filter);
+    }
+}
+
+/// Where a camera ray leaves `camera` (see [`RenderJob::eye`]).
+fn eye(camera: &Camera, ray: &crate::geometry::Ray, camera_from_world: &glam::Mat4) -> glam::Vec3 {
+    if matches!(
+        camera.projection,
+        crate::camera::Projection::Orthographic { .. }
+            | crate::camera::Projection::RadianceMeter
+            | crate::camera::Projection::IrradianceMeter
+            | crate::camera::Projection::Distant { .. }
+    ) {
+        return ray.o;
+    }
+    let (o, d) = (camera_from_world.transform_point3(ray.o), camera_from_world.transform_vector3(ray.d));
+    if d.z.abs() > 0.0 {
+        ray.o - ray.d * (o.z / d.z)
+    } else {
+        ray.o
     }
 }
 

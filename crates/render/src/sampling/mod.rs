@@ -4,6 +4,7 @@
 //! Naming rule: `sample_x(u) -> point` and `x_pdf(point) -> density`, with
 //! the density's measure stated in the doc comment.
 
+pub mod continuous1d;
 pub mod distrib1d;
 pub mod distrib2d;
 pub mod marginal2d;
@@ -13,6 +14,7 @@ pub mod sampler;
 pub mod sequences;
 pub mod warp;
 
+pub use continuous1d::ContinuousDistribution;
 pub use distrib1d::Distribution1D;
 pub use distrib2d::Distribution2D;
 pub use sampler::{SampleStream, Sampler, SamplerKind};

@@ -3,11 +3,14 @@
 //! Every BSDF parameter Mitsuba lets a texture drive is a [`Texture`]; a
 //! plain `<rgb>` or `<float>` becomes [`Texture::Constant`], Mitsuba's
 //! `bitmap` a [`Texture::Bitmap`], `checkerboard` a
-//! [`Texture::Checkerboard`] and `mesh_attribute` a [`Texture::MeshAttribute`].
+//! [`Texture::Checkerboard`], `mesh_attribute` a [`Texture::MeshAttribute`]
+//! and `volume` a [`Texture::Volume`] (volume data, volume.rs, looked up at
+//! the surface point in world space).
 
 pub mod bitmap;
 pub mod checkerboard;
 pub mod mesh_attribute;
+pub mod volume;
 
 pub use bitmap::{Bitmap, FilterType, WrapMode};
 pub use checkerboard::Checkerboard;
@@ -29,6 +32,9 @@ pub enum Texture {
     Checkerboard(Arc<Checkerboard>),
     /// Mitsuba's `mesh_attribute`: per-vertex or per-face data of the hit mesh.
     MeshAttribute(Arc<MeshAttribute>),
+    /// Mitsuba's `volume`: a volume (`constvolume`, `gridvolume` of 1 or 3
+    /// channels) looked up at the world-space surface point.
+    Volume(Arc<volume::Volume>),
 }
 
 impl Texture {
@@ -40,6 +46,7 @@ impl Texture {
             Texture::Bitmap(b) => b.eval(si.uv),
             Texture::Checkerboard(c) => c.eval(si),
             Texture::MeshAttribute(m) => m.eval(si),
+            Texture::Volume(v) => v.eval(si.p),
         }
     }
 
@@ -54,6 +61,7 @@ impl Texture {
             Texture::Bitmap(b) => b.eval_1(si.uv),
             Texture::Checkerboard(c) => c.eval_1(si),
             Texture::MeshAttribute(m) => m.eval_1(si),
+            Texture::Volume(v) => v.eval_1(si.p),
         }
     }
 
@@ -72,14 +80,14 @@ impl Texture {
     /// Whether Mitsuba implements `eval_1_grad` for this texture (bump maps
     /// need it).
     pub fn has_gradient(&self) -> bool {
-        !matches!(self, Texture::Checkerboard(_) | Texture::MeshAttribute(_))
+        !matches!(self, Texture::Checkerboard(_) | Texture::MeshAttribute(_) | Texture::Volume(_))
     }
 
     /// Whether Mitsuba implements `mean` for this texture (not for
-    /// `mesh_attribute`: plugins that need it fail to load there).
+    /// `mesh_attribute` and `volume`: plugins that need it fail to load there).
     pub fn has_mean(&self) -> bool {
         match self {
-            Texture::MeshAttribute(_) => false,
+            Texture::MeshAttribute(_) | Texture::Volume(_) => false,
             Texture::Checkerboard(c) => c.color0.has_mean() && c.color1.has_mean(),
             _ => true,
         }
@@ -94,7 +102,7 @@ impl Texture {
             Texture::Bitmap(b) => b.mean(),
             Texture::Checkerboard(c) => 0.5 * (c.color0.mean() + c.color1.mean()),
             // Never asked for: the builder checks `has_mean` first.
-            Texture::MeshAttribute(_) => 0.0,
+            Texture::MeshAttribute(_) | Texture::Volume(_) => 0.0,
         }
     }
 

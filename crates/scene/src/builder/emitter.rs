@@ -90,6 +90,12 @@ pub(super) fn area(en: &Node, shape_node: &Node, shape: &Shape, textures: &mut T
             let loc = &en.children_of(Kind::Texture).next().map_or(en.loc.clone(), |c| c.loc.clone());
             return Err(LoadError::at(loc, "an area emitter's radiance cannot be a mesh_attribute texture"));
         }
+        // Mitsuba samples a spatially varying radiance by the texture's
+        // sample_position, which a volume texture lacks.
+        Texture::Volume(_) => {
+            let loc = &en.children_of(Kind::Texture).next().map_or(en.loc.clone(), |c| c.loc.clone());
+            return Err(LoadError::at(loc, "an area emitter's radiance cannot be a volume texture"));
+        }
         Texture::Constant(c) if c.min_element() < 0.0 => {
             return Err(LoadError::at(en.loc_of("radiance"), "an area emitter's radiance must not be negative"));
         }

@@ -7,9 +7,12 @@
 //! | `heterogeneous` | the same, `sigma_t` and `albedo` as volumes; the medium fills `sigma_t`'s bounds |
 //! | `isotropic`     | — |
 //! | `hg`            | `g` (0.8), in (−1, 1) |
+//! | `rayleigh`      | — |
+//! | `tabphase`      | `values` (required): a string of comma- or space-separated values of the phase function over cos θ regularly spaced on [−1, 1] (cos θ = 1 forward), at least two, not negative, normalised |
+//! | `sggx`          | `S` (required): a nested 6-channel `gridvolume` of S_xx, S_yy, S_zz, S_xy, S_xz, S_yz (Mitsuba cannot read a `constvolume` there either) |
 //! | `blendphase`    | `weight` (0.5), two nested phase functions |
 //! | `constvolume`   | `value` (1), `to_world` |
-//! | `gridvolume`    | `filename` (`.vol`), `filter_type` (trilinear / nearest), `wrap_mode` (clamp / repeat / mirror), `to_world`, `use_grid_bbox` (false), `max_value`, `raw`, `accel` |
+//! | `gridvolume`    | `filename` (`.vol`, 1, 3 or 6 channels; 6 only for `sggx`), `filter_type` (trilinear / nearest), `wrap_mode` (clamp / repeat / mirror), `to_world`, `use_grid_bbox` (false), `max_value`, `raw`, `accel` |
 //!
 //! A volume parameter may be a float, a colour or a nested `<volume>`.
 
@@ -19,6 +22,7 @@ use crate::error::{LoadError, Result};
 use crate::scene_builder::SceneBuilder;
 use glam::{Mat4, Vec3};
 use penumbra_render::math::Spectrum;
+use penumbra_render::medium::phase::{Sggx, TabulatedPhase};
 use penumbra_render::medium::volume::unit_cube_bounds;
 use penumbra_render::medium::{GridVolume, Medium, MediumKind, PhaseFunction, Volume, VolumeFilter, WrapMode};
 use std::collections::HashMap;
@@ -30,8 +34,14 @@ type BuildPhase = fn(&Node) -> Result<PhaseFunction>;
 type BuildVolume = fn(&Node) -> Result<Volume>;
 
 pub(super) const MEDIA: &Plugins<BuildMedium> = &[("homogeneous", homogeneous), ("heterogeneous", heterogeneous)];
-pub(super) const PHASES: &Plugins<BuildPhase> =
-    &[("isotropic", |_| Ok(PhaseFunction::Isotropic)), ("hg", hg), ("blendphase", blendphase)];
+pub(super) const PHASES: &Plugins<BuildPhase> = &[
+    ("isotropic", |_| Ok(PhaseFunction::Isotropic)),
+    ("hg", hg),
+    ("rayleigh", |_| Ok(PhaseFunction::Rayleigh)),
+    ("tabphase", tabphase),
+    ("sggx", sggx),
+    ("blendphase", blendphase),
+];
 pub(super) const VOLUMES: &Plugins<BuildVolume> = &[("constvolume", constvolume), ("gridvolume", gridvolume)];
 
 /// Media already built, by node identity (shared through `<ref>`).
@@ -47,11 +57,16 @@ impl Media {
         if let Some(&i) = self.index.get(&key) {
             return Ok(i);
         }
-        let kind = plugin(MEDIA, node)?(node)?;
+        let mut kind = plugin(MEDIA, node)?(node)?;
         let phase = match node.single_child(Kind::Phase)? {
             Some(p) => phase(&p)?,
             None => PhaseFunction::Isotropic,
         };
+        // sggx scales the extinction by its projected area (Mitsuba's
+        // heterogeneous.cpp), which may exceed 1: the majorant covers it.
+        if let MediumKind::Heterogeneous { majorant, .. } = &mut kind {
+            *majorant *= phase.projected_area_bound();
+        }
         let sample_emitters = node.bool("sample_emitters", true)?;
         // Spectrally varying extinction is always handled (RGB variants'
         // default); the flag cannot change the image.
@@ -65,8 +80,58 @@ impl Media {
 
 fn phase(node: &Node) -> Result<PhaseFunction> {
     let p = plugin(PHASES, node)?(node)?;
-    node.check_all_used(if node.plugin == "blendphase" { &[Kind::Phase] } else { &[] })?;
+    let children: &[Kind] = match node.plugin.as_str() {
+        "blendphase" => &[Kind::Phase],
+        "sggx" => &[Kind::Volume],
+        _ => &[],
+    };
+    node.check_all_used(children)?;
     Ok(p)
+}
+
+/// `values`: a string of numbers separated by commas and/or spaces, as
+/// Mitsuba's `string::tokenize(values, " ,")` splits it.
+fn tabphase(node: &Node) -> Result<PhaseFunction> {
+    let Some((text, loc)) = node.get_string("values")? else {
+        return Err(node.error(
+            "tabphase needs 'values': a string of phase-function values over cos theta in [-1, 1], e.g. \"0.5, 1, 2\"",
+        ));
+    };
+    let mut values = Vec::new();
+    for token in text.split([' ', ',']).filter(|t| !t.is_empty()) {
+        let v: f32 = token.parse().map_err(|_| {
+            LoadError::at(&loc, format!("tabphase values: '{token}' (entry {}) is not a number", values.len()))
+        })?;
+        values.push(v);
+    }
+    let t = TabulatedPhase::new(&values).map_err(|e| LoadError::at(&loc, format!("tabphase values: {e}")))?;
+    Ok(PhaseFunction::Tabulated(Arc::new(t)))
+}
+
+/// `S`: a nested gridvolume with six channels (Mitsuba's `eval_6`, which
+/// only `gridvolume` implements).
+fn sggx(node: &Node) -> Result<PhaseFunction> {
+    let Some(child) = node.children_of(Kind::Volume).find(|c| c.name.as_deref() == Some("S")) else {
+        let loc = if node.props.iter().any(|p| p.name == "S") { node.loc_of("S") } else { &node.loc };
+        return Err(LoadError::at(
+            loc,
+            "sggx needs 'S' as a nested <volume type=\"gridvolume\" name=\"S\"> with 6 channels \
+             (S_xx, S_yy, S_zz, S_xy, S_xz, S_yz)",
+        ));
+    };
+    let v = plugin(VOLUMES, &child.node)?(&child.node)?;
+    child.node.check_all_used(&[])?;
+    match v {
+        Volume::Grid { grid, .. } if grid.grid.channels == 6 => Ok(PhaseFunction::Sggx(Arc::new(Sggx { s: grid }))),
+        Volume::Grid { grid, .. } => Err(LoadError::at(
+            &child.loc,
+            format!("sggx's S has {} channel(s); it needs a gridvolume with 6", grid.grid.channels),
+        )),
+        Volume::Constant { .. } => Err(LoadError::at(
+            &child.loc,
+            "sggx's S must be a 6-channel gridvolume; a constvolume has no six values (Mitsuba's eval_6 fails on it)",
+        )),
+    }
 }
 
 fn hg(node: &Node) -> Result<PhaseFunction> {
@@ -101,14 +166,29 @@ fn check_coefficient(node: &Node, name: &str, v: Spectrum) -> Result<()> {
     Ok(())
 }
 
+/// A nested `<volume>` used for colours or scalars (a medium's
+/// coefficients, the `volume` texture): constvolume, or a gridvolume of 1
+/// or 3 channels.
+pub(super) fn colour_volume(child: &crate::desc::Child, name: &str) -> Result<Volume> {
+    let v = plugin(VOLUMES, &child.node)?(&child.node)?;
+    child.node.check_all_used(&[])?;
+    if let Volume::Grid { grid, .. } = &v {
+        if grid.grid.channels == 6 {
+            return Err(LoadError::at(
+                &child.loc,
+                format!("{name}: a 6-channel gridvolume holds sggx parameters, not a colour; give 1 or 3 channels"),
+            ));
+        }
+    }
+    Ok(v)
+}
+
 /// The volume parameter `name` of `node`: a nested `<volume>`, or a
 /// float or colour (a constant over the unit cube, as Mitsuba's
 /// `get_volume` makes it).
 fn volume_param(node: &Node, name: &str, default: f32) -> Result<Volume> {
     if let Some(child) = node.children_of(Kind::Volume).find(|c| c.name.as_deref() == Some(name)) {
-        let v = plugin(VOLUMES, &child.node)?(&child.node)?;
-        child.node.check_all_used(&[])?;
-        return Ok(v);
+        return colour_volume(child, name);
     }
     let v = node.get_rgb(name)?.map(|v| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32));
     let v = v.unwrap_or(Spectrum::splat(default));
@@ -206,7 +286,11 @@ fn gridvolume(node: &Node) -> Result<Volume> {
     let path = resolve(&loc, &name, "volume file")?;
     let file =
         crate::vol::read(&path).map_err(|e| LoadError::at(&loc, format!("volume file '{}': {e}", path.display())))?;
-    if let Some(i) = file.grid.data.iter().position(|&v| v < 0.0) {
+    // Coefficients are never negative; of sggx's six channels only the
+    // diagonal S_xx, S_yy, S_zz must not be.
+    let channels = file.grid.channels as usize;
+    let may_be_negative = |i: usize| channels == 6 && i % 6 >= 3;
+    if let Some(i) = file.grid.data.iter().enumerate().position(|(i, &v)| v < 0.0 && !may_be_negative(i)) {
         return Err(LoadError::at(
             &loc,
             format!(

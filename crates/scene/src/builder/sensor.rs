@@ -5,7 +5,7 @@ use super::fov::fov_and_axis;
 use super::{plugin, Overrides, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
-use penumbra_render::camera::{Camera, FovAxis};
+use penumbra_render::camera::{tan_half_x, Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind, MAX_MARGIN};
 use penumbra_render::sampling::{Sampler, SamplerKind};
 
@@ -21,12 +21,28 @@ pub(super) type SensorParts = (Camera, Filter, FilmRect, Sampler);
 /// The sensor's projection parameters, read as Mitsuba 3.9.1's
 /// `perspective`, `thinlens` and `orthographic` read them.
 pub(super) enum SensorModel {
-    Perspective { fov: f64, axis: FovAxis },
-    ThinLens { fov: f64, axis: FovAxis, aperture_radius: f64, focus_distance: f64 },
+    Perspective {
+        fov: f64,
+        axis: FovAxis,
+    },
+    ThinLens {
+        fov: f64,
+        axis: FovAxis,
+        aperture_radius: f64,
+        focus_distance: f64,
+    },
     Orthographic,
-    RadianceMeter { to_world: glam::DMat4 },
+    RadianceMeter {
+        to_world: glam::DMat4,
+    },
     IrradianceMeter,
-    Distant { to_world: glam::DMat4, target: Option<glam::DVec3>, shape: Option<Box<penumbra_render::geometry::Shape>> },
+    Distant {
+        to_world: glam::DMat4,
+        target: Option<glam::DVec3>,
+        shape: Option<Box<penumbra_render::geometry::Shape>>,
+    },
+    /// Never built through the table: [`batch`] reads its nested sensors.
+    Batch,
 }
 
 /// Whether a camera-to-world matrix scales (Mitsuba's `has_scale`: some
@@ -46,6 +62,7 @@ pub(super) const SENSORS: &Plugins<BuildSensor> = &[
     ("radiancemeter", radiancemeter),
     ("irradiancemeter (inside a shape)", irradiancemeter),
     ("distant", distant),
+    ("batch", |_, _, _| Ok(SensorModel::Batch)),
 ];
 
 /// A builder of a film's geometry and reconstruction filter.
@@ -259,13 +276,119 @@ fn orthogonal(s: &Node) -> Result<SamplerKind> {
     Ok(SamplerKind::Orthogonal { jitter: s.bool("jitter", true)? })
 }
 
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
 /// The sensor `node`; `on_shape` is the shape it is nested in (world space).
 pub(super) fn build_sensor(
     node: &Node,
     ov: &Overrides,
     on_shape: Option<penumbra_render::geometry::Shape>,
 ) -> Result<SensorParts> {
+    if node.plugin == "batch" {
+        if on_shape.is_some() {
+            return Err(node.error("a batch sensor cannot be nested in a shape"));
+        }
+        return batch(node, ov);
+    }
+    let (model, to_world, near, far) = sensor_model(node, on_shape.is_some())?;
+    let (rect, filter, sampler) = film_and_sampler(node, ov)?;
+    let target_shape = matches!(model, SensorModel::Distant { shape: Some(_), .. });
+    node.check_all_used(if target_shape {
+        &[Kind::Film, Kind::Sampler, Kind::Medium, Kind::Shape]
+    } else {
+        &[Kind::Film, Kind::Sampler, Kind::Medium]
+    })?;
+    let camera = camera(node, model, &to_world, near, far, on_shape, rect.size)?;
+    Ok((camera, filter, rect, sampler))
+}
+
+/// Mitsuba's `batch` sensor (src/sensors/batch.cpp):
+///
+/// | parameter | default | meaning |
+/// |-----------|---------|---------|
+/// | nested `<sensor>`s | (at least one) | rendered side by side, sensor i over film x in [i w/n, (i+1) w/n); a perspective or thinlens sensor keeps the horizontal field of view its `fov` gives on its own film (default 768 x 576), as Mitsuba's |
+/// | `<film>`, `<sampler>` | | the batch's: width a multiple of the sensor count; each nested sensor is built for a film of width / n by height, and its own film and sampler (checked, as Mitsuba creates them) are ignored |
+/// | `to_world`, `shutter_open`, `shutter_close` | | read, no effect (as in Mitsuba) |
+///
+/// `srf` is a spectral parameter that Mitsuba's RGB variants refuse; shapes
+/// carrying sensors (irradiancemeters) inside a batch are not supported; the
+/// camera's medium is the batch's (`<medium>` of the batch sensor, as
+/// Mitsuba's volpath reads it), so nested sensors may not have one; `ptracer`
+/// cannot render a batch (as in Mitsuba).
+fn batch(node: &Node, ov: &Overrides) -> Result<SensorParts> {
+    let to_world = node.transform("to_world")?;
+    node.accept(&["shutter_open", "shutter_close"]);
+    if node.has("srf") {
+        return Err(LoadError::at(
+            node.loc_of("srf"),
+            "srf (a sensor response function) is spectral; Mitsuba's RGB variants refuse it",
+        ));
+    }
+    let subs: Vec<_> = node.children_of(Kind::Sensor).map(|c| c.node.clone()).collect();
+    if subs.is_empty() {
+        return Err(node.error("batch: at least one nested sensor must be given"));
+    }
+    let (rect, filter, sampler) = film_and_sampler(node, ov)?;
+    node.check_all_used(&[Kind::Film, Kind::Sampler, Kind::Medium, Kind::Sensor])?;
+    let (w, h) = rect.size;
+    let n = subs.len() as u32;
+    if w % n != 0 {
+        return Err(node.error(format!(
+            "batch: the film width ({w}) must be divisible by the number of nested sensors ({n}), as in Mitsuba"
+        )));
+    }
+    let mut cameras = Vec::with_capacity(subs.len());
+    for sub in &subs {
+        if sub.plugin == "batch" {
+            return Err(sub.error("a batch sensor cannot be nested in another"));
+        }
+        if let Some(m) = sub.children_of(Kind::Medium).next() {
+            return Err(LoadError::at(
+                &m.loc,
+                "a sensor inside a batch cannot have a medium (Mitsuba uses the batch's); give it to the batch sensor",
+            ));
+        }
+        let (model, to_world, near, far) = sensor_model(sub, false)?;
+        // Checked as Mitsuba creates them, then superseded by the batch's;
+        // without one, Mitsuba's default hdrfilm (768 x 576).
+        let own_size = match sub.single_child(Kind::Film)? {
+            Some(film) => {
+                let (r, _) = plugin(FILMS, &film)?(&film)?;
+                film.check_all_used(&[Kind::Rfilter])?;
+                r.size
+            }
+            None => (768, 576),
+        };
+        // Mitsuba turns `fov` into the horizontal field of view once, with
+        // the aspect of the sensor's own film, and keeps it when the batch
+        // resizes that film (perspective.cpp / thinlens.cpp's x_fov).
+        let fov = match &model {
+            SensorModel::Perspective { fov, axis } | SensorModel::ThinLens { fov, axis, .. } => Some((*fov, *axis)),
+            _ => None,
+        };
+        if let Some(s) = sub.single_child(Kind::Sampler)? {
+            plugin(SAMPLERS, &s)?(&s)?;
+            s.accept(&["sample_count", "seed"]);
+            s.check_all_used(&[])?;
+        }
+        let target_shape = matches!(model, SensorModel::Distant { shape: Some(_), .. });
+        sub.check_all_used(if target_shape {
+            &[Kind::Film, Kind::Sampler, Kind::Shape]
+        } else {
+            &[Kind::Film, Kind::Sampler]
+        })?;
+        let mut c = camera(sub, model, &to_world, near, far, None, (w / n, h))?;
+        if let Some((fov, axis)) = fov {
+            let tan_x = tan_half_x(fov as f32, axis, own_size.0 as f32 / own_size.1 as f32);
+            c.tan_half = glam::Vec2::new(tan_x, tan_x * h as f32 / (w / n) as f32);
+        }
+        cameras.push(c);
+    }
+    Ok((Camera::batch(to_world.as_mat4(), cameras), filter, rect, sampler))
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+/// A sensor's projection, `to_world`, near and far clip distances, with
+/// the checks of its parameters; `on_shape`: nested in a shape.
+fn sensor_model(node: &Node, on_shape: bool) -> Result<(SensorModel, glam::DMat4, f64, f64)> {
     let sensor_model = plugin(SENSORS, node)?;
     let to_world = node.transform("to_world")?;
     let near = node.float("near_clip", 0.01)?;
@@ -274,12 +397,12 @@ pub(super) fn build_sensor(
         return Err(node.error("near_clip must be positive and smaller than far_clip"));
     }
     let model = sensor_model(node, &to_world, far)?;
-    match (&model, &on_shape) {
-        (SensorModel::IrradianceMeter, None) => {
+    match (&model, on_shape) {
+        (SensorModel::IrradianceMeter, false) => {
             return Err(node.error("an irradiancemeter must be nested inside the shape it measures over"))
         }
-        (SensorModel::IrradianceMeter, Some(_)) | (_, None) => {}
-        (_, Some(_)) => {
+        (SensorModel::IrradianceMeter, true) | (_, false) => {}
+        (_, true) => {
             return Err(node
                 .error(format!("a {} sensor cannot be nested in a shape; only an irradiancemeter can", node.plugin)))
         }
@@ -296,7 +419,12 @@ pub(super) fn build_sensor(
     node.accept(&["shutter_open", "shutter_close"]);
     // Every projective camera of Mitsuba reads it; only thinlens uses it.
     node.accept(&["focus_distance"]);
+    Ok((model, to_world, near, far))
+}
 
+/// The sensor's film (its size, crop window and filter) and sampler, with
+/// the command line's overrides.
+fn film_and_sampler(node: &Node, ov: &Overrides) -> Result<(FilmRect, Filter, Sampler)> {
     // Film.
     let film =
         node.single_child(Kind::Film)?.ok_or_else(|| node.error("the sensor needs a <film type=\"hdrfilm\">"))?;
@@ -342,14 +470,21 @@ pub(super) fn build_sensor(
     if let Some(o) = ov.seed {
         seed = o;
     }
-    let target_shape = matches!(model, SensorModel::Distant { shape: Some(_), .. });
-    node.check_all_used(if target_shape {
-        &[Kind::Film, Kind::Sampler, Kind::Medium, Kind::Shape]
-    } else {
-        &[Kind::Film, Kind::Sampler, Kind::Medium]
-    })?;
-    let (m, (w, h)) = (to_world.as_mat4(), rect.size);
-    let camera = match model {
+    Ok((rect, filter, Sampler::new(kind, seed, spp)))
+}
+
+/// The camera of sensor `node` for a film of `(w, h)` pixels.
+fn camera(
+    node: &Node,
+    model: SensorModel,
+    to_world: &glam::DMat4,
+    near: f64,
+    far: f64,
+    on_shape: Option<penumbra_render::geometry::Shape>,
+    (w, h): (u32, u32),
+) -> Result<Camera> {
+    let m = to_world.as_mat4();
+    Ok(match model {
         SensorModel::Perspective { fov, axis } => Camera::new(m, fov as f32, axis, w, h, near as f32, far as f32),
         SensorModel::ThinLens { fov, axis, aperture_radius, focus_distance } => Camera::thin_lens(
             m,
@@ -381,6 +516,6 @@ pub(super) fn build_sensor(
             }
             Camera::distant(to_world.as_mat4(), target.map(|t| t.as_vec3()), shape.map(|s| *s))
         }
-    };
-    Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))
+        SensorModel::Batch => return Err(node.error("a batch sensor cannot be nested in another")),
+    })
 }

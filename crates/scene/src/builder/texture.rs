@@ -1,6 +1,10 @@
 //! Texture parameters: a BSDF parameter given as a constant (`<rgb>`,
 //! `<float>`, `<spectrum>`) or as a nested / referenced `<texture>`
-//! (Mitsuba's `bitmap`, `checkerboard` and `mesh_attribute`).
+//! (Mitsuba's `bitmap`, `checkerboard`, `mesh_attribute` and `volume`).
+//!
+//! | plugin   | parameters (defaults) |
+//! |----------|-----------------------|
+//! | `volume` | `volume` (required): a nested `<volume>` (constvolume, or a gridvolume of 1 or 3 channels) looked up at the world-space surface point; as a scalar, a constant's channel mean, a grid's value or luminance. Mitsuba refuses a float or colour there, and textures needing a mean (blendbsdf weights, …) or a gradient (bumpmap) cannot use it |
 
 use super::{find_plugin, listed, Plugins};
 use crate::desc::{Kind, Node};
@@ -23,6 +27,7 @@ pub(super) const TEXTURES: &Plugins<BuildTexture> = &[
     ("bitmap", |_, node| build_bitmap(node)),
     ("checkerboard", Textures::checkerboard),
     ("mesh_attribute", |_, node| mesh_attribute(node)),
+    ("volume", |_, node| volume(node)),
 ];
 
 /// Textures already built, by node identity (shared through `<ref>`).
@@ -78,7 +83,7 @@ impl Textures {
             )));
         };
         let t = build(self, node)?;
-        node.check_all_used(&[Kind::Texture])?;
+        node.check_all_used(if node.plugin == "volume" { &[Kind::Volume] } else { &[Kind::Texture] })?;
         Ok(t)
     }
 
@@ -93,6 +98,19 @@ impl Textures {
         let to_uv = to_uv(node)?;
         Ok(Texture::Checkerboard(Arc::new(Checkerboard { color0, color1, to_uv })))
     }
+}
+
+/// Mitsuba's `volume` texture: its nested volume named `volume`.
+fn volume(node: &Node) -> Result<Texture> {
+    let Some(child) = node.children_of(Kind::Volume).find(|c| c.name.as_deref() == Some("volume")) else {
+        let loc = if node.props.iter().any(|p| p.name == "volume") { node.loc_of("volume") } else { &node.loc };
+        return Err(LoadError::at(
+            loc,
+            "the volume texture needs a nested <volume name=\"volume\"> (constvolume or gridvolume); \
+             Mitsuba refuses a float or colour here",
+        ));
+    };
+    Ok(Texture::Volume(Arc::new(super::medium::colour_volume(child, "volume")?)))
 }
 
 fn mesh_attribute(node: &Node) -> Result<Texture> {

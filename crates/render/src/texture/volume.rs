@@ -1,8 +1,10 @@
 //! Volume data: Mitsuba 3's `constvolume` and `gridvolume`. A volume maps
 //! world points to RGB values through its `to_world` transform, which
-//! places the unit cube [0, 1]³ of the data in the scene.
+//! places the unit cube [0, 1]³ of the data in the scene. Media read them
+//! (re-exported as `medium::volume`), and so does the `volume` texture.
 
 use crate::geometry::Aabb;
+use crate::math::luminance;
 use crate::math::Spectrum;
 pub use crate::texture::WrapMode;
 use glam::{Mat4, Vec3};
@@ -17,12 +19,13 @@ pub enum VolumeFilter {
     Trilinear,
 }
 
-/// A voxel grid with 1 or 3 channels, x fastest (Mitsuba's `.vol` order).
-#[derive(Debug, Clone)]
+/// A voxel grid with 1, 3 or 6 channels, x fastest (Mitsuba's `.vol` order).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
     /// Voxels along x, y and z.
     pub res: [u32; 3],
-    /// Values per voxel: 1 (broadcast to RGB) or 3.
+    /// Values per voxel: 1 (broadcast to RGB), 3 (RGB) or 6 (the `sggx`
+    /// phase function's S_xx, S_yy, S_zz, S_xy, S_xz, S_yz).
     pub channels: u32,
     /// `res[0] · res[1] · res[2] · channels` values.
     pub data: Vec<f32>,
@@ -34,19 +37,20 @@ impl Grid {
         self.data.iter().copied().fold(0.0, f32::max)
     }
 
+    /// The first N channels of a voxel; a 1-channel grid broadcasts its value.
     #[inline]
-    fn voxel(&self, x: usize, y: usize, z: usize) -> Spectrum {
+    fn voxel<const N: usize>(&self, x: usize, y: usize, z: usize) -> [f32; N] {
         let i = ((z * self.res[1] as usize + y) * self.res[0] as usize + x) * self.channels as usize;
         if self.channels == 1 {
-            Spectrum::splat(self.data[i])
+            [self.data[i]; N]
         } else {
-            Spectrum::new(self.data[i], self.data[i + 1], self.data[i + 2])
+            std::array::from_fn(|c| self.data[i + c])
         }
     }
 }
 
 /// A placed grid: Mitsuba's `gridvolume`.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct GridVolume {
     /// The voxels.
     pub grid: Arc<Grid>,
@@ -62,9 +66,20 @@ pub struct GridVolume {
 }
 
 impl GridVolume {
-    /// The value at world point `p`, looked up as Dr.Jit's textures do:
-    /// voxel centres at (i + ½) / res.
+    /// The value at world point `p` (a grid of 1 or 3 channels), looked up
+    /// as Dr.Jit's textures do: voxel centres at (i + ½) / res.
     pub fn eval(&self, p: Vec3) -> Spectrum {
+        Spectrum::from_array(self.lookup::<3>(p))
+    }
+
+    /// The six values at world point `p` of a 6-channel grid (Mitsuba's
+    /// `eval_6`, which the `sggx` phase function reads).
+    pub fn eval6(&self, p: Vec3) -> [f32; 6] {
+        self.lookup::<6>(p)
+    }
+
+    /// The first N channels at `p`, nearest or trilinear.
+    fn lookup<const N: usize>(&self, p: Vec3) -> [f32; N] {
         let q = self.to_local.transform_point3(p);
         let g = &*self.grid;
         let res = Vec3::new(g.res[0] as f32, g.res[1] as f32, g.res[2] as f32);
@@ -91,11 +106,15 @@ impl GridVolume {
                 let wx = [1.0 - f.x, f.x];
                 let wy = [1.0 - f.y, f.y];
                 let wz = [1.0 - f.z, f.z];
-                let mut acc = Spectrum::ZERO;
+                let mut acc = [0.0f32; N];
                 for (k, &z) in zs.iter().enumerate() {
                     for (j, &y) in ys.iter().enumerate() {
                         for (i, &x) in xs.iter().enumerate() {
-                            acc += g.voxel(x, y, z) * (wx[i] * wy[j] * wz[k]);
+                            let w = wx[i] * wy[j] * wz[k];
+                            let v = g.voxel::<N>(x, y, z);
+                            for (a, v) in acc.iter_mut().zip(v) {
+                                *a += v * w;
+                            }
                         }
                     }
                 }
@@ -106,7 +125,7 @@ impl GridVolume {
 }
 
 /// A volume: a constant or a grid, each placed by its `to_world`.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Volume {
     /// Mitsuba `constvolume` (and a plain float or colour given for a volume).
     Constant {
@@ -160,6 +179,17 @@ impl Volume {
     pub fn bounds(&self) -> Aabb {
         match self {
             Volume::Constant { bounds, .. } | Volume::Grid { bounds, .. } => *bounds,
+        }
+    }
+
+    /// A scalar at `p` (Mitsuba's `eval_1`): the mean of a constant's
+    /// channels, a 1-channel grid's value, a 3-channel grid's luminance.
+    #[inline]
+    pub fn eval_1(&self, p: Vec3) -> f32 {
+        match self {
+            Volume::Constant { value, .. } => (value.x + value.y + value.z) / 3.0,
+            Volume::Grid { grid, .. } if grid.grid.channels == 1 => grid.eval(p).x,
+            Volume::Grid { grid, .. } => luminance(grid.eval(p)),
         }
     }
 
