@@ -206,9 +206,10 @@ pub fn read_image_with(path: &Path, raw: bool) -> Result<RgbImage, String> {
         "hdr" => (image::ImageFormat::Hdr, false),
         "png" => (image::ImageFormat::Png, true),
         "jpg" | "jpeg" => (image::ImageFormat::Jpeg, true),
+        "tga" => (image::ImageFormat::Tga, true),
         _ => {
             return Err(format!(
-                "cannot read '{}': unsupported image format; use .exr, .hdr, .pfm, .png or .jpg",
+                "cannot read '{}': unsupported image format; use .exr, .hdr, .pfm, .png, .jpg or .tga",
                 path.display()
             ))
         }
@@ -441,8 +442,13 @@ mod tests {
         image::save_buffer(&jpg, &[188u8; 8 * 8 * 3], 8, 8, image::ColorType::Rgb8).unwrap();
         let back = read_image(&jpg).unwrap();
         assert!(back.pixels.iter().flatten().all(|c| (c - 0.5029).abs() < 0.01), "{:?}", back.pixels[0]);
-        let err = read_image(&dir.join("in.tga")).unwrap_err();
-        assert!(err.contains("in.tga") && err.contains(".exr, .hdr, .pfm, .png or .jpg"), "{err}");
+        // 8-bit sRGB TGA (pbrt-v4 scenes use them), the same grey.
+        let tga = dir.join("in.tga");
+        image::save_buffer(&tga, &[188u8; 8 * 8 * 3], 8, 8, image::ColorType::Rgb8).unwrap();
+        let back = read_image(&tga).unwrap();
+        assert!(back.pixels.iter().flatten().all(|c| (c - 0.5029).abs() < 1e-4), "{:?}", back.pixels[0]);
+        let err = read_image(&dir.join("in.bmp")).unwrap_err();
+        assert!(err.contains("in.bmp") && err.contains(".exr, .hdr, .pfm, .png, .jpg or .tga"), "{err}");
         let err = read_image(&dir.join("missing.hdr")).unwrap_err();
         assert!(err.contains("missing.hdr"), "{err}");
         fs::remove_dir_all(&dir).ok();

@@ -309,7 +309,8 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
     }
     // Options the translator refuses before the world block.
     for (pre, at, what) in [
-        ("Integrator \"bdpt\"\n", "b.pbrt:1:1", "Integrator \"bdpt\" is not supported"),
+        ("Integrator \"ambientocclusion\"\n", "b.pbrt:1:1", "Integrator \"ambientocclusion\" is not supported"),
+        ("Integrator \"bdpt\" \"integer maxdepth\" -1\n", "b.pbrt:1:", "maxdepth must not be negative"),
         ("Integrator \"path\" \"bool regularize\" true\n", "b.pbrt:1:1", "regularize"),
         ("PixelFilter \"sinc\"\n", "b.pbrt:1:1", "PixelFilter \"sinc\""),
         ("Camera \"realistic\"\n", "b.pbrt:1:1", "Camera \"realistic\""),
@@ -319,6 +320,29 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
         std::fs::write(&path, format!("{pre}{head}Shape \"sphere\"\n")).unwrap();
         let e = load_scene(&path, &[], &Overrides::default()).map(|_| ()).unwrap_err().to_string();
         assert!(e.contains(at) && e.contains(what), "{pre:?}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// pbrt-v4's other unbiased (or consistent) integrators render as `path`
+/// with the same maxdepth, with a note naming the parameters set aside.
+#[test]
+fn pbrt_bdpt_and_sppm_render_as_path() {
+    let dir = temp_dir("pbrt-integrators");
+    let body = "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nShape \"sphere\"\n";
+    let load = |integrator: &str| {
+        let path = dir.join("i.pbrt");
+        std::fs::write(&path, format!("LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\n{integrator}{body}")).unwrap();
+        let s = penumbra_scene::pbrt::parse_file(&path).unwrap();
+        penumbra_scene::pbrt::translate::translate(&s, &path, &Overrides::default()).unwrap()
+    };
+    let (path_job, _) = load("Integrator \"path\" \"integer maxdepth\" 7\n");
+    for other in ["bdpt", "sppm", "mlt"] {
+        let (job, notes) =
+            load(&format!("Integrator \"{other}\" \"integer maxdepth\" 7 \"bool visualizestrategies\" false\n"));
+        assert_eq!(format!("{:?}", job.integrator), format!("{:?}", path_job.integrator), "{other}");
+        let note = notes.iter().find(|n| n.contains(other)).unwrap_or_else(|| panic!("{other}: {notes:?}"));
+        assert!(note.contains("path tracing") && note.contains("bool visualizestrategies"), "{note}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -390,6 +390,20 @@ impl ParamList {
         Ok(Some((v, p.loc.clone())))
     }
 
+    /// Marks every parameter not read yet as used and returns their
+    /// declarations (`"float radius"`): for a directive whose parameters are
+    /// knowingly set aside, with a note naming them.
+    pub fn take_unused(&self) -> Vec<String> {
+        self.params
+            .iter()
+            .filter(|p| !p.is_used())
+            .map(|p| {
+                p.used.set(true);
+                format!("{} {}", p.ty.name(), p.name)
+            })
+            .collect()
+    }
+
     /// An error for the first parameter no getter read: `what` names the
     /// directive (e.g. `Shape "sphere"`).
     pub fn check_unused(&self, what: &str) -> Result<()> {

@@ -76,7 +76,7 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
     b.set_camera(camera, None);
     b.set_film(film, filter(scene.filter.as_ref(), &mut notes)?);
     b.set_sampler(sampler(scene.sampler.as_ref(), option_seed, ov, &mut notes)?);
-    let (integrator, selection, iat) = integrator(scene.integrator.as_ref(), &file, ov)?;
+    let (integrator, selection, iat) = integrator(scene.integrator.as_ref(), &file, ov, &mut notes)?;
     b.set_integrator(integrator, selection, &iat);
 
     // Materials and shapes.
@@ -474,14 +474,28 @@ fn sampler(e: Option<&Entity>, option_seed: i64, ov: &Overrides, notes: &mut Vec
     Ok(Sampler::new(kind, ov.seed.unwrap_or(seed as u64), spp))
 }
 
-fn integrator(e: Option<&Entity>, file: &FileLoc, ov: &Overrides) -> Result<(Integrator, LightSelection, FileLoc)> {
+/// pbrt-v4 integrators that converge to the image `path` renders (unbiased,
+/// or consistent for `sppm`): rendered by path tracing, with a note.
+const SAME_IMAGE_INTEGRATORS: &[&str] = &["bdpt", "mlt", "sppm", "lightpath", "simplepath", "randomwalk"];
+
+fn integrator(
+    e: Option<&Entity>,
+    file: &FileLoc,
+    ov: &Overrides,
+    notes: &mut Vec<String>,
+) -> Result<(Integrator, LightSelection, FileLoc)> {
     let empty = ParamList::default();
     let (p, at) = match e {
         Some(e) => {
-            if e.kind != "path" && e.kind != "volpath" {
+            let kind = e.kind.as_str();
+            if kind != "path" && kind != "volpath" && !SAME_IMAGE_INTEGRATORS.contains(&kind) {
                 return Err(LoadError::at(
                     &e.loc,
-                    format!("Integrator \"{}\" is not supported; supported: path, volpath", e.kind),
+                    format!(
+                        "Integrator \"{kind}\" is not supported; supported: path, volpath, and {} (rendered by path \
+                         tracing, which converges to the same image)",
+                        SAME_IMAGE_INTEGRATORS.join(", ")
+                    ),
                 ));
             }
             (&e.params, e.loc.clone())
@@ -503,6 +517,18 @@ fn integrator(e: Option<&Entity>, file: &FileLoc, ov: &Overrides) -> Result<(Int
             return Err(LoadError::at(&at, format!("lightsampler \"{other}\" is not one of bvh, power, uniform")))
         }
     };
+    if let Some(e) = e.filter(|e| SAME_IMAGE_INTEGRATORS.contains(&e.kind.as_str())) {
+        let unused = e.params.take_unused();
+        let unused = if unused.is_empty() {
+            String::new()
+        } else {
+            format!("; its parameters {} are not used", unused.join(", "))
+        };
+        notes.push(format!(
+            "Integrator \"{}\" is rendered by path tracing with the same maxdepth (the same image in expectation){unused}",
+            e.kind
+        ));
+    }
     if let Some(e) = e {
         e.params.check_unused(&format!("Integrator \"{}\"", e.kind))?;
     }
