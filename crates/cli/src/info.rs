@@ -59,6 +59,10 @@ fn run_pbrt(a: &InfoArgs) -> Result<()> {
             penumbra_render::integrator::Integrator::Path(p) => {
                 format!("path (Mitsuba's max_depth = {}: pbrt's maxdepth + 1)", p.term.max_depth)
             }
+            penumbra_render::integrator::Integrator::VolPath(p) => format!(
+                "volpath, with the scene's media (Mitsuba's max_depth = {}: pbrt's maxdepth + 1)",
+                p.term.max_depth
+            ),
             _ => "other".to_string(),
         };
         writeln!(out, "integrator: {integrator}")?;

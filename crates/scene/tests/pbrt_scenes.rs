@@ -277,9 +277,14 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
             "\"alpha\" on an area light",
         ),
         (
-            "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nMediumInterface \"fog\" \"\"\nShape \"sphere\"",
-            "b.pbrt:5:1",
-            "participating media",
+            "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"string preset\" \"Wholemilk\"\n",
+            "b.pbrt:3:1",
+            "\"preset\" \"Wholemilk\"",
+        ),
+        (
+            "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"float g\" 1\n",
+            "b.pbrt:3:1",
+            "\"g\" 1 must lie in (-1, 1)",
         ),
         ("LightSource \"spot\" \"float conedeltaangle\" 40", "b.pbrt:3:1", "conedeltaangle"),
         ("AreaLightSource \"diffuse\" \"string filename\" \"e.exr\"\nShape \"sphere\"", "b.pbrt:3:1", "\"filename\""),
@@ -788,5 +793,81 @@ fn pbrt_shared_image_texture_is_built_once() {
         panic!("not bitmaps")
     };
     assert!(std::sync::Arc::ptr_eq(&a, &b));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A homogeneous medium (chromatic σ_a, forward-scattering g) inside a
+/// sphere bounded by an `interface` surface, and the camera in a thin haze
+/// filling a larger interface sphere around the scene, under `volpath`: the same as the Mitsuba XML twin
+/// (homogeneous media, a null BSDF, `volpath`). With `path`, pbrt-v4
+/// ignores the media, and so does the translation (with a note).
+#[test]
+fn pbrt_media_match_their_mitsuba_xml_twin() {
+    let dir = temp_dir("media");
+    let pbrt = |integrator: &str| {
+        format!(
+            "LookAt 0 0 -4  0 0 0  0 1 0\nMakeNamedMedium \"haze\" \"string type\" \"homogeneous\" \
+             \"rgb sigma_a\" [0.02 0.02 0.02] \"rgb sigma_s\" [0.05 0.05 0.05]\nMediumInterface \"haze\"\n\
+             Camera \"perspective\" \"float fov\" 40\n\
+             Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n\
+             Sampler \"independent\" \"integer pixelsamples\" 16\n\
+             Integrator \"{integrator}\" \"integer maxdepth\" 20\nWorldBegin\n\
+             LightSource \"infinite\" \"rgb L\" [1 1 1]\n\
+             MakeNamedMedium \"ink\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.5 1.0] \
+             \"rgb sigma_s\" [1 1 1] \"float scale\" 2 \"float g\" 0.6\n\
+             AttributeBegin\nMaterial \"interface\"\nMediumInterface \"ink\" \"haze\"\n\
+             Translate 0.6 0 0\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n\
+             AttributeBegin\nMediumInterface \"haze\" \"haze\"\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n\
+             Translate 0 -1.2 0\nRotate 90 1 0 0\nShape \"disk\" \"float radius\" 3\nAttributeEnd\n\
+             AttributeBegin\nMaterial \"interface\"\nMediumInterface \"haze\" \"\"\n\
+             Shape \"sphere\" \"float radius\" 8\nAttributeEnd\n"
+        )
+    };
+    let xml = r#"<scene version="3.0.0">
+<integrator type="volpath"><integer name="max_depth" value="21"/></integrator>
+<medium type="homogeneous" id="haze"><rgb name="sigma_t" value="0.07"/><rgb name="albedo" value="0.7142857"/></medium>
+<sensor type="perspective">
+  <float name="fov" value="40"/><string name="fov_axis" value="smaller"/>
+  <transform name="to_world"><scale x="-1"/><lookat origin="0 0 -4" target="0 0 0" up="0 1 0"/></transform>
+  <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+  <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film>
+  <ref id="haze"/>
+</sensor>
+<emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+<shape type="sphere"><float name="radius" value="1"/><point name="center" value="0.6, 0, 0"/><bsdf type="null"/>
+  <medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.55, 0.75, 1"/><float name="scale" value="4"/>
+    <rgb name="albedo" value="0.9090909, 0.6666667, 0.5"/><phase type="hg"><float name="g" value="0.6"/></phase></medium>
+  <ref name="exterior" id="haze"/></shape>
+<shape type="disk">
+  <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/><translate y="-1.2"/></transform>
+  <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></bsdf>
+  <ref name="exterior" id="haze"/><ref name="interior" id="haze"/></shape>
+<shape type="sphere"><float name="radius" value="8"/><bsdf type="null"/><ref name="interior" id="haze"/></shape>
+</scene>"#;
+    let (p, x) = (dir.join("m.pbrt"), dir.join("m.xml"));
+    std::fs::write(&p, pbrt("volpath")).unwrap();
+    std::fs::write(&x, xml).unwrap();
+    let a = render_with_variance(&p, 256, 16, None, 50);
+    let b = render_with_variance(&x, 256, 16, None, 51);
+    assert_agree("media vs XML", &a, &b, 0.02);
+    for (what, bad) in injected_errors(&a) {
+        let v = compare(&format!("injected {what}"), &bad, &b, 0.02);
+        assert!(!v.failures.is_empty(), "the comparison misses an injected error: {what}");
+    }
+    // `path`: the media are ignored, with a note.
+    std::fs::write(&p, pbrt("path")).unwrap();
+    let s = penumbra_scene::pbrt::parse_file(&p).unwrap();
+    let (job, notes) = penumbra_scene::pbrt::translate::translate(&s, &p, &Overrides::default()).unwrap();
+    assert!(matches!(job.integrator, penumbra_render::integrator::Integrator::Path(_)));
+    assert!(notes.iter().any(|n| n.contains("ignores them")), "{notes:?}");
+    // Unknown media and unsupported kinds are errors at their line.
+    let bad = pbrt("volpath").replace("MediumInterface \"ink\" \"haze\"", "MediumInterface \"inc\" \"haze\"");
+    std::fs::write(&p, bad).unwrap();
+    let e = load_scene(&p, &[], &Overrides::default()).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("m.pbrt:") && e.contains("\"inc\""), "{e}");
+    let bad = pbrt("volpath").replace("\"homogeneous\" \"rgb sigma_a\" [0.1", "\"uniformgrid\" \"rgb sigma_a\" [0.1");
+    std::fs::write(&p, bad).unwrap();
+    let e = load_scene(&p, &[], &Overrides::default()).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("m.pbrt:10:") && e.contains("uniformgrid"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -48,9 +48,8 @@ pub fn light(l: &LightEntity) -> Result<Light> {
     let e = &l.entity;
     let (p, at) = (&e.params, &e.loc);
     let m = &l.world_from_light;
-    if !l.medium.is_empty() {
-        return Err(LoadError::at(at, "lights inside participating media are not supported for pbrt-v4 scenes yet"));
-    }
+    // A light's medium (`MediumInterface` before it) needs no attaching:
+    // paths from the camera find media through the shapes that bound them.
     let light = match e.kind.as_str() {
         "point" => {
             let i = illuminant(e, "I")?;

@@ -10,7 +10,7 @@
 //! | Film        | rgb (gbuffer: the same, `coordinatesystem` read; its channels are `--aov`): xresolution (1280), yresolution (720), cropwindow, filename (not used: the output is Penumbra's `-o`), sensor cie1931, iso 100, exposuretime 1, whitebalance 0, savefp16, diagonal |
 //! | PixelFilter | gaussian (sigma 0.5; truncated at 4σ, pbrt-v4 at its radius 1.5), box (radius 0.5), triangle (radius), mitchell (radius 2, B, C) |
 //! | Sampler     | pixelsamples (16), seed; independent, stratified (xsamples × ysamples, jittered); zsobol, sobol, paddedsobol, halton, pmj02bn: Owen-scrambled Sobol' (the same expected image) |
-//! | Integrator  | path, volpath: maxdepth (5 bounces = Mitsuba's max_depth 6), lightsampler (bvh, power, uniform), regularize false; `--integrator` replaces it as for XML scenes (max_depth carried over) |
+//! | Integrator  | path, volpath (with media: Penumbra's volumetric path tracer; see `media`): maxdepth (5 bounces = Mitsuba's max_depth 6), lightsampler (bvh, power, uniform), regularize false; `--integrator` replaces it as for XML scenes (max_depth carried over) |
 //! | Option      | seed                                                               |
 //! | ColorSpace  | srgb                                                               |
 //!
@@ -23,6 +23,7 @@
 
 mod lights;
 mod materials;
+mod media;
 mod shapes;
 mod spectra;
 mod textures;
@@ -36,7 +37,7 @@ use glam::{DMat4, DVec3};
 use materials::Materials;
 use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind};
-use penumbra_render::integrator::{Integrator, PathIntegrator, Termination};
+use penumbra_render::integrator::{Integrator, PathIntegrator, Termination, VolPathIntegrator};
 use penumbra_render::light::LightSelection;
 use penumbra_render::material::Material;
 use penumbra_render::render::RenderJob;
@@ -73,11 +74,25 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
     // Camera and film.
     let (film, (w, h)) = film(scene.film.as_ref(), &mut notes)?;
     let camera = camera(scene, w, h)?;
-    b.set_camera(camera, None);
     b.set_film(film, filter(scene.filter.as_ref(), &mut notes)?);
     b.set_sampler(sampler(scene.sampler.as_ref(), option_seed, ov, &mut notes)?);
     let (integrator, selection, iat) = integrator(scene.integrator.as_ref(), &file, ov, &mut notes)?;
+    // Media: rendered by `volpath` only, as in pbrt-v4 (see `media`).
+    let volumetric = matches!(integrator, Integrator::VolPath(_));
     b.set_integrator(integrator, selection, &iat);
+    let media = media::Media::new(scene, &mut b)?;
+    let camera_medium = match &scene.camera {
+        Some(c) if volumetric => media.get(&c.medium, &c.entity.loc)?,
+        _ => None,
+    };
+    b.set_camera(camera, camera_medium);
+    let uses_media = scene.shapes.iter().any(|s| !s.media.0.is_empty() || !s.media.1.is_empty())
+        || scene.camera.as_ref().is_some_and(|c| !c.medium.is_empty());
+    if uses_media && !volumetric {
+        notes.push(
+            "the scene's media are not rendered: pbrt-v4's \"path\" integrator ignores them (use \"volpath\")".into(),
+        );
+    }
 
     // Materials and shapes.
     let tex = Textures::new(&scene.textures)?;
@@ -124,12 +139,13 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
             },
         }
     };
+    // Media inside object definitions are not supported (a group's members share one placement).
     let media_check = |s: &ShapeEntity| -> Result<()> {
-        if !s.media.0.is_empty() || !s.media.1.is_empty() {
+        if volumetric && (!s.media.0.is_empty() || !s.media.1.is_empty()) {
             return Err(LoadError::at(
                 &s.entity.loc,
                 format!(
-                    "MediumInterface \"{}\" \"{}\": participating media are not supported for pbrt-v4 scenes yet",
+                    "MediumInterface \"{}\" \"{}\" inside ObjectBegin: media of instanced shapes are not supported",
                     s.media.0, s.media.1
                 ),
             ));
@@ -137,7 +153,7 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
         Ok(())
     };
     for s in &scene.shapes {
-        media_check(s)?;
+        let shape_media = if volumetric { media.interface(&s.media, &s.entity.loc)? } else { Default::default() };
         let Some(alpha) = alpha_of(s)? else {
             s.entity.params.check_unused(&format!("Shape \"{}\"", s.entity.kind))?;
             continue;
@@ -157,7 +173,7 @@ pub fn translate(scene: &PbrtScene, path: &Path, ov: &Overrides) -> Result<(Rend
                 Some(if two_sided { Emission::DiffuseTwoSided(l) } else { Emission::Diffuse(l) })
             }
         };
-        let desc = ShapeDesc { emission, ..ShapeDesc::new(geometry, material) };
+        let desc = ShapeDesc { emission, media: shape_media, ..ShapeDesc::new(geometry, material) };
         let id = b.add_shape(desc, &s.entity.loc)?;
         b.place_shape(id);
     }
@@ -294,11 +310,6 @@ fn camera(scene: &PbrtScene, w: u32, h: u32) -> Result<Camera> {
         Some(c) => (&c.entity, c.camera_from_world),
         None => (&default, DMat4::IDENTITY),
     };
-    if let Some(c) = &scene.camera {
-        if !c.medium.is_empty() {
-            return Err(LoadError::at(&e.loc, "a camera inside a participating medium is not supported yet"));
-        }
-    }
     let (p, at) = (&e.params, &e.loc);
     let world_from_camera = (camera_from_world.inverse() * DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0))).as_mat4();
     if !world_from_camera.is_finite() {
@@ -555,5 +566,8 @@ fn integrator(
         return Ok((integrator, selection, at));
     }
     let term = Termination { max_depth, ..Termination::default() };
+    if e.is_some_and(|e| e.kind == "volpath") {
+        return Ok((Integrator::VolPath(VolPathIntegrator { term, hide_emitters: false }), selection, at));
+    }
     Ok((Integrator::Path(PathIntegrator { term, ..PathIntegrator::default() }), selection, at))
 }
