@@ -1,0 +1,1141 @@
+//! pbrt-v4's stochastic layered BSDFs `coateddiffuse` and `coatedconductor`
+//! (pbrt-v4 `LayeredBxDF<DielectricBxDF, DiffuseBxDF | ConductorBxDF, true>`,
+//! *Physically Based Rendering* 4th ed., §14.3): a dielectric coat over a
+//! Lambertian or conductor base, with a homogeneous slab of unit extinction
+//! between them (transmittance Tr = exp(−thickness/|cos θ|), Henyey–Greenstein
+//! phase function, single-scattering albedo). `eval`, `sample` and `pdf` run
+//! pbrt's random walk between the two interfaces; `eval` and `pdf` are
+//! unbiased *stochastic* estimates, their randomness drawn from a hash of
+//! (wo, wi) so images stay a pure function of (seed, pixel, sample index).
+//! Two-sided as pbrt defines them: `wo` below the surface flips both
+//! directions; nothing is transmitted (the bases are opaque).
+//!
+//! `sample` returns pbrt's path throughput f·|cos θ_i|/p of the walk as
+//! the weight (unbiased, not f(wo, wi)·|cos θ_i|/pdf(wo, wi)) and, as pdf,
+//! pbrt's `PDF()` estimate (`pdfIsProportional`): what MIS uses.
+//!
+//! coateddiffuse:
+//!
+//! | parameter                  | type    | default |
+//! |----------------------------|---------|---------|
+//! | reflectance                | texture | 0.5     |
+//! | roughness / uroughness / vroughness | float texture | 0 (coat) |
+//! | thickness                  | float texture | 0.01 |
+//! | eta (interface.eta)        | float   | 1.5 (0 means 1) |
+//! | g                          | float texture | 0 (HG asymmetry, clamped to [−1, 1]) |
+//! | albedo                     | texture | 0 (medium single-scattering albedo, clamped to [0, 1]) |
+//! | maxdepth                   | integer | 10      |
+//! | nsamples                   | integer | 1       |
+//! | remaproughness             | bool    | true (α = √roughness, pbrt's `RoughnessToAlpha`) |
+//!
+//! coatedconductor:
+//!
+//! | parameter                  | type    | default |
+//! |----------------------------|---------|---------|
+//! | interface.roughness / .uroughness / .vroughness | float texture | 0 |
+//! | interface.eta              | float   | 1.5     |
+//! | thickness                  | float texture | 0.01 |
+//! | conductor.eta, conductor.k | texture | metal-Cu (here Penumbra's RGB `Cu`) |
+//! | reflectance                | texture | instead of eta, k: η = 1, k = 2√r/√(1 − r), r ≤ 0.9999 |
+//! | conductor.roughness / .uroughness / .vroughness | float texture | 0 |
+//! | g, albedo, maxdepth, nsamples, remaproughness | | as coateddiffuse |
+//!
+//! The conductor's η and k are divided by the interface η (it sits in the coat).
+//! Both interfaces use pbrt-v4's Trowbridge–Reitz distribution (visible
+//! normals of the full sphere, G1 without a back-facing test) and are smooth
+//! when max(α) < 1e-3, so they are written here after pbrt rather than taken
+//! from `microfacet.rs` (whose sampler and G1 assume the upper hemisphere).
+
+use super::fresnel::fresnel_conductor;
+use super::presets::named_conductor;
+use super::{BsdfModel, BsdfParams, BsdfSample};
+use crate::geometry::SurfaceInteraction;
+use crate::math::{safe_sqrt, Frame, Spectrum, INV_PI, PI};
+use crate::sampling::rng::mix64;
+use crate::sampling::warp;
+use crate::texture::Texture;
+use glam::{Vec2, Vec3};
+
+const INV_4PI: f32 = 0.25 * INV_PI;
+/// pbrt's `OneMinusEpsilon` for f32.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+// ---------------------------------------------------------------------------
+// pbrt-v4 building blocks
+
+/// pbrt-v4's `TrowbridgeReitzDistribution` (GGX), anisotropic.
+#[derive(Debug, Clone, Copy)]
+pub struct TrowbridgeReitz {
+    /// α along the shading frame's `s` axis.
+    pub alpha_x: f32,
+    /// α along `t`.
+    pub alpha_y: f32,
+}
+
+impl TrowbridgeReitz {
+    /// As pbrt's constructor: unless smooth, both α at least 1e-4.
+    pub fn new(ax: f32, ay: f32) -> TrowbridgeReitz {
+        let mut d = TrowbridgeReitz { alpha_x: ax, alpha_y: ay };
+        if !d.effectively_smooth() {
+            d.alpha_x = ax.max(1e-4);
+            d.alpha_y = ay.max(1e-4);
+        }
+        d
+    }
+
+    /// Treated as a perfectly smooth interface.
+    #[inline]
+    pub fn effectively_smooth(&self) -> bool {
+        self.alpha_x.max(self.alpha_y) < 1e-3
+    }
+
+    /// D(wm).
+    pub fn d(&self, wm: Vec3) -> f32 {
+        let cos2 = wm.z * wm.z;
+        let cos4 = cos2 * cos2;
+        if cos2 == 0.0 || cos4 < 1e-16 {
+            return 0.0;
+        }
+        let e = ((wm.x / self.alpha_x).powi(2) + (wm.y / self.alpha_y).powi(2)) / cos2;
+        1.0 / (PI * self.alpha_x * self.alpha_y * cos4 * (1.0 + e) * (1.0 + e))
+    }
+
+    /// Smith's Λ(w).
+    pub fn lambda(&self, w: Vec3) -> f32 {
+        if w.z == 0.0 {
+            return 0.0;
+        }
+        let a2t2 = ((w.x * self.alpha_x).powi(2) + (w.y * self.alpha_y).powi(2)) / (w.z * w.z);
+        if !a2t2.is_finite() {
+            return 0.0;
+        }
+        0.5 * ((1.0 + a2t2).sqrt() - 1.0)
+    }
+
+    /// G1(w) = 1/(1 + Λ(w)).
+    #[inline]
+    pub fn g1(&self, w: Vec3) -> f32 {
+        1.0 / (1.0 + self.lambda(w))
+    }
+
+    /// Height-correlated G(wo, wi).
+    #[inline]
+    pub fn g(&self, wo: Vec3, wi: Vec3) -> f32 {
+        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    }
+
+    /// The visible-normal density D_w(wm), pbrt's `PDF(w, wm)`.
+    #[inline]
+    pub fn pdf(&self, w: Vec3, wm: Vec3) -> f32 {
+        self.g1(w) / w.z.abs() * self.d(wm) * w.dot(wm).abs()
+    }
+
+    /// pbrt's `Sample_wm`: a visible normal of `w` (either hemisphere).
+    pub fn sample_wm(&self, w: Vec3, u: Vec2) -> Vec3 {
+        let mut wh = Vec3::new(self.alpha_x * w.x, self.alpha_y * w.y, w.z).normalize();
+        if wh.z < 0.0 {
+            wh = -wh;
+        }
+        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
+        let t2 = wh.cross(t1);
+        // pbrt's SampleUniformDiskPolar.
+        let (r, phi) = (u.x.sqrt(), 2.0 * PI * u.y);
+        let (px, mut py) = (r * phi.cos(), r * phi.sin());
+        let h = safe_sqrt(1.0 - px * px);
+        let s = 0.5 * (1.0 + wh.z);
+        py = (1.0 - s) * h + s * py;
+        let pz = safe_sqrt(1.0 - px * px - py * py);
+        let nh = px * t1 + py * t2 + pz * wh;
+        Vec3::new(self.alpha_x * nh.x, self.alpha_y * nh.y, nh.z.max(1e-6)).normalize()
+    }
+}
+
+/// pbrt's `FrDielectric` (cos θ signed; below the surface η flips).
+fn fr_dielectric(cos_i: f32, eta: f32) -> f32 {
+    let (mut c, mut eta) = (cos_i.clamp(-1.0, 1.0), eta);
+    if c < 0.0 {
+        eta = 1.0 / eta;
+        c = -c;
+    }
+    let sin2_t = (1.0 - c * c) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let ct = safe_sqrt(1.0 - sin2_t);
+    let r_parl = (eta * c - ct) / (eta * c + ct);
+    let r_perp = (c - eta * ct) / (c + eta * ct);
+    0.5 * (r_parl * r_parl + r_perp * r_perp)
+}
+
+/// pbrt's `Refract`: `wi` through the surface with normal `n` (flipped to
+/// `wi`'s side), returning the direction and the relative η along the ray;
+/// `None` for total internal reflection.
+fn refract(wi: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
+    let (mut c, mut eta, mut n) = (n.dot(wi), eta, n);
+    if c < 0.0 {
+        eta = 1.0 / eta;
+        c = -c;
+        n = -n;
+    }
+    let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let ct = (1.0 - sin2_t).sqrt();
+    Some((-wi / eta + (c / eta - ct) * n, eta))
+}
+
+#[inline]
+fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
+    a.z * b.z > 0.0
+}
+
+/// pbrt's power heuristic with one sample each.
+#[inline]
+fn power_heuristic(f: f32, g: f32) -> f32 {
+    let (f2, g2) = (f * f, g * g);
+    if f2.is_infinite() {
+        1.0
+    } else {
+        f2 / (f2 + g2)
+    }
+}
+
+/// Which of reflection and transmission a sample may choose
+/// (pbrt's `BxDFReflTransFlags`).
+#[derive(Debug, Clone, Copy)]
+struct Lobes {
+    refl: bool,
+    trans: bool,
+}
+
+const ALL: Lobes = Lobes { refl: true, trans: true };
+const REFL: Lobes = Lobes { refl: true, trans: false };
+const TRANS: Lobes = Lobes { refl: false, trans: true };
+
+/// pbrt's `BSDFSample` of one interface.
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    f: Spectrum,
+    wi: Vec3,
+    pdf: f32,
+    specular: bool,
+}
+
+impl Sample {
+    /// pbrt's `!bs || !bs->f || bs->pdf == 0 || bs->wi.z == 0` negated.
+    #[inline]
+    fn usable(s: &Option<Sample>) -> Option<Sample> {
+        s.filter(|s| s.f.max_element() > 0.0 && s.pdf > 0.0 && s.wi.z != 0.0)
+    }
+
+    #[inline]
+    fn is_reflection(&self, wo: Vec3) -> bool {
+        same_hemisphere(wo, self.wi)
+    }
+}
+
+/// One interface of the stack (pbrt's `BxDF` interface as `LayeredBxDF`
+/// uses it). `radiance` is pbrt's `TransportMode::Radiance`.
+trait Interface {
+    fn f(&self, wo: Vec3, wi: Vec3, radiance: bool) -> Spectrum;
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2, radiance: bool, lobes: Lobes) -> Option<Sample>;
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32;
+    /// pbrt's `IsSpecular(Flags())`.
+    fn specular(&self) -> bool;
+    /// pbrt's `IsNonSpecular(Flags())` (a diffuse or glossy lobe).
+    fn non_specular(&self) -> bool;
+}
+
+/// pbrt-v4's `DielectricBxDF`: the coat (relative η, Trowbridge–Reitz).
+#[derive(Debug, Clone, Copy)]
+pub struct CoatInterface {
+    /// Relative IOR of the coat (inside / outside).
+    pub eta: f32,
+    /// Roughness of the coat.
+    pub distrib: TrowbridgeReitz,
+}
+
+impl CoatInterface {
+    #[inline]
+    fn smooth(&self) -> bool {
+        self.eta == 1.0 || self.distrib.effectively_smooth()
+    }
+
+    /// The generalized half vector of pbrt's rough `f` and `PDF`, with
+    /// reflect and η' (`None` where pbrt returns zero).
+    fn half_vector(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, bool, f32)> {
+        let (co, ci) = (wo.z, wi.z);
+        let reflect = ci * co > 0.0;
+        let etap = if reflect {
+            1.0
+        } else if co > 0.0 {
+            self.eta
+        } else {
+            1.0 / self.eta
+        };
+        let wm = wi * etap + wo;
+        if ci == 0.0 || co == 0.0 || wm.length_squared() == 0.0 {
+            return None;
+        }
+        let mut wm = wm.normalize();
+        if wm.z < 0.0 {
+            wm = -wm;
+        }
+        // Back-facing microfacets.
+        if wm.dot(wi) * ci < 0.0 || wm.dot(wo) * co < 0.0 {
+            return None;
+        }
+        Some((wm, reflect, etap))
+    }
+}
+
+impl Interface for CoatInterface {
+    fn f(&self, wo: Vec3, wi: Vec3, radiance: bool) -> Spectrum {
+        if self.smooth() {
+            return Spectrum::ZERO;
+        }
+        let Some((wm, reflect, etap)) = self.half_vector(wo, wi) else { return Spectrum::ZERO };
+        let fr = fr_dielectric(wo.dot(wm), self.eta);
+        let d = &self.distrib;
+        let v = if reflect {
+            d.d(wm) * d.g(wo, wi) * fr / (4.0 * wi.z * wo.z).abs()
+        } else {
+            let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2) * wi.z * wo.z;
+            let mut ft = d.d(wm) * (1.0 - fr) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / denom).abs();
+            if radiance {
+                ft /= etap * etap;
+            }
+            ft
+        };
+        Spectrum::splat(v)
+    }
+
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2, radiance: bool, lobes: Lobes) -> Option<Sample> {
+        if self.smooth() {
+            let r = fr_dielectric(wo.z, self.eta);
+            let pr = if lobes.refl { r } else { 0.0 };
+            let pt = if lobes.trans { 1.0 - r } else { 0.0 };
+            if pr == 0.0 && pt == 0.0 {
+                return None;
+            }
+            return if uc < pr / (pr + pt) {
+                let wi = Vec3::new(-wo.x, -wo.y, wo.z);
+                Some(Sample { f: Spectrum::splat(r / wi.z.abs()), wi, pdf: pr / (pr + pt), specular: true })
+            } else {
+                let (wi, etap) = refract(wo, Vec3::Z, self.eta)?;
+                let mut ft = (1.0 - r) / wi.z.abs();
+                if radiance {
+                    ft /= etap * etap;
+                }
+                Some(Sample { f: Spectrum::splat(ft), wi, pdf: pt / (pr + pt), specular: true })
+            };
+        }
+        let d = &self.distrib;
+        let wm = d.sample_wm(wo, u);
+        let r = fr_dielectric(wo.dot(wm), self.eta);
+        let pr = if lobes.refl { r } else { 0.0 };
+        let pt = if lobes.trans { 1.0 - r } else { 0.0 };
+        if pr == 0.0 && pt == 0.0 {
+            return None;
+        }
+        if uc < pr / (pr + pt) {
+            let wi = 2.0 * wo.dot(wm) * wm - wo;
+            if !same_hemisphere(wo, wi) {
+                return None;
+            }
+            let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt);
+            let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * wi.z * wo.z);
+            Some(Sample { f: Spectrum::splat(f), wi, pdf, specular: false })
+        } else {
+            let (wi, etap) = refract(wo, wm, self.eta)?;
+            if same_hemisphere(wo, wi) || wi.z == 0.0 {
+                return None;
+            }
+            let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
+            let dwm_dwi = wi.dot(wm).abs() / denom;
+            let pdf = d.pdf(wo, wm) * dwm_dwi * pt / (pr + pt);
+            let mut ft = (1.0 - r) * d.d(wm) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (wi.z * wo.z * denom)).abs();
+            if radiance {
+                ft /= etap * etap;
+            }
+            Some(Sample { f: Spectrum::splat(ft), wi, pdf, specular: false })
+        }
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        if self.smooth() {
+            return 0.0;
+        }
+        let Some((wm, reflect, etap)) = self.half_vector(wo, wi) else { return 0.0 };
+        let r = fr_dielectric(wo.dot(wm), self.eta);
+        let pr = if lobes.refl { r } else { 0.0 };
+        let pt = if lobes.trans { 1.0 - r } else { 0.0 };
+        if pr == 0.0 && pt == 0.0 {
+            return 0.0;
+        }
+        let d = &self.distrib;
+        if reflect {
+            d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt)
+        } else {
+            let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
+            d.pdf(wo, wm) * (wi.dot(wm).abs() / denom) * pt / (pr + pt)
+        }
+    }
+
+    fn specular(&self) -> bool {
+        self.smooth()
+    }
+
+    fn non_specular(&self) -> bool {
+        !self.smooth()
+    }
+}
+
+/// pbrt-v4's `DiffuseBxDF`: the Lambertian base of `coateddiffuse`.
+#[derive(Debug, Clone, Copy)]
+pub struct DiffuseBase {
+    /// Reflectance in [0, 1].
+    pub reflectance: Spectrum,
+}
+
+impl Interface for DiffuseBase {
+    fn f(&self, wo: Vec3, wi: Vec3, _radiance: bool) -> Spectrum {
+        if same_hemisphere(wo, wi) {
+            self.reflectance * INV_PI
+        } else {
+            Spectrum::ZERO
+        }
+    }
+
+    fn sample(&self, wo: Vec3, _uc: f32, u: Vec2, _radiance: bool, lobes: Lobes) -> Option<Sample> {
+        if !lobes.refl {
+            return None;
+        }
+        let mut wi = warp::sample_cosine_hemisphere(u);
+        if wo.z < 0.0 {
+            wi.z = -wi.z;
+        }
+        let pdf = wi.z.abs() * INV_PI;
+        Some(Sample { f: self.reflectance * INV_PI, wi, pdf, specular: false })
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        if !lobes.refl || !same_hemisphere(wo, wi) {
+            0.0
+        } else {
+            wi.z.abs() * INV_PI
+        }
+    }
+
+    fn specular(&self) -> bool {
+        false
+    }
+
+    fn non_specular(&self) -> bool {
+        self.reflectance.max_element() > 0.0
+    }
+}
+
+/// pbrt-v4's `ConductorBxDF`: the base of `coatedconductor` (η, k relative
+/// to the coat).
+#[derive(Debug, Clone, Copy)]
+pub struct ConductorBase {
+    /// Roughness of the conductor.
+    pub distrib: TrowbridgeReitz,
+    /// Real part of the complex IOR relative to the coat.
+    pub eta: Spectrum,
+    /// Imaginary part of the complex IOR relative to the coat.
+    pub k: Spectrum,
+}
+
+impl ConductorBase {
+    #[inline]
+    fn fresnel(&self, cos: f32) -> Spectrum {
+        fresnel_conductor(cos.clamp(0.0, 1.0), self.eta, self.k)
+    }
+}
+
+impl Interface for ConductorBase {
+    fn f(&self, wo: Vec3, wi: Vec3, _radiance: bool) -> Spectrum {
+        if !same_hemisphere(wo, wi) || self.distrib.effectively_smooth() {
+            return Spectrum::ZERO;
+        }
+        let (co, ci) = (wo.z.abs(), wi.z.abs());
+        let wm = wi + wo;
+        if ci == 0.0 || co == 0.0 || wm.length_squared() == 0.0 {
+            return Spectrum::ZERO;
+        }
+        let wm = wm.normalize();
+        let d = &self.distrib;
+        self.fresnel(wo.dot(wm).abs()) * (d.d(wm) * d.g(wo, wi) / (4.0 * ci * co))
+    }
+
+    fn sample(&self, wo: Vec3, _uc: f32, u: Vec2, _radiance: bool, lobes: Lobes) -> Option<Sample> {
+        if !lobes.refl {
+            return None;
+        }
+        if self.distrib.effectively_smooth() {
+            let wi = Vec3::new(-wo.x, -wo.y, wo.z);
+            let c = wi.z.abs();
+            return Some(Sample { f: self.fresnel(c) / c, wi, pdf: 1.0, specular: true });
+        }
+        if wo.z == 0.0 {
+            return None;
+        }
+        let d = &self.distrib;
+        let wm = d.sample_wm(wo, u);
+        let wi = 2.0 * wo.dot(wm) * wm - wo;
+        if !same_hemisphere(wo, wi) {
+            return None;
+        }
+        let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs());
+        let (co, ci) = (wo.z.abs(), wi.z.abs());
+        if ci == 0.0 || co == 0.0 {
+            return None;
+        }
+        let f = self.fresnel(wo.dot(wm).abs()) * (d.d(wm) * d.g(wo, wi) / (4.0 * ci * co));
+        Some(Sample { f, wi, pdf, specular: false })
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3, lobes: Lobes) -> f32 {
+        if !lobes.refl || !same_hemisphere(wo, wi) || self.distrib.effectively_smooth() {
+            return 0.0;
+        }
+        let wm = wo + wi;
+        if wm.length_squared() == 0.0 {
+            return 0.0;
+        }
+        let mut wm = wm.normalize();
+        if wm.z < 0.0 {
+            wm = -wm;
+        }
+        self.distrib.pdf(wo, wm) / (4.0 * wo.dot(wm).abs())
+    }
+
+    fn specular(&self) -> bool {
+        self.distrib.effectively_smooth()
+    }
+
+    fn non_specular(&self) -> bool {
+        !self.distrib.effectively_smooth()
+    }
+}
+
+/// pbrt's Henyey–Greenstein phase function value for directions `wo`, `wi`
+/// both pointing away from the scattering point.
+#[inline]
+fn hg(wo: Vec3, wi: Vec3, g: f32) -> f32 {
+    let denom = 1.0 + g * g + 2.0 * g * wo.dot(wi);
+    INV_4PI * (1.0 - g * g) / (denom * safe_sqrt(denom))
+}
+
+/// Samples wi ∝ hg(wo, wi): the scattering angle about the propagation
+/// direction −wo by inverting the HG CDF (p = pdf, so the weight is 1).
+fn sample_hg(wo: Vec3, g: f32, u: Vec2) -> (Vec3, f32) {
+    let cos = if g.abs() < 1e-3 {
+        1.0 - 2.0 * u.x
+    } else {
+        let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u.x);
+        ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+    };
+    let sin = safe_sqrt(1.0 - cos * cos);
+    let phi = 2.0 * PI * u.y;
+    let frame = Frame::from_normal(-wo);
+    let wi = frame.to_world(Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)).normalize();
+    (wi, hg(wo, wi, g))
+}
+
+/// A small deterministic generator for one walk (pbrt seeds its PCG32 from
+/// hashes of the directions): splitmix64 over a hashed key.
+struct WalkRng {
+    key: u64,
+    i: u64,
+}
+
+impl WalkRng {
+    fn new(words: &[u32]) -> WalkRng {
+        let mut h = 0x243f_6a88_85a3_08d3u64;
+        for &w in words {
+            h = mix64(h ^ u64::from(w));
+        }
+        WalkRng { key: h, i: 0 }
+    }
+
+    #[inline]
+    fn next(&mut self) -> f32 {
+        self.i += 1;
+        let h = mix64(self.key.wrapping_add(self.i.wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+        ((h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)).min(ONE_MINUS_EPSILON)
+    }
+
+    #[inline]
+    fn next2(&mut self) -> Vec2 {
+        let a = self.next();
+        Vec2::new(a, self.next())
+    }
+}
+
+fn bits(v: Vec3) -> [u32; 3] {
+    [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()]
+}
+
+/// pbrt's `LayeredBxDF::Tr`.
+#[inline]
+fn tr(dz: f32, w: Vec3) -> f32 {
+    if dz.abs() <= f32::MIN_POSITIVE {
+        1.0
+    } else {
+        (-(dz / w.z).abs()).exp()
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The layered model
+
+/// pbrt-v4's `LayeredBxDF<DielectricBxDF, Base, true>` at a hit.
+#[derive(Debug, Clone, Copy)]
+pub struct Layered<B> {
+    /// The dielectric coat on top.
+    pub top: CoatInterface,
+    /// The opaque base.
+    pub bottom: B,
+    /// Thickness of the slab (unit extinction), at least `f32::MIN_POSITIVE`.
+    pub thickness: f32,
+    /// Henyey–Greenstein asymmetry of the medium.
+    pub g: f32,
+    /// Single-scattering albedo of the medium (0: purely absorbing).
+    pub albedo: Spectrum,
+    /// Longest random walk (interface and medium events).
+    pub max_depth: u32,
+    /// Walks averaged per evaluation.
+    pub n_samples: u32,
+}
+
+/// pbrt-v4's `CoatedDiffuseBxDF`.
+pub type CoatedDiffuse = Layered<DiffuseBase>;
+/// pbrt-v4's `CoatedConductorBxDF`.
+pub type CoatedConductor = Layered<ConductorBase>;
+
+#[allow(private_bounds)]
+impl<B: Interface> Layered<B> {
+    /// pbrt's `TopOrBottomBxDF`.
+    #[inline]
+    fn side(&self, top: bool) -> &dyn Interface {
+        if top {
+            &self.top
+        } else {
+            &self.bottom
+        }
+    }
+
+    /// pbrt's `LayeredBxDF::f` (twoSided): an unbiased estimate of f.
+    fn f(&self, mut wo: Vec3, mut wi: Vec3) -> Spectrum {
+        if wo.z < 0.0 {
+            wo = -wo;
+            wi = -wi;
+        }
+        let thickness = self.thickness;
+        // Two-sided: always entered at the top.
+        let entered_top = true;
+        let enter = self.side(entered_top);
+        let exit_bottom = same_hemisphere(wo, wi) ^ entered_top;
+        let (exit, non_exit) = (self.side(!exit_bottom), self.side(exit_bottom));
+        let exit_z = if exit_bottom { 0.0 } else { thickness };
+        let ns = self.n_samples.max(1) as f32;
+
+        let mut f = Spectrum::ZERO;
+        if same_hemisphere(wo, wi) {
+            f = ns * enter.f(wo, wi, true);
+        }
+        let mut rng = WalkRng::new(&[bits(wo), bits(wi)].concat());
+        let has_albedo = self.albedo.max_element() > 0.0;
+
+        for _ in 0..self.n_samples.max(1) {
+            // Transmission through the entrance, and a presampled
+            // transmission for the virtual light from wi (adjoint).
+            let uc = rng.next();
+            let Some(wos) = Sample::usable(&enter.sample(wo, uc, rng.next2(), true, TRANS)) else { continue };
+            let uc = rng.next();
+            let Some(wis) = Sample::usable(&exit.sample(wi, uc, rng.next2(), false, TRANS)) else { continue };
+
+            let mut beta = wos.f * wos.wi.z.abs() / wos.pdf;
+            let mut z = if entered_top { thickness } else { 0.0 };
+            let mut w = wos.wi;
+
+            for depth in 0..self.max_depth {
+                // Russian roulette.
+                if depth > 3 && beta.max_element() < 0.25 {
+                    let q = (1.0 - beta.max_element()).max(0.0);
+                    if rng.next() < q {
+                        break;
+                    }
+                    beta /= 1.0 - q;
+                }
+                if !has_albedo {
+                    z = if z == thickness { 0.0 } else { thickness };
+                    beta *= tr(thickness, w);
+                } else {
+                    let dz = -(1.0 - rng.next()).ln() * w.z.abs();
+                    let zp = if w.z > 0.0 { z + dz } else { z - dz };
+                    if zp == z {
+                        continue;
+                    }
+                    if 0.0 < zp && zp < thickness {
+                        // Medium scattering: NEE through the exit along wis (MIS
+                        // with the phase function unless the exit is specular).
+                        let mut wt = 1.0;
+                        if !exit.specular() {
+                            wt = power_heuristic(wis.pdf, hg(-w, -wis.wi, self.g));
+                        }
+                        f += beta * self.albedo * hg(-w, -wis.wi, self.g) * wt * tr(zp - exit_z, wis.wi) * wis.f
+                            / wis.pdf;
+                        let (wn, ppdf) = sample_hg(-w, self.g, rng.next2());
+                        if ppdf == 0.0 || wn.z == 0.0 {
+                            continue;
+                        }
+                        beta *= self.albedo; // p / pdf = 1
+                        w = wn;
+                        z = zp;
+                        if ((z < exit_z && w.z > 0.0) || (z > exit_z && w.z < 0.0)) && !exit.specular() {
+                            let f_exit = exit.f(-w, wi, true);
+                            if f_exit.max_element() > 0.0 {
+                                let exit_pdf = exit.pdf(-w, wi, TRANS);
+                                let wt = power_heuristic(ppdf, exit_pdf);
+                                f += beta * tr(zp - exit_z, wn) * f_exit * wt;
+                            }
+                        }
+                        continue;
+                    }
+                    z = zp.clamp(0.0, thickness);
+                }
+
+                if z == exit_z {
+                    // Reflection back into the slab at the exit interface.
+                    let uc = rng.next();
+                    let Some(bs) = Sample::usable(&exit.sample(-w, uc, rng.next2(), true, REFL)) else { break };
+                    beta *= bs.f * bs.wi.z.abs() / bs.pdf;
+                    w = bs.wi;
+                } else {
+                    if !non_exit.specular() {
+                        // NEE along the presampled wis.
+                        let mut wt = 1.0;
+                        if !exit.specular() {
+                            wt = power_heuristic(wis.pdf, non_exit.pdf(-w, -wis.wi, ALL));
+                        }
+                        f += beta * non_exit.f(-w, -wis.wi, true) * wis.wi.z.abs() * wt * tr(thickness, wis.wi) * wis.f
+                            / wis.pdf;
+                    }
+                    let uc = rng.next();
+                    let u = rng.next2();
+                    let Some(bs) = Sample::usable(&non_exit.sample(-w, uc, u, true, REFL)) else { break };
+                    beta *= bs.f * bs.wi.z.abs() / bs.pdf;
+                    w = bs.wi;
+                    if !exit.specular() {
+                        // NEE along the sampled direction.
+                        let f_exit = exit.f(-w, wi, true);
+                        if f_exit.max_element() > 0.0 {
+                            let mut wt = 1.0;
+                            if !non_exit.specular() {
+                                let exit_pdf = exit.pdf(-w, wi, TRANS);
+                                wt = power_heuristic(bs.pdf, exit_pdf);
+                            }
+                            f += beta * tr(thickness, bs.wi) * f_exit * wt;
+                        }
+                    }
+                }
+            }
+        }
+        f / ns
+    }
+
+    /// pbrt's `LayeredBxDF::Sample_f` (twoSided): the walk's sample with
+    /// its path throughput f and path density, and whether it is specular.
+    fn sample_walk(&self, mut wo: Vec3, uc: f32, u: Vec2) -> Option<(Sample, bool)> {
+        let flip = wo.z < 0.0;
+        if flip {
+            wo = -wo;
+        }
+        let thickness = self.thickness;
+        let bs = Sample::usable(&self.top.sample(wo, uc, u, true, ALL))?;
+        if bs.is_reflection(wo) {
+            let wi = if flip { -bs.wi } else { bs.wi };
+            return Some((Sample { wi, ..bs }, bs.specular));
+        }
+        let mut w = bs.wi;
+        let mut specular_path = bs.specular;
+        let mut rng = WalkRng::new(&[bits(wo).as_slice(), &[uc.to_bits(), u.x.to_bits(), u.y.to_bits(), 7]].concat());
+        let mut f = bs.f * bs.wi.z.abs();
+        let mut pdf = bs.pdf;
+        let mut z = thickness;
+        let has_albedo = self.albedo.max_element() > 0.0;
+
+        for depth in 0..self.max_depth {
+            let rr_beta = f.max_element() / pdf;
+            if depth > 3 && rr_beta < 0.25 {
+                let q = (1.0 - rr_beta).max(0.0);
+                if rng.next() < q {
+                    return None;
+                }
+                pdf *= 1.0 - q;
+            }
+            if w.z == 0.0 {
+                return None;
+            }
+            if has_albedo {
+                let dz = -(1.0 - rng.next()).ln() * w.z.abs();
+                let zp = if w.z > 0.0 { z + dz } else { z - dz };
+                if zp == z {
+                    return None;
+                }
+                if 0.0 < zp && zp < thickness {
+                    let (wn, ppdf) = sample_hg(-w, self.g, rng.next2());
+                    if ppdf == 0.0 || wn.z == 0.0 {
+                        return None;
+                    }
+                    f *= self.albedo * ppdf;
+                    pdf *= ppdf;
+                    specular_path = false;
+                    w = wn;
+                    z = zp;
+                    continue;
+                }
+                z = zp.clamp(0.0, thickness);
+            } else {
+                z = if z == thickness { 0.0 } else { thickness };
+                f *= tr(thickness, w);
+            }
+            let interface = self.side(z != 0.0);
+            let uc = rng.next();
+            let u = rng.next2();
+            let bs = Sample::usable(&interface.sample(-w, uc, u, true, ALL))?;
+            let transmitted = !bs.is_reflection(-w);
+            f *= bs.f;
+            pdf *= bs.pdf;
+            specular_path &= bs.specular;
+            w = bs.wi;
+            // Left the slab: transmitted through the interface.
+            if transmitted {
+                let wi = if flip { -w } else { w };
+                return Some((Sample { f, wi, pdf, specular: specular_path }, specular_path));
+            }
+            f *= bs.wi.z.abs();
+        }
+        None
+    }
+
+    /// pbrt's `LayeredBxDF::PDF` (twoSided): a stochastic estimate of the
+    /// sampling density, mixed with the uniform sphere density as pbrt does
+    /// (0.1/(4π) + 0.9 · estimate).
+    fn pdf_estimate(&self, mut wo: Vec3, mut wi: Vec3) -> f32 {
+        if wo.z < 0.0 {
+            wo = -wo;
+            wi = -wi;
+        }
+        let mut rng = WalkRng::new(&[bits(wi), bits(wo), [3, 0, 0]].concat());
+        let ns = self.n_samples.max(1) as f32;
+        let mut pdf_sum = 0.0;
+        let same = same_hemisphere(wo, wi);
+        if same {
+            pdf_sum += ns * self.top.pdf(wo, wi, REFL);
+        }
+        for _ in 0..self.n_samples.max(1) {
+            if same {
+                // TRT: transmission into the slab from both ends.
+                let (r_if, t_if) = (self.side(false), self.side(true));
+                let (uc, u) = (rng.next(), rng.next2());
+                let wos = t_if.sample(wo, uc, u, true, TRANS);
+                let (uc, u) = (rng.next(), rng.next2());
+                let wis = t_if.sample(wi, uc, u, false, TRANS);
+                let ok = |s: &Option<Sample>| s.filter(|s| s.f.max_element() > 0.0 && s.pdf > 0.0);
+                let (Some(wos), Some(wis)) = (ok(&wos), ok(&wis)) else { continue };
+                if !t_if.non_specular() {
+                    pdf_sum += r_if.pdf(-wos.wi, -wis.wi, ALL);
+                } else {
+                    let (uc, u) = (rng.next(), rng.next2());
+                    let Some(rs) = ok(&r_if.sample(-wos.wi, uc, u, true, ALL)) else { continue };
+                    if !r_if.non_specular() {
+                        pdf_sum += t_if.pdf(-rs.wi, wi, ALL);
+                    } else {
+                        let r_pdf = r_if.pdf(-wos.wi, -wis.wi, ALL);
+                        pdf_sum += power_heuristic(wis.pdf, r_pdf) * r_pdf;
+                        let t_pdf = t_if.pdf(-rs.wi, wi, ALL);
+                        pdf_sum += power_heuristic(rs.pdf, t_pdf) * t_pdf;
+                    }
+                }
+            } else {
+                // TT: through both interfaces; the opaque bases of these
+                // two-sided variants never transmit, so this adds nothing,
+                // but the random numbers are drawn as pbrt draws them.
+                let (to_if, ti_if) = (self.side(true), self.side(false));
+                let (uc, u) = (rng.next(), rng.next2());
+                let Some(wos) = Sample::usable(&to_if.sample(wo, uc, u, true, ALL)) else { continue };
+                if wos.is_reflection(wo) {
+                    continue;
+                }
+                let (uc, u) = (rng.next(), rng.next2());
+                let Some(wis) = Sample::usable(&ti_if.sample(wi, uc, u, false, ALL)) else { continue };
+                if wis.is_reflection(wi) {
+                    continue;
+                }
+                pdf_sum += if to_if.specular() {
+                    ti_if.pdf(-wos.wi, wi, ALL)
+                } else if ti_if.specular() {
+                    to_if.pdf(wo, -wis.wi, ALL)
+                } else {
+                    0.5 * (to_if.pdf(wo, -wis.wi, ALL) + ti_if.pdf(-wos.wi, wi, ALL))
+                };
+            }
+        }
+        0.1 * INV_4PI + 0.9 * pdf_sum / ns
+    }
+}
+
+impl<B: Interface + Copy + std::fmt::Debug> BsdfModel for Layered<B> {
+    fn has_smooth(&self) -> bool {
+        self.top.non_specular() || self.bottom.non_specular() || self.albedo.max_element() > 0.0
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {
+        self.f(wo, wi)
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_estimate(wo, wi)
+    }
+
+    /// The walk's throughput as the weight; the pdf for MIS is pbrt's
+    /// `PDF()` estimate, or the path's discrete probability when every
+    /// event was specular (a delta lobe).
+    fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
+        let (s, specular) = self.sample_walk(wo, u, u2)?;
+        let weight = s.f * s.wi.z.abs() / s.pdf;
+        if !weight.is_finite() {
+            return None;
+        }
+        let pdf = if specular { s.pdf } else { self.pdf_estimate(wo, s.wi) };
+        Some(BsdfSample { wi: s.wi, pdf, weight, delta: specular, null: false, eta: 1.0 })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Parameters as the scene stores them
+
+/// The settings both materials share (pbrt-v4's defaults in `Default`).
+#[derive(Debug, Clone)]
+pub struct LayerParams {
+    /// Thickness of the slab between the interfaces.
+    pub thickness: Texture,
+    /// Henyey–Greenstein asymmetry of the medium.
+    pub g: Texture,
+    /// Single-scattering albedo of the medium.
+    pub albedo: Texture,
+    /// Longest random walk.
+    pub max_depth: u32,
+    /// Walks per evaluation.
+    pub n_samples: u32,
+    /// Roughness values are mapped to α = √roughness.
+    pub remap_roughness: bool,
+}
+
+impl Default for LayerParams {
+    fn default() -> LayerParams {
+        LayerParams {
+            thickness: Texture::Constant(Spectrum::splat(0.01)),
+            g: Texture::Constant(Spectrum::ZERO),
+            albedo: Texture::Constant(Spectrum::ZERO),
+            max_depth: 10,
+            n_samples: 1,
+            remap_roughness: true,
+        }
+    }
+}
+
+impl LayerParams {
+    fn textures(&self) -> [&Texture; 3] {
+        [&self.thickness, &self.g, &self.albedo]
+    }
+
+    fn alpha(&self, r: f32) -> f32 {
+        if self.remap_roughness {
+            r.max(0.0).sqrt()
+        } else {
+            r
+        }
+    }
+
+    fn distrib(&self, u: &Texture, v: &Texture, si: &SurfaceInteraction) -> TrowbridgeReitz {
+        TrowbridgeReitz::new(self.alpha(u.eval_1(si)), self.alpha(v.eval_1(si)))
+    }
+
+    fn layered<B>(&self, top: CoatInterface, bottom: B, si: &SurfaceInteraction) -> Layered<B> {
+        Layered {
+            top,
+            bottom,
+            thickness: self.thickness.eval_1(si).max(f32::MIN_POSITIVE),
+            g: self.g.eval_1(si).clamp(-1.0, 1.0),
+            albedo: self.albedo.eval(si).clamp(Vec3::ZERO, Vec3::ONE),
+            max_depth: self.max_depth,
+            n_samples: self.n_samples.max(1),
+        }
+    }
+}
+
+/// pbrt's interface η: 0 means 1.
+fn interface_eta(eta: f32) -> f32 {
+    if eta == 0.0 {
+        1.0
+    } else {
+        eta
+    }
+}
+
+/// pbrt-v4 `coateddiffuse` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct CoatedDiffuseParams {
+    /// Reflectance of the Lambertian base.
+    pub reflectance: Texture,
+    /// Coat roughness along `s`.
+    pub u_roughness: Texture,
+    /// Coat roughness along `t`.
+    pub v_roughness: Texture,
+    /// Relative IOR of the coat.
+    pub eta: f32,
+    /// Slab, medium and walk settings.
+    pub layer: LayerParams,
+}
+
+impl Default for CoatedDiffuseParams {
+    fn default() -> CoatedDiffuseParams {
+        CoatedDiffuseParams {
+            reflectance: Texture::Constant(Spectrum::splat(0.5)),
+            u_roughness: Texture::Constant(Spectrum::ZERO),
+            v_roughness: Texture::Constant(Spectrum::ZERO),
+            eta: 1.5,
+            layer: LayerParams::default(),
+        }
+    }
+}
+
+impl BsdfParams for CoatedDiffuseParams {
+    type Model<'a> = CoatedDiffuse;
+
+    fn at(&self, si: &SurfaceInteraction) -> CoatedDiffuse {
+        let top = CoatInterface {
+            eta: interface_eta(self.eta),
+            distrib: self.layer.distrib(&self.u_roughness, &self.v_roughness, si),
+        };
+        let bottom = DiffuseBase { reflectance: self.reflectance.eval(si).clamp(Vec3::ZERO, Vec3::ONE) };
+        self.layer.layered(top, bottom, si)
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        let mut t = vec![&self.reflectance, &self.u_roughness, &self.v_roughness];
+        t.extend(self.layer.textures());
+        t
+    }
+
+    fn anisotropic(&self) -> bool {
+        matches!((self.u_roughness.constant(), self.v_roughness.constant()), (Some(u), Some(v)) if u != v)
+    }
+}
+
+/// How `coatedconductor` gives its base's optical constants.
+#[derive(Debug, Clone)]
+pub enum ConductorSpec {
+    /// `conductor.eta` and `conductor.k` (relative to the outside medium).
+    EtaK {
+        /// Real part.
+        eta: Texture,
+        /// Imaginary part.
+        k: Texture,
+    },
+    /// `reflectance`: η = 1, k = 2√r/√(1 − r) with r clamped to [0, 0.9999].
+    Reflectance(Texture),
+}
+
+/// pbrt-v4 `coatedconductor` as the scene stores it.
+#[derive(Debug, Clone)]
+pub struct CoatedConductorParams {
+    /// Coat roughness along `s`.
+    pub interface_u_roughness: Texture,
+    /// Coat roughness along `t`.
+    pub interface_v_roughness: Texture,
+    /// Relative IOR of the coat.
+    pub interface_eta: f32,
+    /// The conductor's optical constants.
+    pub conductor: ConductorSpec,
+    /// Conductor roughness along `s`.
+    pub conductor_u_roughness: Texture,
+    /// Conductor roughness along `t`.
+    pub conductor_v_roughness: Texture,
+    /// Slab, medium and walk settings.
+    pub layer: LayerParams,
+}
+
+impl Default for CoatedConductorParams {
+    fn default() -> CoatedConductorParams {
+        let (eta, k) = named_conductor("Cu").expect("Cu is a named conductor");
+        let zero = || Texture::Constant(Spectrum::ZERO);
+        CoatedConductorParams {
+            interface_u_roughness: zero(),
+            interface_v_roughness: zero(),
+            interface_eta: 1.5,
+            conductor: ConductorSpec::EtaK {
+                eta: Texture::Constant(Vec3::from_array(eta)),
+                k: Texture::Constant(Vec3::from_array(k)),
+            },
+            conductor_u_roughness: zero(),
+            conductor_v_roughness: zero(),
+            layer: LayerParams::default(),
+        }
+    }
+}
+
+impl BsdfParams for CoatedConductorParams {
+    type Model<'a> = CoatedConductor;
+
+    fn at(&self, si: &SurfaceInteraction) -> CoatedConductor {
+        let ieta = interface_eta(self.interface_eta);
+        let top = CoatInterface {
+            eta: ieta,
+            distrib: self.layer.distrib(&self.interface_u_roughness, &self.interface_v_roughness, si),
+        };
+        let (ce, ck) = match &self.conductor {
+            ConductorSpec::EtaK { eta, k } => (eta.eval(si), k.eval(si)),
+            ConductorSpec::Reflectance(r) => {
+                let r = r.eval(si).clamp(Vec3::ZERO, Vec3::splat(0.9999));
+                let k = Vec3::new(r.x.sqrt(), r.y.sqrt(), r.z.sqrt()) * 2.0
+                    / Vec3::new((1.0 - r.x).max(0.0).sqrt(), (1.0 - r.y).max(0.0).sqrt(), (1.0 - r.z).max(0.0).sqrt());
+                (Vec3::ONE, k)
+            }
+        };
+        let bottom = ConductorBase {
+            distrib: self.layer.distrib(&self.conductor_u_roughness, &self.conductor_v_roughness, si),
+            eta: ce / ieta,
+            k: ck / ieta,
+        };
+        self.layer.layered(top, bottom, si)
+    }
+
+    fn textures(&self) -> Vec<&Texture> {
+        let mut t = vec![
+            &self.interface_u_roughness,
+            &self.interface_v_roughness,
+            &self.conductor_u_roughness,
+            &self.conductor_v_roughness,
+        ];
+        match &self.conductor {
+            ConductorSpec::EtaK { eta, k } => t.extend([eta, k]),
+            ConductorSpec::Reflectance(r) => t.push(r),
+        }
+        t.extend(self.layer.textures());
+        t
+    }
+
+    fn anisotropic(&self) -> bool {
+        let aniso = |u: &Texture, v: &Texture| matches!((u.constant(), v.constant()), (Some(u), Some(v)) if u != v);
+        aniso(&self.interface_u_roughness, &self.interface_v_roughness)
+            || aniso(&self.conductor_u_roughness, &self.conductor_v_roughness)
+    }
+}
