@@ -1392,7 +1392,8 @@ mod tests {
 
     #[test]
     fn values_are_finite_nonnegative_and_zero_across_the_surface() {
-        let models: Vec<Box<dyn Fn(Vec3, Vec3) -> (Spectrum, f32)>> = vec![
+        type EvalPdf = Box<dyn Fn(Vec3, Vec3) -> (Spectrum, f32)>;
+        let models: Vec<EvalPdf> = vec![
             Box::new(|a, b| {
                 let m = diffuse(Vec3::new(0.9, 0.4, 0.1), 0.0, 0.01, 1.5, 0.0, 0.0, 10);
                 (m.eval(a, b), m.pdf(a, b))
@@ -1553,11 +1554,13 @@ mod tests {
         assert!(d.top.eta == 1.5 && d.top.distrib.effectively_smooth());
         assert!(d.thickness == 0.01 && d.max_depth == 10 && d.n_samples == 1 && d.g == 0.0);
         assert_eq!(d.albedo, Vec3::ZERO);
-        let mut p = CoatedConductorParams::default();
-        p.interface_eta = 2.0;
-        p.conductor = ConductorSpec::Reflectance(Texture::Constant(Vec3::new(0.5, 1.0, 0.0)));
-        p.conductor_u_roughness = Texture::Constant(Vec3::splat(0.25));
-        p.conductor_v_roughness = Texture::Constant(Vec3::splat(0.25));
+        let p = CoatedConductorParams {
+            interface_eta: 2.0,
+            conductor: ConductorSpec::Reflectance(Texture::Constant(Vec3::new(0.5, 1.0, 0.0))),
+            conductor_u_roughness: Texture::Constant(Vec3::splat(0.25)),
+            conductor_v_roughness: Texture::Constant(Vec3::splat(0.25)),
+            ..Default::default()
+        };
         let c = p.at(&si);
         // η = 1, k = 2√r/√(1 − r) (r ≤ 0.9999), both divided by the coat's η;
         // α = √roughness.
