@@ -1573,4 +1573,41 @@ mod tests {
         let r = fresnel_conductor(1.0, Vec3::ONE, Vec3::splat(2.0 * 0.5f32.sqrt() / 0.5f32.sqrt()));
         assert!((r.x - 0.5).abs() < 1e-5, "{r}");
     }
+
+    #[test]
+    fn mis_with_the_pdf_estimate_is_unbiased() {
+        // Direct light from a white environment as a path tracer gathers
+        // it: BSDF samples (weight, MIS by `pdf`) plus uniform light samples
+        // (eval |cos| / p_l, MIS by `pdf`), power heuristic. `pdf` only
+        // enters the weights, which sum to one, so the sum must equal the
+        // directional albedo E[weight] whatever pdf returns, provided eval
+        // and sample agree (pbrt-v4 issue #187: there they do not; the
+        // sampling tests above catch that, z = 18.7, this one barely, z = 2.3,
+        // as BSDF samples carry most of the MIS weight). Power: a sample
+        // reporting its walk's path density instead of `pdf` as its MIS
+        // density breaks the partition of unity: z = 98.
+        let b = diffuse(Vec3::splat(0.8), 0.3, 0.01, 1.5, 0.0, 0.0, 10);
+        let p_light = INV_4PI;
+        for (i, wo) in wos().into_iter().enumerate() {
+            let mut rng = TestRng::new(1000 + i as u64);
+            let (mut mis, mut plain) = (Stat::new(), Stat::new());
+            for _ in 0..2 * N {
+                let mut v = Vec3::ZERO;
+                if let Some(s) = b.sample(wo, rng.next_f32(), rng.next_2d()) {
+                    v += if s.delta { s.weight } else { s.weight * power_heuristic(s.pdf, p_light) };
+                }
+                let wi = warp::sample_uniform_sphere(rng.next_2d());
+                let f = b.eval(wo, wi);
+                if f.max_element() > 0.0 {
+                    v += f * wi.z.abs() / p_light * power_heuristic(p_light, b.pdf(wo, wi));
+                }
+                mis.add(v);
+                let s = b.sample(wo, rng.next_f32(), rng.next_2d());
+                plain.add(s.map_or(Vec3::ZERO, |s| s.weight));
+            }
+            let z = z_of(&mis, &plain);
+            eprintln!("wo {wo}: MIS {:?} ± {:?}, sampled {:?}, z {z:.2}", mis.mean(), mis.se(), plain.mean());
+            assert!(z < 4.0, "wo {wo}: MIS {:?} vs sampled {:?}, z = {z}", mis.mean(), plain.mean());
+        }
+    }
 }
