@@ -4,9 +4,13 @@
 //! Lambertian or conductor base, with a homogeneous slab of unit extinction
 //! between them (transmittance Tr = exp(−thickness/|cos θ|), Henyey–Greenstein
 //! phase function, single-scattering albedo). `eval`, `sample` and `pdf` run
-//! pbrt's random walk between the two interfaces; `eval` and `pdf` are
-//! unbiased *stochastic* estimates, their randomness drawn from a hash of
-//! (wo, wi) so images stay a pure function of (seed, pixel, sample index).
+//! pbrt's random walk between the two interfaces. `eval` is an unbiased
+//! *stochastic* estimate of f, `pdf` pbrt's stochastic approximation of the
+//! sampling density (it only weighs MIS); their random numbers come from a
+//! hash of (wo, wi) (pbrt seeds a PCG32 from such hashes; the stream here is
+//! splitmix64, so single values differ from pbrt's, expectations do not) and
+//! `sample`'s from a hash of its own numbers, so images stay a pure function
+//! of (seed, pixel, sample index).
 //! Two-sided as pbrt defines them: `wo` below the surface flips both
 //! directions; nothing is transmitted (the bases are opaque).
 //!
@@ -41,6 +45,15 @@
 //! | g, albedo, maxdepth, nsamples, remaproughness | | as coateddiffuse |
 //!
 //! The conductor's η and k are divided by the interface η (it sits in the coat).
+//!
+//! Differences from pbrt-v4: RGB instead of sampled wavelengths (a scalar
+//! coat η; `metal-Cu` is Penumbra's RGB `Cu`); the walk's random stream (see
+//! above); and the MIS weights of the two ways `eval` reaches the exit
+//! interface, which pbrt computes in different measures so that its f is
+//! biased for rough coats (see `Layered::f`, pbrt-v4 issue #187). As in
+//! pbrt, `maxdepth` truncates `eval` and `sample` slightly differently when
+//! the medium scatters (`eval`'s next-event estimates end a walk one event
+//! later); with the default thin, non-scattering slab they agree.
 //! Both interfaces use pbrt-v4's Trowbridge–Reitz distribution (visible
 //! normals of the full sphere, G1 without a back-facing test) and are smooth
 //! when max(α) < 1e-3, so they are written here after pbrt rather than taken
@@ -554,9 +567,11 @@ struct WalkRng {
 }
 
 impl WalkRng {
-    fn new(words: &[u32]) -> WalkRng {
-        let mut h = 0x243f_6a88_85a3_08d3u64;
-        for &w in words {
+    /// The stream of two hashed triples of words (direction bits), for
+    /// one of eval (0), sample (1) and pdf (2).
+    fn new(a: [u32; 3], b: [u32; 3], which: u64) -> WalkRng {
+        let mut h = 0x243f_6a88_85a3_08d3u64 ^ which;
+        for w in a.into_iter().chain(b) {
             h = mix64(h ^ u64::from(w));
         }
         WalkRng { key: h, i: 0 }
@@ -658,7 +673,7 @@ impl<B: Interface> Layered<B> {
         if same_hemisphere(wo, wi) {
             f = ns * enter.f(wo, wi, true);
         }
-        let mut rng = WalkRng::new(&[bits(wo), bits(wi)].concat());
+        let mut rng = WalkRng::new(bits(wo), bits(wi), 0);
         let has_albedo = self.albedo.max_element() > 0.0;
 
         for _ in 0..self.n_samples.max(1) {
@@ -772,7 +787,7 @@ impl<B: Interface> Layered<B> {
         }
         let mut w = bs.wi;
         let mut specular_path = bs.specular;
-        let mut rng = WalkRng::new(&[bits(wo).as_slice(), &[uc.to_bits(), u.x.to_bits(), u.y.to_bits(), 7]].concat());
+        let mut rng = WalkRng::new(bits(wo), [uc.to_bits(), u.x.to_bits(), u.y.to_bits()], 1);
         let mut f = bs.f * bs.wi.z.abs();
         let mut pdf = bs.pdf;
         let mut z = thickness;
@@ -840,7 +855,7 @@ impl<B: Interface> Layered<B> {
             wo = -wo;
             wi = -wi;
         }
-        let mut rng = WalkRng::new(&[bits(wi), bits(wo), [3, 0, 0]].concat());
+        let mut rng = WalkRng::new(bits(wi), bits(wo), 2);
         let ns = self.n_samples.max(1) as f32;
         let mut pdf_sum = 0.0;
         let same = same_hemisphere(wo, wi);
