@@ -1325,6 +1325,9 @@ mod tests {
         // than Sample_f reaches; a deep walk makes that difference vanish.
         check_albedos("smooth, medium", &diffuse(r, 0.0, 0.3, 1.5, 0.8, 0.4, 64), 400);
         check_albedos("rough 0.2, medium", &diffuse(r, 0.2, 0.5, 1.5, 0.6, -0.3, 64), 500);
+        let mut aniso = diffuse(r, 0.0, 0.05, 1.5, 0.0, 0.0, 10);
+        aniso.top.distrib = TrowbridgeReitz::new(0.15, 0.6);
+        check_albedos("anisotropic coat", &aniso, 550);
     }
 
     #[test]
@@ -1333,6 +1336,9 @@ mod tests {
         check_albedos("rough coat, rough base", &conductor(0.1, 0.4, 0.2, 1.5, 0.0, 10), 700);
         check_albedos("rough coat, smooth base", &conductor(0.3, 0.0, 0.05, 1.5, 0.0, 10), 800);
         check_albedos("rough coat, medium", &conductor(0.2, 0.3, 0.3, 1.5, 0.7, 64), 900);
+        let mut aniso = conductor(0.05, 0.0, 0.05, 1.5, 0.0, 10);
+        aniso.bottom.distrib = TrowbridgeReitz::new(0.5, 0.1);
+        check_albedos("anisotropic base", &aniso, 950);
     }
 
     #[test]
@@ -1624,5 +1630,49 @@ mod tests {
             eprintln!("wo {wo}: MIS {:?} ± {:?}, sampled {:?}, z {z:.2}", mis.mean(), mis.se(), plain.mean());
             assert!(z < 4.0, "wo {wo}: MIS {:?} vs sampled {:?}, z = {z}", mis.mean(), plain.mean());
         }
+    }
+
+    #[test]
+    fn interface_samplers_match_their_pdfs() {
+        // The walk's building blocks have exact densities: χ² against them
+        // (pbrt's rough dielectric from outside and inside the coat, lobes
+        // restricted as the walk restricts them, and the rough conductor).
+        use crate::testing::chi2::{alpha, chi2_test};
+        let a = alpha(8);
+        let coat = CoatInterface { eta: 1.5, distrib: TrowbridgeReitz::new(0.3, 0.5) };
+        let base =
+            ConductorBase { distrib: TrowbridgeReitz::new(0.4, 0.2), eta: Vec3::splat(0.2), k: Vec3::splat(3.0) };
+        let mut k = 0;
+        for wo in [Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(-0.6, 0.2, -0.5).normalize()] {
+            for lobes in [ALL, REFL, TRANS] {
+                k += 1;
+                let p = chi2_test(
+                    300_000,
+                    30 + k,
+                    |uc, u| coat.sample(wo, uc, u, true, lobes).filter(|s| s.pdf > 0.0).map(|s| s.wi),
+                    |wi| coat.pdf(wo, wi, lobes) as f64,
+                );
+                assert!(p > a, "coat wo {wo} {lobes:?}: p = {p}");
+            }
+            k += 1;
+            let p = chi2_test(
+                300_000,
+                30 + k,
+                |uc, u| base.sample(wo, uc, u, true, ALL).filter(|s| s.pdf > 0.0).map(|s| s.wi),
+                |wi| base.pdf(wo, wi, ALL) as f64,
+            );
+            assert!(p > a, "conductor wo {wo}: p = {p}");
+        }
+        // Power: the transmission pdf of a coat 20 % rougher along one axis
+        // is rejected.
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let wrong = CoatInterface { distrib: TrowbridgeReitz::new(0.36, 0.5), ..coat };
+        let p = chi2_test(
+            300_000,
+            99,
+            |uc, u| coat.sample(wo, uc, u, true, TRANS).filter(|s| s.pdf > 0.0).map(|s| s.wi),
+            |wi| wrong.pdf(wo, wi, TRANS) as f64,
+        );
+        assert!(p < a, "a coat of another η accepted: p = {p}");
     }
 }
