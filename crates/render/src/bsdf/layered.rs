@@ -1675,4 +1675,27 @@ mod tests {
         );
         assert!(p < a, "a coat of another η accepted: p = {p}");
     }
+
+    #[test]
+    fn trowbridge_reitz_is_penumbras_ggx_above_the_surface() {
+        // Same D and visible-normal density as microfacet.rs's GGX for
+        // directions above the surface; pbrt's sampler also serves
+        // directions below it (flipped), which the walk needs.
+        use crate::bsdf::microfacet::{Microfacet, MicrofacetType};
+        let (ax, ay) = (0.3, 0.7);
+        let tr = TrowbridgeReitz::new(ax, ay);
+        let ggx = Microfacet { kind: MicrofacetType::Ggx, alpha_u: ax, alpha_v: ay };
+        let mut rng = TestRng::new(3);
+        for _ in 0..1000 {
+            let w = warp::sample_uniform_hemisphere(rng.next_2d());
+            let m = tr.sample_wm(w, rng.next_2d());
+            let (a, b) = (tr.d(m), ggx.eval(m));
+            assert!((a - b).abs() <= 1e-4 * b, "D({m}): {a} vs {b}");
+            let (a, b) = (tr.pdf(w, m), ggx.pdf(w, m));
+            assert!((a - b).abs() <= 1e-4 * b + 1e-6, "D_w({w}, {m}): {a} vs {b}");
+            // Below the surface: the normals visible from −w.
+            let m2 = tr.sample_wm(-w, rng.next_2d());
+            assert!(m2.z > 0.0 && m2.dot(w) >= -1e-6, "{m2} not visible from {w}");
+        }
+    }
 }
