@@ -24,8 +24,8 @@
 //! |----------------------------|---------|---------|
 //! | reflectance                | texture | 0.5     |
 //! | roughness / uroughness / vroughness | float texture | 0 (coat) |
-//! | thickness                  | float texture | 0.01 |
-//! | eta (interface.eta)        | float   | 1.5 (0 means 1) |
+//! | thickness                  | float texture | 0.01 (at least the smallest normal f32) |
+//! | eta                        | float   | 1.5 (0 means 1; pbrt also takes a spectrum, read at one wavelength) |
 //! | g                          | float texture | 0 (HG asymmetry, clamped to [−1, 1]) |
 //! | albedo                     | texture | 0 (medium single-scattering albedo, clamped to [0, 1]) |
 //! | maxdepth                   | integer | 10      |
@@ -55,7 +55,8 @@
 //! the medium scatters (`eval`'s next-event estimates end a walk one event
 //! later); with the default thin, non-scattering slab they agree.
 //! Both interfaces use pbrt-v4's Trowbridge–Reitz distribution (visible
-//! normals of the full sphere, G1 without a back-facing test) and are smooth
+//! normals of the full sphere, G1 without a back-facing test, the
+//! height-correlated G = 1/(1 + Λo + Λi)) and are smooth
 //! when max(α) < 1e-3, so they are written here after pbrt rather than taken
 //! from `microfacet.rs` (whose sampler and G1 assume the upper hemisphere).
 
