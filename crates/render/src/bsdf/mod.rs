@@ -23,6 +23,7 @@ pub mod difftrans;
 pub mod diffuse;
 pub mod fresnel;
 pub mod hair;
+pub mod layered;
 pub mod measured;
 pub mod microfacet;
 pub mod plastic;
@@ -41,6 +42,7 @@ pub use dielectric::{Dielectric, DielectricParams};
 pub use difftrans::{DiffuseTransmission, DiffuseTransmissionParams};
 pub use diffuse::{Diffuse, DiffuseParams};
 pub use hair::{Hair, HairAbsorption, HairLobes, HairParams};
+pub use layered::{CoatedConductor, CoatedConductorParams, CoatedDiffuse, CoatedDiffuseParams};
 pub use measured::{Measured, MeasuredParams};
 pub use microfacet::{Microfacet, MicrofacetType, Roughness};
 pub use plastic::{Plastic, PlasticParams};
@@ -88,6 +90,8 @@ macro_rules! with_model {
         match $kind {
             BsdfKind::Diffuse($b) => $e,
             BsdfKind::DiffuseTransmission($b) => $e,
+            BsdfKind::CoatedDiffuse($b) => $e,
+            BsdfKind::CoatedConductor($b) => $e,
             BsdfKind::Dielectric($b) => $e,
             BsdfKind::ThinDielectric($b) => $e,
             BsdfKind::Conductor($b) => $e,
@@ -173,6 +177,10 @@ pub enum BsdfKind<'a> {
     Diffuse(Diffuse),
     /// pbrt-v4 `diffusetransmission`.
     DiffuseTransmission(DiffuseTransmission),
+    /// pbrt-v4 `coateddiffuse`.
+    CoatedDiffuse(CoatedDiffuse),
+    /// pbrt-v4 `coatedconductor`.
+    CoatedConductor(CoatedConductor),
     /// Mitsuba `dielectric`.
     Dielectric(Dielectric),
     /// Mitsuba `thindielectric`.

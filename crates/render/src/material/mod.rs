@@ -12,9 +12,10 @@ pub mod bumpmap;
 pub mod normalmap;
 
 use crate::bsdf::{
-    Blend, Bsdf, BsdfKind, BsdfParams, ConductorParams, DielectricParams, DiffuseParams, DiffuseTransmissionParams,
-    HairParams, MeasuredParams, Nested, PPlasticParams, Perturbation, PlasticParams, PrincipledParams,
-    PrincipledThinParams, RoughConductorParams, RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
+    Blend, Bsdf, BsdfKind, BsdfParams, CoatedConductorParams, CoatedDiffuseParams, ConductorParams, DielectricParams,
+    DiffuseParams, DiffuseTransmissionParams, HairParams, MeasuredParams, Nested, PPlasticParams, Perturbation,
+    PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
+    RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
 use crate::math::Frame;
@@ -49,6 +50,10 @@ pub enum Material {
     Diffuse(DiffuseParams),
     /// pbrt-v4 `diffusetransmission`.
     DiffuseTransmission(DiffuseTransmissionParams),
+    /// pbrt-v4 `coateddiffuse`.
+    CoatedDiffuse(Box<CoatedDiffuseParams>),
+    /// pbrt-v4 `coatedconductor`.
+    CoatedConductor(Box<CoatedConductorParams>),
     /// Mitsuba `dielectric`.
     Dielectric(DielectricParams),
     /// Mitsuba `thindielectric`.
@@ -168,6 +173,8 @@ impl Material {
                 }
                 Material::Diffuse(p) => BsdfKind::Diffuse(p.at(si)),
                 Material::DiffuseTransmission(p) => BsdfKind::DiffuseTransmission(p.at(si)),
+                Material::CoatedDiffuse(p) => BsdfKind::CoatedDiffuse(p.at(si)),
+                Material::CoatedConductor(p) => BsdfKind::CoatedConductor(p.at(si)),
                 Material::Dielectric(p) => BsdfKind::Dielectric(p.at(si)),
                 Material::ThinDielectric(p) => BsdfKind::ThinDielectric(p.at(si)),
                 Material::Conductor(p) => BsdfKind::Conductor(p.at(si)),
@@ -206,6 +213,8 @@ impl Material {
         match self {
             Material::Diffuse(p) => p.reads_uv(),
             Material::DiffuseTransmission(p) => p.reads_uv(),
+            Material::CoatedDiffuse(p) => p.reads_uv(),
+            Material::CoatedConductor(p) => p.reads_uv(),
             Material::Dielectric(p) => p.reads_uv(),
             Material::ThinDielectric(p) => p.reads_uv(),
             Material::Conductor(p) => p.reads_uv(),
