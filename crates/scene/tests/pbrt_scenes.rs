@@ -871,3 +871,44 @@ fn pbrt_media_match_their_mitsuba_xml_twin() {
     assert!(e.contains("m.pbrt:10:") && e.contains("uniformgrid"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `coateddiffuse` with an index-matched coat (eta 1) over a vanishing slab
+/// is its base, `diffuse`; a real coat (eta 1.5) darkens it. Bad walk
+/// settings are errors at the material's line.
+#[test]
+fn pbrt_coateddiffuse_without_a_coat_is_diffuse() {
+    let dir = temp_dir("coated");
+    let scene = |material: &str| {
+        format!(
+            "LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+             Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\n\
+             Sampler \"independent\" \"integer pixelsamples\" 16\nWorldBegin\n\
+             LightSource \"infinite\" \"rgb L\" [1 1 1]\nLightSource \"distant\" \"point3 from\" [1 2 -3] \"rgb L\" [2 2 2]\n\
+             {material}\nShape \"sphere\" \"float radius\" 1.2\n"
+        )
+    };
+    let (a, b, c) = (dir.join("a.pbrt"), dir.join("b.pbrt"), dir.join("c.pbrt"));
+    std::fs::write(&a, scene("Material \"diffuse\" \"rgb reflectance\" [0.7 0.4 0.2]")).unwrap();
+    let coated = |eta: f64| {
+        format!(
+            "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.4 0.2] \"float eta\" {eta} \
+             \"float thickness\" 1e-6 \"integer maxdepth\" 50"
+        )
+    };
+    std::fs::write(&b, scene(&coated(1.0))).unwrap();
+    std::fs::write(&c, scene(&coated(1.5))).unwrap();
+    let ea = render_with_variance(&a, 128, 16, None, 60);
+    let eb = render_with_variance(&b, 128, 16, None, 61);
+    assert_agree("coateddiffuse eta 1 vs diffuse", &eb, &ea, 0.02);
+    let ec = render_with_variance(&c, 128, 16, None, 62);
+    let v = compare("coateddiffuse eta 1.5 vs diffuse", &ec, &ea, 0.02);
+    assert!(!v.failures.is_empty(), "a real coat must change the image");
+    let bad = scene("Material \"coatedconductor\" \"integer maxdepth\" 0");
+    std::fs::write(&c, bad).unwrap();
+    let e = load_scene(&c, &[], &Overrides::default()).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("c.pbrt:8:1") && e.contains("maxdepth 0"), "{e}");
+    let ok = scene("Material \"coatedconductor\" \"float interface.roughness\" 0.1 \"rgb reflectance\" [0.9 0.6 0.3]");
+    std::fs::write(&c, ok).unwrap();
+    load_scene(&c, &[], &Overrides::default()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}

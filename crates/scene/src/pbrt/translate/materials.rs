@@ -13,6 +13,8 @@
 //! | dielectric          | eta (1.5; a float or a spectrum, its value at 550 nm), roughness, uroughness, vroughness (0), remaproughness |
 //! | thindielectric      | eta (1.5)                                                         |
 //! | diffusetransmission | reflectance (0.25), transmittance (0.25), scale (1)               |
+//! | coateddiffuse       | reflectance (0.5), roughness, uroughness, vroughness (0), eta (1.5), thickness (0.01), g (0), albedo (0), maxdepth (10), nsamples (1), remaproughness (true): pbrt-v4's stochastic layered BSDF (`bsdf::layered`) |
+//! | coatedconductor     | interface.roughness/uroughness/vroughness (0), interface.eta (1.5), conductor.eta/conductor.k (metal-Cu) or reflectance, conductor.roughness/uroughness/vroughness (0), thickness, g, albedo, maxdepth, nsamples, remaproughness |
 //! | mix                 | materials (two names), amount (0.5): Penumbra blends the two BSDFs, pbrt-v4 picks one per hit with the same probabilities |
 //! | interface, none     | (none): the surface only bounds media                             |
 
@@ -32,8 +34,17 @@ use penumbra_render::texture::Texture;
 use std::collections::HashMap;
 
 /// Materials Penumbra translates, for error messages.
-pub const MATERIALS: &[&str] =
-    &["diffuse", "conductor", "dielectric", "thindielectric", "diffusetransmission", "mix", "interface"];
+pub const MATERIALS: &[&str] = &[
+    "diffuse",
+    "conductor",
+    "dielectric",
+    "thindielectric",
+    "diffusetransmission",
+    "coateddiffuse",
+    "coatedconductor",
+    "mix",
+    "interface",
+];
 
 /// Whether a translated material must be made two-sided.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -210,14 +221,102 @@ impl<'a> Materials<'a> {
                 (Material::Blend { weight: tex_of(amount)?, first: Box::new(ma), second: Box::new(mb) }, sa)
             }
             "coateddiffuse" | "coatedconductor" => {
-                return Err(LoadError::at(
-                    at,
-                    format!(
-                        "material \"{kind}\" (pbrt-v4's stochastic layered BSDF) is not supported yet; \
-                         supported: {}",
-                        MATERIALS.join(", ")
-                    ),
-                ))
+                use penumbra_render::bsdf::layered::{
+                    CoatedConductorParams, CoatedDiffuseParams, ConductorSpec, LayerParams,
+                };
+                // Raw roughness textures: the model applies `remaproughness` itself.
+                let rough = |prefix: &str| -> Result<(Texture, Texture)> {
+                    let r = tex.value(p, &format!("{prefix}roughness"), None, [0.0; 3])?;
+                    let u = tex.optional(p, &format!("{prefix}uroughness"), None)?.unwrap_or_else(|| r.clone());
+                    let v = tex.optional(p, &format!("{prefix}vroughness"), None)?.unwrap_or(r);
+                    Ok((tex_of(u)?, tex_of(v)?))
+                };
+                let float_eta = |name: &str| -> Result<f32> {
+                    let eta = match p.type_of(name) {
+                        None => 1.5,
+                        Some(super::super::params::ParamType::Float) => p.float(name, 1.5)? as f32,
+                        Some(_) => {
+                            let (v, vloc) = p.spectrum(name)?.expect("present");
+                            spectrum_eta(&v, &vloc)?
+                        }
+                    };
+                    if !(eta >= 0.0 && eta.is_finite()) {
+                        return Err(LoadError::at(at, format!("{kind}: {name} {eta} must be finite and not negative")));
+                    }
+                    Ok(eta)
+                };
+                let max_depth = p.int("maxdepth", 10)?;
+                let n_samples = p.int("nsamples", 1)?;
+                if !(1..=10_000).contains(&max_depth) || !(1..=1000).contains(&n_samples) {
+                    return Err(LoadError::at(
+                        at,
+                        format!(
+                            "{kind}: maxdepth {max_depth} must lie in 1..=10000 and nsamples {n_samples} in 1..=1000"
+                        ),
+                    ));
+                }
+                let layer = LayerParams {
+                    thickness: tex_of(tex.value(p, "thickness", None, [0.01; 3])?)?,
+                    g: tex_of(tex.value(p, "g", None, [0.0; 3])?)?,
+                    albedo: tex_of(tex.value(p, "albedo", Some(SpectrumUse::Albedo), [0.0; 3])?)?,
+                    max_depth: max_depth as u32,
+                    n_samples: n_samples as u32,
+                    remap_roughness: p.bool("remaproughness", true)?,
+                };
+                let m = if kind == "coateddiffuse" {
+                    let reflectance = tex_of(tex.value(p, "reflectance", Some(SpectrumUse::Albedo), [0.5; 3])?)?;
+                    let (u_roughness, v_roughness) = rough("")?;
+                    let eta = float_eta("eta")?;
+                    Material::CoatedDiffuse(Box::new(CoatedDiffuseParams {
+                        reflectance,
+                        u_roughness,
+                        v_roughness,
+                        eta,
+                        layer,
+                    }))
+                } else {
+                    let (interface_u_roughness, interface_v_roughness) = rough("interface.")?;
+                    let (conductor_u_roughness, conductor_v_roughness) = rough("conductor.")?;
+                    let interface_eta = float_eta("interface.eta")?;
+                    let conductor = match tex.optional(p, "reflectance", Some(SpectrumUse::Albedo))? {
+                        Some(r) => {
+                            if p.type_of("conductor.eta").is_some() || p.type_of("conductor.k").is_some() {
+                                return Err(LoadError::at(
+                                    at,
+                                    "coatedconductor: give either \"reflectance\" or \"conductor.eta\" and \"conductor.k\", not both",
+                                ));
+                            }
+                            ConductorSpec::Reflectance(tex_of(r)?)
+                        }
+                        None => {
+                            let cu = |n: &str| {
+                                super::spectra::to_rgb(
+                                    &super::super::params::SpectrumValue::Named(n.into()),
+                                    SpectrumUse::Unbounded,
+                                    at,
+                                )
+                                .map(PTex::Const)
+                            };
+                            let eta = tex.optional(p, "conductor.eta", Some(SpectrumUse::Unbounded))?;
+                            let k = tex.optional(p, "conductor.k", Some(SpectrumUse::Unbounded))?;
+                            ConductorSpec::EtaK {
+                                eta: tex_of(eta.map_or_else(|| cu("metal-Cu-eta"), Ok)?)?,
+                                k: tex_of(k.map_or_else(|| cu("metal-Cu-k"), Ok)?)?,
+                            }
+                        }
+                    };
+                    Material::CoatedConductor(Box::new(CoatedConductorParams {
+                        interface_u_roughness,
+                        interface_v_roughness,
+                        interface_eta,
+                        conductor,
+                        conductor_u_roughness,
+                        conductor_v_roughness,
+                        layer,
+                    }))
+                };
+                // pbrt-v4's layered BxDFs are two-sided.
+                (m, Sides::Both)
             }
             other => {
                 return Err(LoadError::at(
