@@ -149,7 +149,7 @@ fn coated_diffuse_white_furnace_renders_one() {
 /// and sample agree inside the path tracer. The two images are independent
 /// renders (different seeds), so their means differ by noise only.
 /// Power: with pbrt-v4's own MIS weights at the exit interface (pbrt-v4
-/// issue #187) the image without MIS came out 9 % brighter, z = 12.5.
+/// weights in mixed measures) the image without MIS came out 9 % brighter, z = 12.5.
 #[test]
 fn rough_coated_diffuse_renders_alike_with_and_without_mis() {
     use penumbra_render::bsdf::CoatedDiffuseParams;

@@ -50,7 +50,7 @@
 //! coat η; `metal-Cu` is Penumbra's RGB `Cu`); the walk's random stream (see
 //! above); and the MIS weights of the two ways `eval` reaches the exit
 //! interface, which pbrt computes in different measures so that its f is
-//! biased for rough coats (see `Layered::f`, pbrt-v4 issue #187). As in
+//! biased for rough coats (see `Layered::f`). As in
 //! pbrt, `maxdepth` truncates `eval` and `sample` slightly differently when
 //! the medium scatters (`eval`'s next-event estimates end a walk one event
 //! later); with the default thin, non-scattering slab they agree.
@@ -653,7 +653,7 @@ impl<B: Interface> Layered<B> {
     /// under both: the exit's `pdf(wi, −w)` (how `wis` is drawn from wi),
     /// where pbrt-v4 writes `PDF(−w, wi)`, the density of wi, another
     /// measure. pbrt's weights then do not sum to one and its f overshoots
-    /// its own `Sample_f` (pbrt-v4 issue #187): by 9 % for a coat of
+    /// its own `Sample_f`: by 9 % for a coat of
     /// roughness 0.3 over a diffuse base, as measured here by the test
     /// `coated_diffuse_sampling_matches_eval` with pbrt's weights.
     fn f(&self, mut wo: Vec3, mut wi: Vec3) -> Spectrum {
@@ -1603,7 +1603,7 @@ mod tests {
         // (eval |cos| / p_l, MIS by `pdf`), power heuristic. `pdf` only
         // enters the weights, which sum to one, so the sum must equal the
         // directional albedo E[weight] whatever pdf returns, provided eval
-        // and sample agree (pbrt-v4 issue #187: there they do not; the
+        // and sample agree (in pbrt-v4 they do not; the
         // sampling tests above catch that, z = 18.7, this one barely, z = 2.3,
         // as BSDF samples carry most of the MIS weight). Power: a sample
         // reporting its walk's path density instead of `pdf` as its MIS
