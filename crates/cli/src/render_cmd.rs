@@ -94,7 +94,13 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         }
     }
     let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
-    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone(), sampler: a.sampler.clone() };
+    let ov = Overrides {
+        spp: a.spp,
+        seed: a.seed,
+        integrator: a.integrator.clone(),
+        sampler: a.sampler.clone(),
+        envmap: a.envmap.clone(),
+    };
     let (mut job, notes) = penumbra_scene::load_scene_noted(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
     for n in notes {
         eprintln!("note: {n}");

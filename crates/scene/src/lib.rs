@@ -11,6 +11,8 @@ pub mod desc;
 pub mod error;
 #[doc(hidden)]
 pub mod fuzzing;
+#[cfg(feature = "gltf")]
+pub mod gltf;
 pub mod image_io;
 pub mod mitsuba;
 pub mod obj;
@@ -31,7 +33,8 @@ pub use scene_builder::{Location, SceneBuilder};
 use penumbra_render::render::RenderJob;
 use std::path::Path;
 
-/// Loads a Mitsuba 3 XML scene with `-D name=value` definitions.
+/// Loads a scene: Mitsuba 3 XML with `-D name=value` definitions, or glTF 2.0
+/// (`.gltf`, `.glb`; see [`gltf`]).
 pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<RenderJob> {
     load_scene_noted(path, defines, ov).map(|(job, _)| job)
 }
@@ -39,7 +42,38 @@ pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> 
 /// As [`load_scene`], with the notes a user should see: the files of an
 /// older version that were upgraded, and what was renamed in them.
 pub fn load_scene_noted(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
+    if let Some(job) = load_other_format(path, defines, ov) {
+        return job;
+    }
     let desc = mitsuba::parse_file(path, defines)?;
     let job = builder::build(&desc, ov).map_err(|e| desc.explain(e))?;
     Ok((job, desc.upgrade_notes()))
+}
+
+/// The scene of a file that is not Mitsuba XML, chosen by its extension
+/// (`None`: read it as Mitsuba XML).
+fn load_other_format(
+    path: &Path,
+    defines: &[(String, String)],
+    ov: &Overrides,
+) -> Option<Result<(RenderJob, Vec<String>)>> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("gltf" | "glb") => Some(if !defines.is_empty() {
+            Err(LoadError::new(None, "-D definitions apply to Mitsuba XML scenes only, not to glTF"))
+        } else {
+            load_gltf(path, ov)
+        }),
+        _ => None,
+    }
+}
+
+#[cfg(feature = "gltf")]
+fn load_gltf(path: &Path, ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
+    gltf::load(path, ov)
+}
+
+#[cfg(not(feature = "gltf"))]
+fn load_gltf(path: &Path, _ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
+    Err(LoadError::in_file(path, "this build has no glTF support; build penumbra-scene with the feature `gltf`"))
 }

@@ -4,12 +4,14 @@
 //! ```text
 //! f = (1 − metallic) · [(1 − F_d) · c/π + F_d · S] + metallic · F_m · S
 //! S   = D(h) G(wo, wi) / (4 cos θ_o cos θ_i)     GGX, α = roughness²
-//! F_d = f0 + (1 − f0) (1 − |wo·h|)⁵              dielectric, f0 = ((η−1)/(η+1))², 0.04 for η = 1.5
+//! F_d = s · (f0 + (1 − f0) (1 − |wo·h|)⁵)        dielectric, f0 = ((η−1)/(η+1))², 0.04 for η = 1.5
 //! F_m = c  + (1 − c)  (1 − |wo·h|)⁵              metal: Schlick with F0 = base colour
 //! ```
 //!
 //! (`fresnel_mix` and `conductor_fresnel` of the specification, with
-//! `KHR_materials_ior` giving η.) `c` is the base colour (factor × texture ×
+//! `KHR_materials_ior` giving η and `KHR_materials_specular`'s
+//! `specularFactor` giving s, 1 by default; s = 0 and metallic 0 make the
+//! material Lambertian.) `c` is the base colour (factor × texture ×
 //! vertex colour). One-sided like Mitsuba's BSDFs; a `doubleSided` glTF
 //! material is wrapped in `twosided` by the reader.
 //!
@@ -30,6 +32,7 @@
 //! | vertex_color | texture | per-vertex colour multiplied in (optional) |
 //! | metallic_roughness | texture | G = roughness, B = metallic (factors baked in) |
 //! | f0 | float | dielectric reflectance at normal incidence |
+//! | specular | float | `specularFactor` s, scaling the dielectric Fresnel term |
 
 use super::microfacet::{reflect_m, Microfacet, MicrofacetType};
 use super::{BsdfModel, BsdfParams, BsdfSample};
@@ -53,6 +56,8 @@ pub struct GltfPbr {
     pub distr: Microfacet,
     /// Dielectric reflectance at normal incidence.
     pub f0: f32,
+    /// `KHR_materials_specular`'s factor, scaling the dielectric Fresnel term.
+    pub specular: f32,
 }
 
 /// The glTF metallic-roughness material as the scene stores it.
@@ -66,6 +71,8 @@ pub struct GltfPbrParams {
     pub metallic_roughness: Texture,
     /// Dielectric reflectance at normal incidence, ((η−1)/(η+1))².
     pub f0: f32,
+    /// `KHR_materials_specular`'s `specularFactor` (1 without the extension).
+    pub specular: f32,
 }
 
 impl BsdfParams for GltfPbrParams {
@@ -78,7 +85,7 @@ impl BsdfParams for GltfPbrParams {
             c *= v.eval(si);
         }
         let mr = self.metallic_roughness.eval(si);
-        GltfPbr::new(c, mr.z, mr.y, self.f0)
+        GltfPbr { specular: self.specular.clamp(0.0, 1.0), ..GltfPbr::new(c, mr.z, mr.y, self.f0) }
     }
 
     fn textures(&self) -> Vec<&Texture> {
@@ -106,6 +113,7 @@ impl GltfPbr {
             metallic: metallic.clamp(0.0, 1.0),
             distr: Microfacet::isotropic(MicrofacetType::Ggx, (r * r).max(MIN_ALPHA)),
             f0,
+            specular: 1.0,
         }
     }
 
@@ -114,7 +122,7 @@ impl GltfPbr {
     #[inline]
     fn p_spec(&self, cos_o: f32) -> f32 {
         let w = schlick_weight(cos_o);
-        let fd = self.f0 + (1.0 - self.f0) * w;
+        let fd = self.specular * (self.f0 + (1.0 - self.f0) * w);
         let lum = |c: Spectrum| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
         let fm = lum(self.base_color + (Spectrum::ONE - self.base_color) * w);
         let spec = (1.0 - self.metallic) * fd + self.metallic * fm;
@@ -142,7 +150,7 @@ impl BsdfModel for GltfPbr {
         }
         let h = (wo + wi).normalize();
         let w = schlick_weight(wo.dot(h));
-        let fd = self.f0 + (1.0 - self.f0) * w;
+        let fd = self.specular * (self.f0 + (1.0 - self.f0) * w);
         let fm = self.base_color + (Spectrum::ONE - self.base_color) * w;
         let s = self.distr.eval(h) * self.distr.g(wo, wi, h) / (4.0 * wo.z * wi.z);
         let m = self.metallic;
@@ -160,6 +168,7 @@ impl BsdfModel for GltfPbr {
         ps * spec + (1.0 - ps) * warp::cosine_hemisphere_pdf(wi)
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
     fn sample(&self, wo: Vec3, u: f32, u2: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
@@ -300,6 +309,11 @@ mod tests {
             let expect = (1.0 - m) * ((1.0 - 0.04) * c * INV_PI + 0.04 * s) + m * c * s;
             let got = b.eval(wo, wi).x;
             assert!((got / expect - 1.0).abs() < 1e-4, "c {c} m {m} r {r}: {got} vs {expect}");
+        }
+        // specularFactor 0, metallic 0: Lambert's c/π everywhere.
+        let b = GltfPbr { specular: 0.0, ..GltfPbr::new(Spectrum::splat(0.6), 0.0, 0.3, 0.04) };
+        for (a, c) in [(dir(0.9, 0.0), dir(0.2, 1.0)), (dir(0.3, 0.5), dir(0.3, 3.6))] {
+            assert!((b.eval(a, c).x / (0.6 * INV_PI) - 1.0).abs() < 1e-6);
         }
         // Lambert's limit: base colour c, roughness 1, far from the specular
         // peak the value approaches (1 − F_d) c/π (F_d from wo·h).

@@ -317,21 +317,7 @@ pub(super) fn build_sensor(
             (kind, spp as u32, seed as u64)
         }
     };
-    let kind = match ov.sampler.as_deref() {
-        None => kind,
-        Some("independent") => SamplerKind::Independent,
-        Some("stratified") => SamplerKind::Stratified,
-        Some("multijitter") => SamplerKind::Multijitter { jitter: true },
-        Some("orthogonal") => SamplerKind::Orthogonal { jitter: true },
-        Some("ldsampler") => SamplerKind::LowDiscrepancy,
-        Some("sobol") => SamplerKind::Sobol,
-        Some(other) => {
-            return Err(LoadError::new(
-                None,
-                format!("--sampler {other}: unknown sampler; use one of {}", SAMPLER_OVERRIDES.join(", ")),
-            ))
-        }
-    };
+    let kind = sampler_kind(ov.sampler.as_deref(), kind)?;
     if let Some(o) = ov.spp {
         spp = o;
     }
@@ -383,4 +369,23 @@ pub(super) fn build_sensor(
         }
     };
     Ok((camera, filter, rect, Sampler::new(kind, seed, spp)))
+}
+
+/// The sampler `--sampler NAME` selects, else `default`.
+pub fn sampler_kind(name: Option<&str>, default: SamplerKind) -> Result<SamplerKind> {
+    Ok(match name {
+        None => default,
+        Some("independent") => SamplerKind::Independent,
+        Some("stratified") => SamplerKind::Stratified,
+        Some("multijitter") => SamplerKind::Multijitter { jitter: true },
+        Some("orthogonal") => SamplerKind::Orthogonal { jitter: true },
+        Some("ldsampler") => SamplerKind::LowDiscrepancy,
+        Some("sobol") => SamplerKind::Sobol,
+        Some(other) => {
+            return Err(LoadError::new(
+                None,
+                format!("--sampler {other}: unknown sampler; use one of {}", SAMPLER_OVERRIDES.join(", ")),
+            ))
+        }
+    })
 }

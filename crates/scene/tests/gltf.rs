@@ -1,0 +1,208 @@
+//! glTF 2.0: the test scene `tests/scenes/gltf/boxes.gltf` (written by
+//! `tools/make_gltf_scene.py` with its Mitsuba twin `boxes.xml`) renders as
+//! the XML does (camera, transforms and hierarchy, diffuse materials,
+//! emission, point light); the same scene as `.glb` and with an embedded
+//! data URI loads alike; bad input is an error naming its JSON pointer.
+
+#![cfg(feature = "gltf")]
+
+mod common;
+
+use ::gltf::json::Value;
+use common::{assert_agree, compare, estimate, injected_errors, root, Estimate};
+use penumbra_render::film::Film;
+use penumbra_render::sampling::Sampler;
+use penumbra_scene::{gltf, load_scene, Overrides};
+use std::path::{Path, PathBuf};
+
+fn scene(name: &str) -> PathBuf {
+    root().join("tests/scenes/gltf").join(name)
+}
+
+/// A window of the 512x384 frame (both formats' film) holding both boxes,
+/// the floor and the lamp; rendered in independently seeded batches.
+const CROP: (u32, u32, u32, u32) = (96, 64, 320, 256);
+
+fn render(path: &Path, spp: u32, batches: u32, seed: u64) -> Estimate {
+    let ov = Overrides { spp: Some(spp / batches), ..Default::default() };
+    let mut job = load_scene(path, &[], &ov).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(job.full_size, (512, 384), "{}", path.display());
+    job.crop_offset = (CROP.0, CROP.1);
+    (job.width, job.height) = (CROP.2, CROP.3);
+    let imgs: Vec<Vec<[f32; 3]>> = (0..batches)
+        .map(|b| {
+            job.sampler = Sampler::new(job.sampler.kind, seed * 1000 + b as u64, job.sampler.spp);
+            let mut film = Film::new(job.width, job.height);
+            job.render_into(&mut film, 0..job.sampler.spp, &|_| {});
+            film.develop()
+        })
+        .collect();
+    estimate(job.width, job.height, &imgs)
+}
+
+/// The glTF scene and its Mitsuba XML twin render the same image; the
+/// comparison catches the usual injected errors (power), among them a
+/// mirrored image, which a wrong camera handedness would give.
+#[test]
+fn gltf_matches_mitsuba_xml_twin() {
+    let ours = render(&scene("boxes.gltf"), 64, 8, 1);
+    let twin = render(&scene("boxes.xml"), 64, 8, 2);
+    let v = assert_agree("boxes.gltf vs boxes.xml", &ours, &twin, 0.02);
+    println!("boxes: block chi2 {:?}, largest block z {:?}", v.block_chi2, v.block_max);
+    for (error, bad) in injected_errors(&ours) {
+        let caught = !compare(&format!("boxes with {error}"), &bad, &twin, 0.02).failures.is_empty();
+        println!("boxes: injected error '{error}' caught: {caught}");
+        assert!(caught, "the comparison missed an injected error: {error}");
+    }
+    // The red box is left of the blue one in the image (not mirrored).
+    let (w, h) = (ours.width as usize, ours.height as usize);
+    let half = |left: bool| {
+        let mut s = [0.0f64; 3];
+        for y in 0..h {
+            for x in 0..w {
+                if (x < w / 2) == left {
+                    let p = ours.mean[y * w + x];
+                    (0..3).for_each(|c| s[c] += p[c]);
+                }
+            }
+        }
+        s
+    };
+    let (l, r) = (half(true), half(false));
+    assert!(l[0] / l[2] > r[0] / r[2], "red is not on the left: left {l:?}, right {r:?}");
+}
+
+/// `boxes.gltf` as one `.glb` (JSON chunk + BIN chunk).
+fn glb() -> Vec<u8> {
+    let mut json = doc();
+    json["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let mut j = json.to_string().into_bytes();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let mut b = std::fs::read(scene("boxes.bin")).unwrap();
+    while b.len() % 4 != 0 {
+        b.push(0);
+    }
+    let total = 12 + 8 + j.len() + 8 + b.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(b.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&b);
+    out
+}
+
+/// The test scene's JSON, to edit.
+fn doc() -> Value {
+    ::gltf::json::deserialize::from_str(&std::fs::read_to_string(scene("boxes.gltf")).unwrap()).unwrap()
+}
+
+/// `doc` edited by `edit`, as bytes.
+fn edited(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+    let mut d = doc();
+    edit(&mut d);
+    d.to_string().into_bytes()
+}
+
+fn load(name: &str, bytes: &[u8]) -> Result<penumbra_render::render::RenderJob, String> {
+    gltf::load_bytes(&scene(name), bytes, &Overrides::default()).map(|(j, _)| j).map_err(|e| e.to_string())
+}
+
+fn triangles(job: &penumbra_render::render::RenderJob) -> usize {
+    job.scene.shapes.iter().map(|s| s.prim_count()).sum()
+}
+
+fn gltf_text() -> String {
+    doc().to_string()
+}
+
+#[test]
+fn glb_and_data_uri_load_as_the_gltf() {
+    let base = load("boxes.gltf", gltf_text().as_bytes()).unwrap();
+    assert_eq!(triangles(&base), 2 + 12 + 12 + 2);
+    assert_eq!(base.scene.lights.len(), 2, "the lamp's area light and the point light");
+    let g = load("boxes.glb", &glb()).unwrap();
+    assert_eq!(triangles(&g), triangles(&base));
+    use base64::Engine;
+    let bin = std::fs::read(scene("boxes.bin")).unwrap();
+    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(bin));
+    let text = edited(|d| d["buffers"][0]["uri"] = uri.into());
+    // Loaded from elsewhere: the buffer cannot come from beside the file.
+    let job = gltf::load_bytes(Path::new("/nonexistent/x.gltf"), &text, &Overrides::default()).unwrap().0;
+    assert_eq!(triangles(&job), triangles(&base));
+    assert_eq!(job.scene.shapes[1].prim_bounds(0).min, base.scene.shapes[1].prim_bounds(0).min);
+}
+
+#[test]
+fn bad_input_names_the_json_pointer() {
+    // Truncated GLB: every cut is an error, never a panic.
+    let full = glb();
+    for cut in [0, 5, 12, 19, 40, full.len() / 2, full.len() - 1] {
+        let e = load("boxes.glb", &full[..cut]).expect_err("a truncated GLB must fail");
+        assert!(!e.is_empty(), "cut {cut}");
+        if cut >= 20 && cut < full.len() - 8 {
+            println!("truncated at {cut}: {e}");
+        }
+    }
+    let e = load("boxes.glb", &full[..full.len() - 100]).unwrap_err();
+    assert!(e.contains("boxes.glb"), "{e}");
+    // An accessor reading past its view.
+    let e = load("boxes.gltf", &edited(|d| d["accessors"][0]["count"] = 400.into())).unwrap_err();
+    assert!(e.contains("at /accessors/0") && e.contains("POSITION") && e.contains("/meshes/0/primitives/0"), "{e}");
+    // A missing buffer file.
+    let e = load("boxes.gltf", &edited(|d| d["buffers"][0]["uri"] = "missing.bin".into())).unwrap_err();
+    assert!(e.contains("at /buffers/0") && e.contains("missing.bin"), "{e}");
+    // A buffer shorter than its byteLength.
+    let e = load("boxes.glb", &{
+        let mut g = glb();
+        let n = g.len();
+        // BIN chunk length field shortened, the file with it.
+        let json_len = u32::from_le_bytes(g[12..16].try_into().unwrap()) as usize;
+        let at = 20 + json_len;
+        let bin_len = u32::from_le_bytes(g[at..at + 4].try_into().unwrap()) - 64;
+        g[at..at + 4].copy_from_slice(&bin_len.to_le_bytes());
+        g.truncate(n - 64);
+        let total = g.len() as u32;
+        g[8..12].copy_from_slice(&total.to_le_bytes());
+        g
+    })
+    .unwrap_err();
+    assert!(e.contains("at /buffers/0") && e.contains("byteLength"), "{e}");
+    // Lines instead of triangles.
+    let e = load("boxes.gltf", &edited(|d| d["meshes"][0]["primitives"][0]["mode"] = 1.into())).unwrap_err();
+    assert!(e.contains("at /meshes/0/primitives/0") && e.contains("triangles"), "{e}");
+    // A scene naming a node that does not exist (the crate's validation).
+    let e =
+        load("boxes.gltf", &edited(|d| d["scenes"][0]["nodes"].as_array_mut().unwrap().push(7.into()))).unwrap_err();
+    assert!(e.contains("/scenes/0/nodes"), "{e}");
+    // A node hierarchy with a cycle.
+    let e = load("boxes.gltf", &edited(|d| d["nodes"][2]["children"] = vec![1].into())).unwrap_err();
+    assert!(e.contains("/nodes/") && e.contains("cycle"), "{e}");
+    // JSON syntax: line and column.
+    let e = load("boxes.gltf", b"{\n \"asset\": {\"version\": \"2.0\"},\n oops\n}").unwrap_err();
+    assert!(e.contains("boxes.gltf:3:"), "{e}");
+}
+
+/// Without camera and lights: the default view frames the scene from +z,
+/// and a white environment lights it.
+#[test]
+fn defaults_without_camera_or_lights() {
+    // Only the floor and the two boxes.
+    let doc = edited(|d| d["scenes"][0]["nodes"] = vec![0, 1, 3].into());
+    let (job, notes) = gltf::load_bytes(&scene("boxes.gltf"), &doc, &Overrides::default()).unwrap();
+    assert_eq!(job.full_size, (gltf::DEFAULT_FILM_SIZE, gltf::DEFAULT_FILM_SIZE));
+    assert_eq!(job.sampler.spp, gltf::DEFAULT_SPP);
+    assert_eq!(job.scene.lights.len(), 1);
+    assert_eq!(job.scene.lights[0].name(), "constant");
+    assert!(notes.iter().any(|n| n.contains("white environment")), "{notes:?}");
+    let eye = job.camera.world_from_camera.transform_point3(glam::Vec3::ZERO);
+    let fwd = job.camera.world_from_camera.transform_vector3(glam::Vec3::Z).normalize();
+    assert!(eye.z > 2.0 && eye.x.abs() < 0.5, "camera at {eye}");
+    assert!((fwd - glam::Vec3::NEG_Z).length() < 1e-5, "looking along {fwd}");
+}

@@ -1,0 +1,168 @@
+#!/usr/bin/env python3
+"""Writes the glTF test scene tests/scenes/gltf/boxes.gltf (+ boxes.bin) and
+the same scene as Mitsuba XML (boxes.xml), for the cross-format test in
+crates/scene/tests/gltf.rs. Only diffuse surfaces (glTF: metallic 0 and
+KHR_materials_specular's specularFactor 0, which is Lambertian), an emissive
+quad, a point light and a perspective camera, so both formats describe
+exactly the same image. Asymmetric (red box left, blue box right, light on
+the right) so that a mirrored camera shows. Run from the repository root."""
+import json, math, struct
+
+OUT = "tests/scenes/gltf/"
+
+def cube():
+    # 24 vertices [-1,1]^3, outward normals, counter-clockwise seen from outside.
+    pos, nrm, idx = [], [], []
+    for axis in range(3):
+        for sign in (1, -1):
+            n = [0, 0, 0]; n[axis] = sign
+            u = [0, 0, 0]; u[(axis + 1) % 3] = 1
+            v = [0, 0, 0]; v[(axis + 2) % 3] = 1
+            if sign < 0:
+                u, v = v, u
+            base = len(pos)
+            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                pos.append([n[i] + a * u[i] + b * v[i] for i in range(3)])
+                nrm.append(n)
+            idx += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return pos, nrm, idx
+
+def quad(normal_down):
+    # [-1,1]^2 in the xz plane, normal +y (or -y).
+    pos = [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]]
+    idx = [0, 2, 1, 0, 3, 2] if not normal_down else [0, 1, 2, 0, 2, 3]
+    n = [0, -1, 0] if normal_down else [0, 1, 0]
+    return pos, [n] * 4, idx
+
+blob = bytearray()
+views, accessors = [], []
+
+def add(data, fmt, count, comp, typ, target, minmax=None):
+    global blob
+    while len(blob) % 4:
+        blob += b"\0"
+    off = len(blob)
+    blob += struct.pack("<" + fmt * (len(data)), *data)
+    views.append({"buffer": 0, "byteOffset": off, "byteLength": len(blob) - off, "target": target})
+    acc = {"bufferView": len(views) - 1, "componentType": comp, "count": count, "type": typ}
+    if minmax:
+        acc["min"], acc["max"] = minmax
+    accessors.append(acc)
+    return len(accessors) - 1
+
+def mesh(pos, nrm, idx):
+    flat = [c for p in pos for c in p]
+    mm = ([min(p[i] for p in pos) for i in range(3)], [max(p[i] for p in pos) for i in range(3)])
+    a_pos = add(flat, "f", len(pos), 5126, "VEC3", 34962, mm)
+    a_nrm = add([c for n in nrm for c in n], "f", len(nrm), 5126, "VEC3", 34962)
+    a_idx = add(idx, "H", len(idx), 5123, "SCALAR", 34963)
+    return a_pos, a_nrm, a_idx
+
+def diffuse(name, rgb):
+    return {"name": name, "pbrMetallicRoughness": {"baseColorFactor": rgb + [1], "metallicFactor": 0, "roughnessFactor": 1},
+            "extensions": {"KHR_materials_specular": {"specularFactor": 0}}}
+
+GREY, RED, BLUE = [0.7, 0.7, 0.7], [0.8, 0.1, 0.1], [0.1, 0.2, 0.8]
+EMIT = 4.0
+LIGHT_POS, LIGHT_RGB, LIGHT_I = [0.6, 1.0, 0.8], [1.0, 0.9, 0.8], 2.0
+CAM_POS, CAM_PITCH, YFOV, ASPECT = [0.0, 1.0, 3.0], -15.0, 0.8, 4 / 3
+
+materials = [diffuse("floor", GREY), diffuse("red", RED), diffuse("blue", BLUE),
+             {"name": "lamp", "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
+              "emissiveFactor": [1, 1, 1], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": EMIT}}}]
+meshes = []
+for geo, mat in ((quad(False), 0), (cube(), 1), (cube(), 2), (quad(True), 3)):
+    p, n, i = mesh(*geo)
+    meshes.append({"primitives": [{"attributes": {"POSITION": p, "NORMAL": n}, "indices": i, "material": mat}]})
+
+def quat_y(deg):
+    h = math.radians(deg) / 2
+    return [0, math.sin(h), 0, math.cos(h)]
+
+def quat_x(deg):
+    h = math.radians(deg) / 2
+    return [math.sin(h), 0, 0, math.cos(h)]
+
+# The blue box by a column-major matrix: scale (0.3, 0.6, 0.3), translate (0.45, 0.6, -0.2).
+blue_matrix = [0.3, 0, 0, 0, 0, 0.6, 0, 0, 0, 0, 0.3, 0, 0.45, 0.6, -0.2, 1]
+nodes = [
+    {"name": "floor", "mesh": 0, "scale": [1.5, 1, 1.5]},
+    # A parent node carries the red box's translation (hierarchy test).
+    {"name": "red_parent", "translation": [-0.45, 0.0, 0.1], "children": [2]},
+    {"name": "red", "mesh": 1, "translation": [0, 0.25, 0], "rotation": quat_y(30), "scale": [0.25, 0.25, 0.25]},
+    {"name": "blue", "mesh": 2, "matrix": blue_matrix},
+    {"name": "lamp", "mesh": 3, "translation": [0, 1.5, 0], "scale": [0.3, 1, 0.3]},
+    {"name": "point", "translation": LIGHT_POS, "extensions": {"KHR_lights_punctual": {"light": 0}}},
+    {"name": "camera", "camera": 0, "translation": CAM_POS, "rotation": quat_x(CAM_PITCH)},
+]
+doc = {
+    "asset": {"version": "2.0", "generator": "tools/make_gltf_scene.py"},
+    "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular"],
+    "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "color": LIGHT_RGB, "intensity": LIGHT_I}]}},
+    "scene": 0,
+    "scenes": [{"nodes": [0, 1, 3, 4, 5, 6]}],
+    "nodes": nodes,
+    "cameras": [{"type": "perspective", "perspective": {"yfov": YFOV, "aspectRatio": ASPECT, "znear": 0.01}}],
+    "meshes": meshes,
+    "materials": materials,
+    "buffers": [{"uri": "boxes.bin", "byteLength": len(blob)}],
+    "bufferViews": views,
+    "accessors": accessors,
+}
+open(OUT + "boxes.bin", "wb").write(blob)
+open(OUT + "boxes.gltf", "w").write(json.dumps(doc, indent=1) + "\n")
+
+# The same scene in Mitsuba XML, written independently of Penumbra's glTF
+# conversion: the camera by lookat, the boxes by Mitsuba's cube, the quads
+# by rectangles rotated into the xz plane.
+p = math.radians(CAM_PITCH)
+fwd = [0, math.sin(p), -math.cos(p)]
+up = [0, math.cos(p), math.sin(p)]
+target = [CAM_POS[i] + fwd[i] for i in range(3)]
+v3 = lambda v: ", ".join(f"{x:.9g}" for x in v)
+rgb = lambda c: ", ".join(f"{x:.9g}" for x in c)
+xml = f"""<scene version="3.0.0">
+    <!-- Written by tools/make_gltf_scene.py: the Mitsuba twin of boxes.gltf. -->
+    <default name="spp" value="64"/>
+    <integrator type="path"/>
+    <sensor type="perspective">
+        <float name="fov" value="{math.degrees(YFOV):.9g}"/>
+        <string name="fov_axis" value="y"/>
+        <float name="near_clip" value="0.01"/>
+        <transform name="to_world">
+            <lookat origin="{v3(CAM_POS)}" target="{v3(target)}" up="{v3(up)}"/>
+        </transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="512"/>
+            <integer name="height" value="384"/>
+            <rfilter type="gaussian"/>
+        </film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><rotate x="1" angle="-90"/><scale x="1.5" z="1.5"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="{rgb(GREY)}"/></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world">
+            <scale value="0.25"/><rotate y="1" angle="30"/><translate y="0.25"/><translate x="-0.45" z="0.1"/>
+        </transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="{rgb(RED)}"/></bsdf>
+    </shape>
+    <shape type="cube">
+        <transform name="to_world"><scale x="0.3" y="0.6" z="0.3"/><translate x="0.45" y="0.6" z="-0.2"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="{rgb(BLUE)}"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><rotate x="1" angle="90"/><scale x="0.3" z="0.3"/><translate y="1.5"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area"><rgb name="radiance" value="{EMIT}"/></emitter>
+    </shape>
+    <emitter type="point">
+        <point name="position" value="{v3(LIGHT_POS)}"/>
+        <rgb name="intensity" value="{rgb([c * LIGHT_I for c in LIGHT_RGB])}"/>
+    </emitter>
+</scene>
+"""
+open(OUT + "boxes.xml", "w").write(xml)
+print("wrote", OUT + "boxes.gltf", len(blob), "bytes of buffer, and boxes.xml")
