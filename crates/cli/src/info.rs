@@ -4,12 +4,17 @@
 use crate::args::InfoArgs;
 use anyhow::{anyhow, Result};
 use penumbra_render::geometry::Shape;
+use penumbra_render::render::RenderJob;
 use penumbra_scene::desc::{Kind, Node, SceneDesc, Value};
 use penumbra_scene::Overrides;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
 pub fn run(a: &InfoArgs) -> Result<()> {
+    let ext = a.scene.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+        return run_other_format(a);
+    }
     let desc = penumbra_scene::mitsuba::parse_file(&a.scene, &a.define).map_err(|e| anyhow!(e))?;
     let mut out = String::new();
     writeln!(out, "scene: {} (format version {})", a.scene.display(), desc.version)?;
@@ -25,45 +30,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     let notes = approximations(&desc);
     let built = penumbra_scene::builder::build(&desc, &Overrides::default()).map_err(|e| desc.explain(e));
     if let Ok(job) = &built {
-        let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
-        for shape in &job.scene.shapes {
-            match shape {
-                Shape::Mesh(m) => {
-                    meshes += 1;
-                    triangles += m.mesh.indices.len();
-                }
-                Shape::Sphere(_) => *analytic.entry("sphere").or_default() += 1,
-                _ => *analytic.entry("other").or_default() += 1,
-            }
-        }
-        let mut geometry = format!("{triangles} triangles in {meshes} meshes");
-        for (kind, n) in &analytic {
-            write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
-        }
-        // Shape-group members are counted once above, however often placed.
-        let n = job.scene.instances.len();
-        if n > 0 {
-            write!(geometry, ", {n} instance{}", if n == 1 { "" } else { "s" })?;
-        }
-        writeln!(out, "geometry: {geometry}")?;
-        let mut lights = BTreeMap::<&str, usize>::new();
-        for l in &job.scene.lights {
-            // `Light::name` matches every kind of light, so a new one is counted by its own name.
-            *lights.entry(l.name()).or_default() += 1;
-        }
-        let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
-        writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;
-        let (w, h) = job.full_size;
-        let crop = if (job.width, job.height) != (w, h) {
-            format!(", crop {}x{} at ({}, {})", job.width, job.height, job.crop_offset.0, job.crop_offset.1)
-        } else {
-            String::new()
-        };
-        writeln!(
-            out,
-            "image: {w}x{h}{crop}, {} samples per pixel ({:?} sampler, seed {})",
-            job.sampler.spp, job.sampler.kind, job.sampler.seed
-        )?;
+        describe_job(job, &mut out)?;
     }
     if notes.is_empty() {
         writeln!(out, "approximations: none")?;
@@ -192,4 +159,70 @@ fn approximations(desc: &SceneDesc) -> Vec<String> {
         ));
     }
     notes
+}
+
+/// `info` for a scene that is not Mitsuba XML (glTF): the built job, and
+/// the reader's notes as its approximations.
+fn run_other_format(a: &InfoArgs) -> Result<()> {
+    let (job, notes) = penumbra_scene::load_scene_noted(&a.scene, &a.define, &Overrides::default())
+        .map_err(|e| anyhow!("the scene cannot be rendered by Penumbra: {e}"))?;
+    let mut out = String::new();
+    writeln!(out, "scene: {}", a.scene.display())?;
+    writeln!(out, "integrator: path (the default for glTF scenes)")?;
+    describe_job(&job, &mut out)?;
+    if notes.is_empty() {
+        writeln!(out, "approximations: none")?;
+    } else {
+        writeln!(out, "approximations:")?;
+        for n in &notes {
+            writeln!(out, "  - {n}")?;
+        }
+    }
+    print!("{out}");
+    println!("status: ready to render");
+    Ok(())
+}
+
+/// Geometry, emitters, image size and samples of a built scene.
+fn describe_job(job: &RenderJob, out: &mut String) -> Result<()> {
+    let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
+    for shape in &job.scene.shapes {
+        match shape {
+            Shape::Mesh(m) => {
+                meshes += 1;
+                triangles += m.mesh.indices.len();
+            }
+            Shape::Sphere(_) => *analytic.entry("sphere").or_default() += 1,
+            _ => *analytic.entry("other").or_default() += 1,
+        }
+    }
+    let mut geometry = format!("{triangles} triangles in {meshes} meshes");
+    for (kind, n) in &analytic {
+        write!(geometry, ", {n} analytic {kind}{}", if *n == 1 { "" } else { "s" })?;
+    }
+    // Shape-group members are counted once above, however often placed.
+    let n = job.scene.instances.len();
+    if n > 0 {
+        write!(geometry, ", {n} instance{}", if n == 1 { "" } else { "s" })?;
+    }
+    writeln!(out, "geometry: {geometry}")?;
+    let mut lights = BTreeMap::<&str, usize>::new();
+    for l in &job.scene.lights {
+        // `Light::name` matches every kind of light, so a new one is counted by its own name.
+        *lights.entry(l.name()).or_default() += 1;
+    }
+    let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;
+    let (w, h) = job.full_size;
+    let crop = if (job.width, job.height) != (w, h) {
+        format!(", crop {}x{} at ({}, {})", job.width, job.height, job.crop_offset.0, job.crop_offset.1)
+    } else {
+        String::new()
+    };
+    writeln!(
+        out,
+        "image: {w}x{h}{crop}, {} samples per pixel ({:?} sampler, seed {})",
+        job.sampler.spp, job.sampler.kind, job.sampler.seed
+    )?;
+    Ok(())
 }
