@@ -166,3 +166,99 @@ xml = f"""<scene version="3.0.0">
 """
 open(OUT + "boxes.xml", "w").write(xml)
 print("wrote", OUT + "boxes.gltf", len(blob), "bytes of buffer, and boxes.xml")
+
+# ---------------------------------------------------------------------------
+# materials.gltf: the metallic-roughness material (a gold metal, a glossy red
+# dielectric, a KHR_materials_transmission glass) on instanced spheres over a
+# floor with an sRGB checker texture (a PNG in a bufferView, repeated 4x by
+# KHR_texture_transform); a directional and a spot light; a camera looking
+# down at 30 degrees. README's image; crates/scene/tests/gltf.rs checks the texture.
+import zlib
+
+def png(w, h, rows):
+    def chunk(t, d):
+        c = struct.pack(">I", len(d)) + t + d
+        return c + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    raw = b"".join(b"\0" + bytes(r) for r in rows)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+CHECK = (200, 60)  # sRGB-encoded bytes of the light and dark squares
+rows = [[c for x in range(8) for c in [CHECK[(x + y) % 2]] * 3] for y in range(8)]
+png_bytes = png(8, 8, rows)
+
+blob = bytearray()
+views, accessors = [], []
+
+def sphere(nu=24, nv=12):
+    pos, nrm, uv, idx = [], [], [], []
+    for j in range(nv + 1):
+        t = math.pi * j / nv
+        for i in range(nu + 1):
+            p = 2 * math.pi * i / nu
+            n = [math.sin(t) * math.cos(p), math.cos(t), -math.sin(t) * math.sin(p)]
+            pos.append(n); nrm.append(n); uv.append([i / nu, j / nv])
+    for j in range(nv):
+        for i in range(nu):
+            a, b = j * (nu + 1) + i, (j + 1) * (nu + 1) + i
+            idx += [a, b, a + 1, a + 1, b, b + 1]
+    return pos, nrm, uv, idx
+
+def mesh_uv(pos, nrm, uv, idx):
+    a_pos, a_nrm, a_idx = mesh(pos, nrm, idx)
+    a_uv = add([c for t in uv for c in t], "f", len(uv), 5126, "VEC2", 34962)
+    return a_pos, a_nrm, a_uv, a_idx
+
+fp, fn, fi = quad(False)
+floor = mesh_uv(fp, fn, [[0, 0], [1, 0], [1, 1], [0, 1]], fi)
+ball = mesh_uv(*sphere())
+while len(blob) % 4:
+    blob += b"\0"
+img_off = len(blob)
+blob += png_bytes
+views.append({"buffer": 0, "byteOffset": img_off, "byteLength": len(png_bytes)})
+img_view = len(views) - 1
+
+def prim(m, mat):
+    return {"primitives": [{"attributes": {"POSITION": m[0], "NORMAL": m[1], "TEXCOORD_0": m[2]}, "indices": m[3], "material": mat}]}
+
+doc2 = {
+    "asset": {"version": "2.0", "generator": "tools/make_gltf_scene.py"},
+    "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior", "KHR_texture_transform"],
+    "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "directional", "color": [1, 0.95, 0.9], "intensity": 2.5},
+        {"type": "spot", "color": [0.6, 0.7, 1.0], "intensity": 6, "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.6}}]}},
+    "scene": 0,
+    "scenes": [{"nodes": [0, 1, 2, 3, 4, 5, 6]}],
+    "cameras": [{"type": "perspective", "perspective": {"yfov": 0.6, "aspectRatio": 1.5, "znear": 0.01}}],
+    "nodes": [
+        {"name": "floor", "mesh": 0, "scale": [2.2, 1, 1.4]},
+        {"name": "gold", "mesh": 1, "translation": [-1.1, 0.45, 0], "scale": [0.45, 0.45, 0.45]},
+        {"name": "red", "mesh": 2, "translation": [0, 0.45, 0], "scale": [0.45, 0.45, 0.45]},
+        {"name": "glass", "mesh": 3, "translation": [1.1, 0.45, 0], "scale": [0.45, 0.45, 0.45]},
+        # The sun from the upper left front: its −z turned towards (0.5, −1, −0.6).
+        {"name": "sun", "rotation": [-0.4, -0.2, -0.1, 0.89], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        # A spot straight down onto the red ball (−z turned to −y).
+        {"name": "spot", "translation": [0, 2.5, 0], "rotation": [-0.7071068, 0, 0, 0.7071068],
+         "extensions": {"KHR_lights_punctual": {"light": 1}}},
+        {"name": "camera", "camera": 0, "translation": [0, 2.3, 3.6], "rotation": quat_x(-30)},
+    ],
+    "meshes": [prim(floor, 0), prim(ball, 1), prim(ball, 2), prim(ball, 3)],
+    "materials": [
+        {"name": "checker", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.7,
+         "baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [4, 4]}}}}},
+        {"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.77, 0.34, 1], "metallicFactor": 1, "roughnessFactor": 0.35}},
+        {"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.08, 0.06, 1], "metallicFactor": 0, "roughnessFactor": 0.25}},
+        {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.05},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_ior": {"ior": 1.5}}},
+    ],
+    "textures": [{"source": 0, "sampler": 0}],
+    "samplers": [{"magFilter": 9728, "wrapS": 10497, "wrapT": 10497}],
+    "images": [{"bufferView": img_view, "mimeType": "image/png"}],
+    "buffers": [{"uri": "materials.bin", "byteLength": len(blob)}],
+    "bufferViews": views,
+    "accessors": accessors,
+}
+open(OUT + "materials.bin", "wb").write(blob)
+open(OUT + "materials.gltf", "w").write(json.dumps(doc2, indent=1) + "\n")
+print("wrote", OUT + "materials.gltf", len(blob), "bytes of buffer")

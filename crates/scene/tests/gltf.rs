@@ -206,3 +206,57 @@ fn defaults_without_camera_or_lights() {
     assert!(eye.z > 2.0 && eye.x.abs() < 0.5, "camera at {eye}");
     assert!((fwd - glam::Vec3::NEG_Z).length() < 1e-5, "looking along {fwd}");
 }
+
+/// `materials.gltf`: the floor's checker (an sRGB PNG in a bufferView,
+/// repeated 4x by KHR_texture_transform, nearest filter) is decoded to
+/// linear values at the right texels; the spot and directional lights and
+/// the three material kinds are built.
+#[test]
+fn textures_lights_and_materials() {
+    use penumbra_render::material::Material;
+    use penumbra_render::texture::Texture;
+    use penumbra_scene::image_io::srgb_to_linear;
+    let (job, notes) = gltf::load(&scene("materials.gltf"), &Overrides::default()).unwrap();
+    assert!(notes.is_empty(), "{notes:?}");
+    let mut names: Vec<&str> = job.scene.lights.iter().map(|l| l.name()).collect();
+    names.sort();
+    assert_eq!(names, ["directional", "spot"]);
+    let Material::GltfPbr(floor) = &job.scene.materials[0] else { panic!("{:?}", job.scene.materials[0]) };
+    let Texture::Bitmap(b) = &floor.base_color else { panic!("the floor has no texture") };
+    // Texel (x, y) of the 8x8 checker is light when x + y is even; with the
+    // 4x repetition its centre is at uv = ((x + 0.5) / 8, (y + 0.5) / 8) / 4.
+    let (light, dark) = (srgb_to_linear(200.0 / 255.0), srgb_to_linear(60.0 / 255.0));
+    for (x, y) in [(0, 0), (1, 0), (0, 1), (5, 2), (7, 7)] {
+        let uv = glam::Vec2::new((x as f32 + 0.5) / 32.0, (y as f32 + 0.5) / 32.0);
+        let expect = if (x + y) % 2 == 0 { light } else { dark };
+        let got = b.eval(uv);
+        assert!((got - glam::Vec3::splat(expect)).abs().max_element() < 1e-5, "texel ({x}, {y}): {got} vs {expect}");
+        // The next repetition (uv + 1/4) is the same texel.
+        assert!((b.eval(uv + glam::Vec2::splat(0.25)) - got).abs().max_element() < 1e-6);
+    }
+    assert!(
+        matches!(&job.scene.materials[1], Material::GltfPbr(p) if p.metallic_roughness.constant() == Some(glam::Vec3::new(0.0, 0.35, 1.0)))
+    );
+    // Transmission: a blend with a rough dielectric.
+    assert!(
+        matches!(&job.scene.materials[3], Material::Blend { second, .. } if matches!(**second, Material::RoughDielectric(_)))
+    );
+}
+
+/// `--envmap`: added to a glTF scene's lights, in place of the white
+/// environment of a scene without lights; added to a Mitsuba scene too.
+#[test]
+fn envmap_option() {
+    let env = root().join("tests/scenes/textures/sunsky.exr");
+    let ov = Overrides { envmap: Some(env.clone()), ..Default::default() };
+    let no_lights = edited(|d| d["scenes"][0]["nodes"] = vec![0, 1, 3, 6].into());
+    let (job, _) = gltf::load_bytes(&scene("boxes.gltf"), &no_lights, &ov).unwrap();
+    let names: Vec<&str> = job.scene.lights.iter().map(|l| l.name()).collect();
+    assert_eq!(names, ["envmap"]);
+    let job = load_scene(&scene("boxes.xml"), &[], &ov).unwrap();
+    assert!(job.scene.lights.iter().any(|l| l.name() == "envmap"));
+    assert_eq!(job.scene.lights.len(), 3);
+    let bad = Overrides { envmap: Some(root().join("missing.exr")), ..Default::default() };
+    let e = load_scene(&scene("boxes.gltf"), &[], &bad).unwrap_err().to_string();
+    assert!(e.contains("--envmap") && e.contains("missing.exr"), "{e}");
+}
