@@ -8,7 +8,9 @@
 //! - The default scene's node hierarchy (TRS or matrix transforms), meshes
 //!   of triangles (other primitive modes are errors) with POSITION, NORMAL,
 //!   TEXCOORD_0 and COLOR_0, baked into world space (a mirroring transform
-//!   reverses the winding, as the specification requires).
+//!   reverses the winding, as the specification requires); a mesh that
+//!   several nodes use, none of them mirroring and no primitive emitting,
+//!   is stored once as a group placed by instances.
 //! - Materials: the metallic-roughness model as [`GltfPbrParams`] (base
 //!   colour factor × sRGB texture × vertex colour; metallic and roughness
 //!   factors × the texture's B and G channels; `KHR_materials_ior` gives the
@@ -40,7 +42,7 @@
 use crate::builder::Overrides;
 use crate::error::{FileLoc, LoadError, Result};
 use crate::image_io::{srgb_to_linear, RgbImage};
-use crate::scene_builder::{image_texture, Emission, Film, MaterialId, MeshData, SceneBuilder, ShapeDesc};
+use crate::scene_builder::{image_texture, Emission, Film, GroupId, MaterialId, MeshData, SceneBuilder, ShapeDesc};
 use glam::{Affine2, Mat4, Quat, Vec2, Vec3};
 use gltf::camera::Projection as GltfProjection;
 use gltf::khr_lights_punctual::Kind as LightKind;
@@ -65,6 +67,17 @@ pub const DEFAULT_FILM_SIZE: u32 = 512;
 pub const DEFAULT_SPP: u32 = 64;
 /// The vertical field of view of the default camera (degrees).
 pub const DEFAULT_FOV_DEG: f32 = 40.0;
+
+/// The extensions read (others listed in `extensionsRequired` are refused by
+/// the `gltf` crate's validation, in `extensionsUsed` noted).
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_texture_transform",
+];
 
 /// Whether `path` names a glTF file (`.gltf` or `.glb`).
 pub fn is_gltf(path: &Path) -> bool {
@@ -97,10 +110,21 @@ pub fn load_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(RenderJo
         vertex_color: Arc::new(MeshAttribute::new("vertex_color".into(), 1.0)),
         color_tables: Vec::new(),
         bounds: (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        mesh_uses: {
+            let mut uses = vec![0; gltf.meshes().len()];
+            gltf.nodes().filter_map(|n| n.mesh()).for_each(|m| uses[m.index()] += 1);
+            uses
+        },
+        groups: HashMap::new(),
         camera: None,
         lights: 0,
         notes: Vec::new(),
     };
+    for ext in gltf.extensions_used() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            r.notes.push(format!("/extensionsUsed: {ext} is not supported; the file renders without it"));
+        }
+    }
     for view in gltf.views() {
         let len = r.buffers[view.buffer().index()].len();
         if view.offset().checked_add(view.length()).is_none_or(|end| end > len) {
@@ -220,6 +244,11 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// Whether a primitive of `mesh` emits light (its shapes cannot join a group).
+fn emissive(mesh: &gltf::Mesh) -> bool {
+    mesh.primitives().any(|p| p.material().emissive_factor().iter().any(|&e| e > 0.0))
+}
+
 /// A decoded image: RGBA texels as stored (not yet sRGB-decoded), top row first.
 struct Image {
     width: u32,
@@ -245,6 +274,10 @@ struct Reader<'a> {
     color_tables: Vec<(u32, AttributeTable)>,
     /// World-space bounds of every vertex.
     bounds: (Vec3, Vec3),
+    /// How many nodes use each mesh: meshes used by several are instanced.
+    mesh_uses: Vec<usize>,
+    /// The group of each instanced mesh, with its object-space bounds.
+    groups: HashMap<usize, (GroupId, Vec3, Vec3)>,
     /// The first camera met, with its node's world transform.
     camera: Option<(Mat4, gltf::Camera<'a>, String)>,
     /// Lights added (punctual and emissive shapes).
@@ -268,7 +301,14 @@ impl<'a> Reader<'a> {
             return Err(LoadError::at(&self.at(place), "the node's transform is not finite"));
         }
         if let Some(mesh) = n.mesh() {
-            self.mesh(&mesh, &world)?;
+            let shared = self.mesh_uses[mesh.index()] > 1 && !emissive(&mesh);
+            if shared && world.determinant() > 0.0 {
+                self.instance(&mesh, &world, &place)?;
+            } else {
+                let (ids, lo, hi) = self.mesh(&mesh, &world)?;
+                ids.into_iter().for_each(|id| self.scene.place_shape(id));
+                self.bounds = (self.bounds.0.min(lo), self.bounds.1.max(hi));
+            }
         }
         if let Some(cam) = n.camera() {
             if self.camera.is_none() {
@@ -314,7 +354,39 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
-    fn mesh(&mut self, mesh: &gltf::Mesh<'a>, world: &Mat4) -> Result<()> {
+    /// `mesh` placed by `world` (which must not mirror) through a group
+    /// shared by every node of the mesh: its geometry is stored once.
+    fn instance(&mut self, mesh: &gltf::Mesh<'a>, world: &Mat4, place: &str) -> Result<()> {
+        let (group, lo, hi) = match self.groups.get(&mesh.index()) {
+            Some(g) => *g,
+            None => {
+                let (ids, lo, hi) = self.mesh(mesh, &Mat4::IDENTITY)?;
+                if ids.is_empty() {
+                    return Ok(());
+                }
+                let g = self.scene.add_group(ids, &self.at(format!("/meshes/{}", mesh.index())))?;
+                self.groups.insert(mesh.index(), (g, lo, hi));
+                (g, lo, hi)
+            }
+        };
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            let w = world.transform_point3(corner);
+            self.bounds = (self.bounds.0.min(w), self.bounds.1.max(w));
+        }
+        self.scene.add_instance(group, *world, &self.at(place))
+    }
+
+    /// The shapes of `mesh`'s primitives placed by `to_world` (not yet in the
+    /// scene), with their bounds.
+    fn mesh(&mut self, mesh: &gltf::Mesh<'a>, to_world: &Mat4) -> Result<(Vec<u32>, Vec3, Vec3)> {
+        let world = to_world;
+        let mut ids = Vec::new();
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for prim in mesh.primitives() {
             let place = format!("/meshes/{}/primitives/{}", mesh.index(), prim.index());
             let loc = self.at(place.clone());
@@ -372,7 +444,7 @@ impl<'a> Reader<'a> {
             }
             for p in &positions {
                 let w = world.transform_point3(*p);
-                self.bounds = (self.bounds.0.min(w), self.bounds.1.max(w));
+                (lo, hi) = (lo.min(w), hi.max(w));
             }
             let with_colors = !colors.is_empty();
             let (material, emission) = self.material(prim.material(), with_colors)?;
@@ -388,12 +460,12 @@ impl<'a> Reader<'a> {
                 ShapeDesc { emission: emission.map(Emission::Diffuse), ..ShapeDesc::new(geometry, material) },
                 &loc,
             )?;
-            self.scene.place_shape(id);
+            ids.push(id);
             if let Some(a) = attrs.iter().find(|a| a.name == "vertex_color") {
                 self.color_tables.push((id, AttributeTable::new(a, &kept_indices)));
             }
         }
-        Ok(())
+        Ok((ids, lo, hi))
     }
 
     fn image(&mut self, index: usize) -> Result<Arc<Image>> {

@@ -260,3 +260,70 @@ fn envmap_option() {
     let e = load_scene(&scene("boxes.gltf"), &[], &bad).unwrap_err().to_string();
     assert!(e.contains("--envmap") && e.contains("missing.exr"), "{e}");
 }
+
+/// alphaMode, doubleSided, normalTexture and unsupported extensions.
+#[test]
+fn alpha_sides_normal_maps_and_extensions() {
+    use penumbra_render::material::Material;
+    let build = |edit: &dyn Fn(&mut Value)| {
+        let doc = edited(|d| edit(d));
+        gltf::load_bytes(&scene("boxes.gltf"), &doc, &Overrides::default()).unwrap()
+    };
+    let opacity = |m: &Material| match m {
+        Material::Mask { opacity, .. } => opacity.constant().map(|c| c.x),
+        _ => None,
+    };
+    let (job, _) = build(&|d| {
+        d["materials"][0]["alphaMode"] = "BLEND".into();
+        d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = vec![0.7, 0.7, 0.7, 0.3].into();
+    });
+    assert_eq!(opacity(&job.scene.materials[0]), Some(0.3));
+    let (job, _) = build(&|d| {
+        d["materials"][0]["alphaMode"] = "MASK".into();
+        d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = vec![0.7, 0.7, 0.7, 0.3].into();
+    });
+    assert_eq!(opacity(&job.scene.materials[0]), Some(0.0), "0.3 is below the default cut-off 0.5");
+    let (job, _) = build(&|d| d["materials"][0]["doubleSided"] = true.into());
+    assert!(matches!(job.scene.materials[0], Material::TwoSided(..)));
+    assert!(matches!(job.scene.materials[1], Material::GltfPbr(_)));
+    let (job, notes) = build(&|d| d["extensionsUsed"].as_array_mut().unwrap().push("KHR_materials_clearcoat".into()));
+    assert!(notes.iter().any(|n| n.contains("KHR_materials_clearcoat")), "{notes:?}");
+    assert_eq!(job.scene.materials.len(), 4);
+    // A required extension that is not supported is refused.
+    let e =
+        load("boxes.gltf", &edited(|d| d["extensionsRequired"] = vec!["KHR_materials_clearcoat"].into())).unwrap_err();
+    assert!(e.contains("/extensionsRequired") && e.contains("KHR_materials_clearcoat"), "{e}");
+}
+
+/// A mesh used by two nodes is stored once and placed by instances; it
+/// renders as two copies of the mesh do.
+#[test]
+fn shared_meshes_are_instanced() {
+    let bin = scene("boxes.bin").to_str().unwrap().to_string();
+    let write = |name: &str, edit: &dyn Fn(&mut Value)| {
+        let path = std::env::temp_dir().join(format!("penumbra-gltf-test-{}-{name}", std::process::id()));
+        let doc = edited(|d| {
+            d["buffers"][0]["uri"] = bin.clone().into();
+            edit(d);
+        });
+        std::fs::write(&path, doc).unwrap();
+        path
+    };
+    // The blue box's node shows the red box's mesh (mesh 1) ...
+    let shared = write("shared.gltf", &|d| d["nodes"][3]["mesh"] = 1.into());
+    // ... or a copy of it (mesh 4).
+    let copied = write("copied.gltf", &|d| {
+        let m = d["meshes"][1].clone();
+        d["meshes"].as_array_mut().unwrap().push(m);
+        d["nodes"][3]["mesh"] = 4.into();
+    });
+    let job = load_scene(&shared, &[], &Overrides::default()).unwrap();
+    assert_eq!(job.scene.instances.len(), 2);
+    assert_eq!(triangles(&job), 2 + 12 + 12 + 2 - 12, "the cube's triangles stored once");
+    let job = load_scene(&copied, &[], &Overrides::default()).unwrap();
+    assert_eq!(job.scene.instances.len(), 0);
+    let a = render(&shared, 32, 8, 3);
+    let b = render(&copied, 32, 8, 4);
+    let _ = (std::fs::remove_file(&shared), std::fs::remove_file(&copied));
+    assert_agree("instanced vs copied mesh", &a, &b, 0.02);
+}
