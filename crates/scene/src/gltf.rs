@@ -96,7 +96,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
 pub fn load_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
     let file = Arc::new(path.to_path_buf());
     let at = |place: &str| FileLoc::with_place(file.clone(), place.to_string());
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| parse_error(&file, e))?;
+    let gltf = parse(bytes).map_err(|e| parse_error(&file, e))?;
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let buffers = read_buffers(&gltf, &dir, &at)?;
     let mut r = Reader {
@@ -156,6 +156,30 @@ pub fn load_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(RenderJo
         r.node(&n, Mat4::IDENTITY, 0)?;
     }
     r.finish(ov)
+}
+
+/// The document, validated. The `gltf` crate's validation indexes the
+/// accessors by each primitive's POSITION without a bounds check (1.4.1), so
+/// that index is checked first.
+fn parse(bytes: &[u8]) -> std::result::Result<gltf::Gltf, gltf::Error> {
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)?;
+    let json = document.into_json();
+    let mut errors = Vec::new();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let pos = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(i) = prim.attributes.get(&pos) {
+                if i.value() >= json.accessors.len() {
+                    let path = gltf::json::Path(format!("meshes[{m}].primitives[{p}].attributes.POSITION"));
+                    errors.push((path, gltf::json::validation::Error::IndexOutOfBounds));
+                }
+            }
+        }
+    }
+    if !errors.is_empty() {
+        return Err(gltf::Error::Validation(errors));
+    }
+    Ok(gltf::Gltf { document: gltf::Document::from_json(json)?, blob })
 }
 
 /// The `gltf` crate's error as a load error: validation errors with the
@@ -242,6 +266,32 @@ fn percent_decode(s: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Checks that an attribute the reader uses has a type the specification
+/// allows (the `gltf` crate's readers assume it).
+fn check_type(acc: &gltf::Accessor, sem: &gltf::Semantic, prim: &str, loc: &FileLoc) -> Result<()> {
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    use gltf::Semantic as S;
+    let (t, d, norm) = (acc.data_type(), acc.dimensions(), acc.normalized());
+    let ok = match sem {
+        S::Positions | S::Normals => (t, d) == (T::F32, D::Vec3),
+        S::TexCoords(0) => d == D::Vec2 && (t == T::F32 || (norm && matches!(t, T::U8 | T::U16))),
+        S::Colors(0) => matches!(d, D::Vec3 | D::Vec4) && (t == T::F32 || (norm && matches!(t, T::U8 | T::U16))),
+        _ => true, // not read
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(LoadError::at(
+            loc,
+            format!(
+                "{} of {prim}: {d:?} of {t:?}{} is not a type the specification allows for it",
+                sem.to_string(),
+                if norm { " (normalized)" } else { "" }
+            ),
+        ))
+    }
 }
 
 /// Whether a primitive of `mesh` emits light (its shapes cannot join a group).
@@ -398,9 +448,17 @@ impl<'a> Reader<'a> {
             }
             for (sem, acc) in prim.attributes() {
                 self.check_accessor(&acc, &sem.to_string(), &place)?;
+                check_type(&acc, &sem, &place, &self.at(format!("/accessors/{}", acc.index())))?;
             }
             if let Some(acc) = prim.indices() {
                 self.check_accessor(&acc, "indices", &place)?;
+                use gltf::accessor::{DataType as T, Dimensions as D};
+                if !matches!((acc.data_type(), acc.dimensions()), (T::U8 | T::U16 | T::U32, D::Scalar)) {
+                    return Err(LoadError::at(
+                        &self.at(format!("/accessors/{}", acc.index())),
+                        format!("the indices of {place} must be unsigned byte, short or int scalars"),
+                    ));
+                }
             }
             let buffers = &self.buffers;
             let reader = prim.reader(|b| buffers.get(b.index()).map(|v| v.as_slice()));

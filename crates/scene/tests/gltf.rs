@@ -327,3 +327,41 @@ fn shared_meshes_are_instanced() {
     let _ = (std::fs::remove_file(&shared), std::fs::remove_file(&copied));
     assert_agree("instanced vs copied mesh", &a, &b, 0.02);
 }
+
+/// Corrupted files (seeded byte changes in the GLB's JSON and binary chunks,
+/// and in the JSON's numbers) are errors or scenes, never panics.
+#[test]
+fn corrupted_files_never_panic() {
+    let base = glb();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let (mut errors, mut loaded) = (0, 0);
+    let json_end = 20 + u32::from_le_bytes(base[12..16].try_into().unwrap()) as usize;
+    for k in 0..20_000 {
+        let mut g = base.clone();
+        for _ in 0..1 + next() % 4 {
+            // Half the runs change the JSON chunk, half the binary one.
+            let (lo, hi) = if k % 2 == 0 { (0, json_end) } else { (json_end, g.len()) };
+            let i = lo + (next() % (hi - lo) as u64) as usize;
+            g[i] = match next() % 3 {
+                0 => next() as u8,
+                1 => b"0123456789"[(next() % 10) as usize],
+                _ => g[i] ^ (1 << (next() % 8)),
+            };
+        }
+        match std::panic::catch_unwind(|| load("fuzz.glb", &g)) {
+            Ok(Ok(_)) => loaded += 1,
+            Ok(Err(_)) => errors += 1,
+            Err(_) => {
+                panic!("a corrupted GLB panicked the reader: {:?}", String::from_utf8_lossy(&g[20..g.len().min(400)]))
+            }
+        }
+    }
+    println!("corrupted GLBs: {errors} errors, {loaded} loaded");
+    assert!(errors > 100 && loaded > 100);
+}
