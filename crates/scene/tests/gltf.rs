@@ -365,3 +365,46 @@ fn corrupted_files_never_panic() {
     println!("corrupted GLBs: {errors} errors, {loaded} loaded");
     assert!(errors > 100 && loaded > 100);
 }
+
+/// COLOR_0 multiplies the base colour: the red box with vertex colours
+/// (0.5, 1, 1) renders as the XML twin with reflectance (0.4, 0.1, 0.1).
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    use base64::Engine;
+    let dir = std::env::temp_dir().join(format!("penumbra-gltf-colours-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let colours: Vec<u8> = (0..24).flat_map(|_| [0.5f32, 1.0, 1.0]).flat_map(f32::to_le_bytes).collect();
+    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&colours));
+    let bin = scene("boxes.bin").to_str().unwrap().to_string();
+    let doc = edited(|d| {
+        d["buffers"][0]["uri"] = bin.into();
+        let n = colours.len();
+        d["buffers"].as_array_mut().unwrap().push(serde_value(&format!(r#"{{"uri": "{uri}", "byteLength": {n}}}"#)));
+        let views = d["bufferViews"].as_array_mut().unwrap();
+        views.push(serde_value(&format!(r#"{{"buffer": 1, "byteLength": {n}}}"#)));
+        let view = views.len() - 1;
+        let accs = d["accessors"].as_array_mut().unwrap();
+        accs.push(serde_value(&format!(
+            r#"{{"bufferView": {view}, "componentType": 5126, "count": 24, "type": "VEC3"}}"#
+        )));
+        let acc = accs.len() - 1;
+        d["meshes"][1]["primitives"][0]["attributes"]["COLOR_0"] = acc.into();
+    });
+    let gltf_path = dir.join("colours.gltf");
+    std::fs::write(&gltf_path, doc).unwrap();
+    let xml = std::fs::read_to_string(scene("boxes.xml")).unwrap().replace("0.8, 0.1, 0.1", "0.4, 0.1, 0.1");
+    assert!(xml.contains("0.4, 0.1, 0.1"));
+    let xml_path = dir.join("colours.xml");
+    std::fs::write(&xml_path, xml).unwrap();
+    let a = render(&gltf_path, 32, 8, 5);
+    let b = render(&xml_path, 32, 8, 6);
+    // Power: the unchanged twin (vertex colours ignored) differs.
+    let c = render(&scene("boxes.xml"), 32, 8, 7);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_agree("vertex colours vs XML", &a, &b, 0.02);
+    assert!(!compare("without vertex colours", &a, &c, 0.02).failures.is_empty());
+}
+
+fn serde_value(s: &str) -> Value {
+    ::gltf::json::deserialize::from_str(s).unwrap()
+}
