@@ -189,6 +189,11 @@ fn settings(a: &RenderArgs, scene_bytes: &[u8], job: &RenderJob, part: Option<Pa
     if let Some(sampler) = &a.sampler {
         settings.set("sampler", sampler);
     }
+    if let Some(env) = &a.envmap {
+        // The file's name and contents (an unreadable file failed loading).
+        let bytes = std::fs::read(env).unwrap_or_default();
+        settings.set("envmap", &format!("{} crc32 {:08x}", env.display(), crc32fast::hash(&bytes)));
+    }
     if a.denoise {
         settings.set("filter", "box (--denoise)");
     }

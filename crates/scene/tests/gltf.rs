@@ -374,7 +374,8 @@ fn vertex_colours_multiply_the_base_colour() {
     let dir = std::env::temp_dir().join(format!("penumbra-gltf-colours-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let colours: Vec<u8> = (0..24).flat_map(|_| [0.5f32, 1.0, 1.0]).flat_map(f32::to_le_bytes).collect();
-    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&colours));
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&colours));
     let bin = scene("boxes.bin").to_str().unwrap().to_string();
     let doc = edited(|d| {
         d["buffers"][0]["uri"] = bin.into();
@@ -407,4 +408,33 @@ fn vertex_colours_multiply_the_base_colour() {
 
 fn serde_value(s: &str) -> Value {
     ::gltf::json::deserialize::from_str(s).unwrap()
+}
+
+/// `normalTexture` becomes a normal map whose texels carry `scale`
+/// (scale 0: the unperturbed normal (0, 0, 1), stored as (0.5, 0.5, 1));
+/// an orthographic camera sets the film's aspect from xmag / ymag.
+#[test]
+fn normal_maps_and_orthographic_cameras() {
+    use penumbra_render::camera::Projection;
+    use penumbra_render::material::Material;
+    use penumbra_render::texture::Texture;
+    let text = std::fs::read_to_string(scene("materials.gltf")).unwrap();
+    let mut d: Value = ::gltf::json::deserialize::from_str(&text).unwrap();
+    d["materials"][0]["normalTexture"] = serde_value(r#"{"index": 0, "scale": 0}"#);
+    d["cameras"][0] =
+        serde_value(r#"{"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 1, "znear": 0.1, "zfar": 50}}"#);
+    let (job, _) = gltf::load_bytes(&scene("materials.gltf"), d.to_string().as_bytes(), &Overrides::default()).unwrap();
+    let Material::NormalMap { normals: Texture::Bitmap(b), inner } = &job.scene.materials[0] else {
+        panic!("{:?}", job.scene.materials[0])
+    };
+    assert!(matches!(**inner, Material::GltfPbr(_)));
+    // (The checker as a normal map: light texels (2c − 1 > 0) give +z, dark ones −z.)
+    for (uv, z) in [(glam::Vec2::new(0.01, 0.01), 1.0), (glam::Vec2::new(0.3, 0.7), 0.0)] {
+        assert!((b.eval(uv) - glam::Vec3::new(0.5, 0.5, z)).abs().max_element() < 1e-6, "{}", b.eval(uv));
+    }
+    assert!(matches!(job.camera.projection, Projection::Orthographic { .. }));
+    assert_eq!(job.full_size, (512, 256));
+    // The view spans ±xmag: the camera's x axis has length xmag.
+    let x = job.camera.world_from_camera.transform_vector3(glam::Vec3::X).length();
+    assert!((x - 2.0).abs() < 1e-5, "{x}");
 }
