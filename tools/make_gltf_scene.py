@@ -3,7 +3,7 @@
 the same scene as Mitsuba XML (boxes.xml), for the cross-format test in
 crates/scene/tests/gltf.rs. Only diffuse surfaces (glTF: metallic 0 and
 KHR_materials_specular's specularFactor 0, which is Lambertian), an emissive
-quad, a point light and a perspective camera, so both formats describe
+quad, a point, a spot and a directional light and a perspective camera, so both formats describe
 exactly the same image. Asymmetric (red box left, blue box right, light on
 the right) so that a mirrored camera shows. Run from the repository root."""
 import json, math, struct
@@ -66,6 +66,20 @@ GREY, RED, BLUE = [0.7, 0.7, 0.7], [0.8, 0.1, 0.1], [0.1, 0.2, 0.8]
 EMIT = 4.0
 LIGHT_POS, LIGHT_RGB, LIGHT_I = [0.6, 1.0, 0.8], [1.0, 0.9, 0.8], 2.0
 CAM_POS, CAM_PITCH, YFOV, ASPECT = [0.0, 1.0, 3.0], -15.0, 0.8, 4 / 3
+# A spot straight down onto the blue box, and a directional light from the left.
+SPOT_POS, SPOT_RGB, SPOT_I, SPOT_INNER, SPOT_OUTER = [0.45, 2.0, -0.2], [0.6, 0.8, 1.0], 3.0, 0.15, 0.35
+SUN_DIR = [0.8, -1.0, -0.4]
+SUN_RGB, SUN_I = [1.0, 0.8, 0.6], 0.4
+
+def quat_from_to(a, b):
+    """The rotation taking unit vector a to the direction of b, as glTF's [x, y, z, w]."""
+    n = math.sqrt(sum(x * x for x in b))
+    b = [x / n for x in b]
+    c = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    d = sum(a[i] * b[i] for i in range(3))
+    q = c + [1 + d]
+    m = math.sqrt(sum(x * x for x in q))
+    return [x / m for x in q]
 
 materials = [diffuse("floor", GREY), diffuse("red", RED), diffuse("blue", BLUE),
              {"name": "lamp", "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
@@ -94,13 +108,19 @@ nodes = [
     {"name": "lamp", "mesh": 3, "translation": [0, 1.5, 0], "scale": [0.3, 1, 0.3]},
     {"name": "point", "translation": LIGHT_POS, "extensions": {"KHR_lights_punctual": {"light": 0}}},
     {"name": "camera", "camera": 0, "translation": CAM_POS, "rotation": quat_x(CAM_PITCH)},
+    {"name": "spot", "translation": SPOT_POS, "rotation": quat_x(-90), "extensions": {"KHR_lights_punctual": {"light": 1}}},
+    {"name": "sun", "rotation": quat_from_to([0, 0, -1], SUN_DIR), "extensions": {"KHR_lights_punctual": {"light": 2}}},
 ]
 doc = {
     "asset": {"version": "2.0", "generator": "tools/make_gltf_scene.py"},
     "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular"],
-    "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "color": LIGHT_RGB, "intensity": LIGHT_I}]}},
+    "extensions": {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": LIGHT_RGB, "intensity": LIGHT_I},
+        {"type": "spot", "color": SPOT_RGB, "intensity": SPOT_I,
+         "spot": {"innerConeAngle": SPOT_INNER, "outerConeAngle": SPOT_OUTER}},
+        {"type": "directional", "color": SUN_RGB, "intensity": SUN_I}]}},
     "scene": 0,
-    "scenes": [{"nodes": [0, 1, 3, 4, 5, 6]}],
+    "scenes": [{"nodes": [0, 1, 3, 4, 5, 6, 7, 8]}],
     "nodes": nodes,
     "cameras": [{"type": "perspective", "perspective": {"yfov": YFOV, "aspectRatio": ASPECT, "znear": 0.01}}],
     "meshes": meshes,
@@ -161,6 +181,18 @@ xml = f"""<scene version="3.0.0">
     <emitter type="point">
         <point name="position" value="{v3(LIGHT_POS)}"/>
         <rgb name="intensity" value="{rgb([c * LIGHT_I for c in LIGHT_RGB])}"/>
+    </emitter>
+    <emitter type="spot">
+        <transform name="to_world">
+            <lookat origin="{v3(SPOT_POS)}" target="{v3([SPOT_POS[0], 0, SPOT_POS[2]])}" up="0, 0, 1"/>
+        </transform>
+        <float name="cutoff_angle" value="{math.degrees(SPOT_OUTER):.9g}"/>
+        <float name="beam_width" value="{math.degrees(SPOT_INNER):.9g}"/>
+        <rgb name="intensity" value="{rgb([c * SPOT_I for c in SPOT_RGB])}"/>
+    </emitter>
+    <emitter type="directional">
+        <vector name="direction" value="{v3(SUN_DIR)}"/>
+        <rgb name="irradiance" value="{rgb([c * SUN_I for c in SUN_RGB])}"/>
     </emitter>
 </scene>
 """

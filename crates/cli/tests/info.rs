@@ -67,8 +67,11 @@ fn gltf_info_and_render() {
     let scene = root().join("tests/scenes/gltf/boxes.gltf");
     let (ok, out, err) = info(&scene, &[]);
     assert!(ok, "{err}");
-    for needle in ["geometry: 28 triangles in 4 meshes", "emitters: 2 (1 area, 1 point)", "image: 512x384, 64 samples"]
-    {
+    for needle in [
+        "geometry: 28 triangles in 4 meshes",
+        "emitters: 4 (1 area, 1 directional, 1 point, 1 spot)",
+        "image: 512x384, 64 samples",
+    ] {
         assert!(out.contains(needle), "'{needle}' not in:\n{out}");
     }
     let dir = std::env::temp_dir().join(format!("penumbra-info-gltf-{}", std::process::id()));

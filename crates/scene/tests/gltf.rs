@@ -1,7 +1,7 @@
 //! glTF 2.0: the test scene `tests/scenes/gltf/boxes.gltf` (written by
 //! `tools/make_gltf_scene.py` with its Mitsuba twin `boxes.xml`) renders as
 //! the XML does (camera, transforms and hierarchy, diffuse materials,
-//! emission, point light); the same scene as `.glb` and with an embedded
+//! emission, point, spot and directional lights); the same scene as `.glb` and with an embedded
 //! data URI loads alike; bad input is an error naming its JSON pointer.
 
 #![cfg(feature = "gltf")]
@@ -126,7 +126,9 @@ fn gltf_text() -> String {
 fn glb_and_data_uri_load_as_the_gltf() {
     let base = load("boxes.gltf", gltf_text().as_bytes()).unwrap();
     assert_eq!(triangles(&base), 2 + 12 + 12 + 2);
-    assert_eq!(base.scene.lights.len(), 2, "the lamp's area light and the point light");
+    let mut names: Vec<&str> = base.scene.lights.iter().map(|l| l.name()).collect();
+    names.sort();
+    assert_eq!(names, ["area", "directional", "point", "spot"]);
     let g = load("boxes.glb", &glb()).unwrap();
     assert_eq!(triangles(&g), triangles(&base));
     use base64::Engine;
@@ -179,7 +181,7 @@ fn bad_input_names_the_json_pointer() {
     assert!(e.contains("at /meshes/0/primitives/0") && e.contains("triangles"), "{e}");
     // A scene naming a node that does not exist (the crate's validation).
     let e =
-        load("boxes.gltf", &edited(|d| d["scenes"][0]["nodes"].as_array_mut().unwrap().push(7.into()))).unwrap_err();
+        load("boxes.gltf", &edited(|d| d["scenes"][0]["nodes"].as_array_mut().unwrap().push(99.into()))).unwrap_err();
     assert!(e.contains("/scenes/0/nodes"), "{e}");
     // A node hierarchy with a cycle.
     let e = load("boxes.gltf", &edited(|d| d["nodes"][2]["children"] = vec![1].into())).unwrap_err();
@@ -255,7 +257,7 @@ fn envmap_option() {
     assert_eq!(names, ["envmap"]);
     let job = load_scene(&scene("boxes.xml"), &[], &ov).unwrap();
     assert!(job.scene.lights.iter().any(|l| l.name() == "envmap"));
-    assert_eq!(job.scene.lights.len(), 3);
+    assert_eq!(job.scene.lights.len(), 5);
     let bad = Overrides { envmap: Some(root().join("missing.exr")), ..Default::default() };
     let e = load_scene(&scene("boxes.gltf"), &[], &bad).unwrap_err().to_string();
     assert!(e.contains("--envmap") && e.contains("missing.exr"), "{e}");
