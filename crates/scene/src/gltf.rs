@@ -583,9 +583,10 @@ impl<'a> Reader<'a> {
         let to_uv = match &transform {
             None => Affine2::IDENTITY,
             Some(t) => {
-                // The extension's uv' = T R S uv, with R = [[cos, sin], [−sin, cos]] (rows).
+                // The extension's uv' = T R S uv, with its GLSL (column-major)
+                // R = mat3(cos, sin, 0, −sin, cos, 0, 0, 0, 1): u' = cos u − sin v.
                 let (s, c) = t.rotation().sin_cos();
-                let r = Affine2::from_cols(Vec2::new(c, -s), Vec2::new(s, c), Vec2::ZERO);
+                let r = Affine2::from_cols(Vec2::new(c, s), Vec2::new(-s, c), Vec2::ZERO);
                 Affine2::from_translation(Vec2::from(t.offset())) * r * Affine2::from_scale(Vec2::from(t.scale()))
             }
         };

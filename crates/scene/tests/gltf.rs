@@ -412,6 +412,7 @@ fn serde_value(s: &str) -> Value {
     ::gltf::json::deserialize::from_str(s).unwrap()
 }
 
+/// KHR_texture_transform's rotation turns uv counter-clockwise;
 /// `normalTexture` becomes a normal map whose texels carry `scale`
 /// (scale 0: the unperturbed normal (0, 0, 1), stored as (0.5, 0.5, 1));
 /// an orthographic camera sets the film's aspect from xmag / ymag.
@@ -423,6 +424,8 @@ fn normal_maps_and_orthographic_cameras() {
     let text = std::fs::read_to_string(scene("materials.gltf")).unwrap();
     let mut d: Value = ::gltf::json::deserialize::from_str(&text).unwrap();
     d["materials"][0]["normalTexture"] = serde_value(r#"{"index": 0, "scale": 0}"#);
+    d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]["KHR_texture_transform"] =
+        serde_value(r#"{"rotation": 0.7853982}"#);
     d["cameras"][0] =
         serde_value(r#"{"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 1, "znear": 0.1, "zfar": 50}}"#);
     let (job, _) = gltf::load_bytes(&scene("materials.gltf"), d.to_string().as_bytes(), &Overrides::default()).unwrap();
@@ -434,6 +437,12 @@ fn normal_maps_and_orthographic_cameras() {
     for (uv, z) in [(glam::Vec2::new(0.01, 0.01), 1.0), (glam::Vec2::new(0.3, 0.7), 0.0)] {
         assert!((b.eval(uv) - glam::Vec3::new(0.5, 0.5, z)).abs().max_element() < 1e-6, "{}", b.eval(uv));
     }
+    // KHR_texture_transform's rotation, counter-clockwise as the extension's
+    // GLSL: uv (0.3, 0) turned by 45° is (0.212, 0.212), texel (1, 1), light;
+    // turned the other way (0.212, −0.212) it would be texel (1, 6), dark.
+    let Material::GltfPbr(p) = &**inner else { unreachable!() };
+    let Texture::Bitmap(base) = &p.base_color else { panic!("no base colour texture") };
+    assert!(base.eval(glam::Vec2::new(0.3, 0.0)).x > 0.5, "{}", base.eval(glam::Vec2::new(0.3, 0.0)));
     assert!(matches!(job.camera.projection, Projection::Orthographic { .. }));
     assert_eq!(job.full_size, (512, 256));
     // The view spans ±xmag: the camera's x axis has length xmag.
