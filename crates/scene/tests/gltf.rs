@@ -449,3 +449,38 @@ fn normal_maps_and_orthographic_cameras() {
     let x = job.camera.world_from_camera.transform_vector3(glam::Vec3::X).length();
     assert!((x - 2.0).abs() < 1e-5, "{x}");
 }
+
+/// emissiveFactor × sRGB emissiveTexture × emissive strength becomes the
+/// floor's area light, texel by texel (the texture's transform applies).
+#[test]
+fn emissive_textures() {
+    use penumbra_render::light::Light;
+    use penumbra_render::texture::Texture;
+    use penumbra_scene::image_io::srgb_to_linear;
+    let text = std::fs::read_to_string(scene("materials.gltf")).unwrap();
+    let mut d: Value = ::gltf::json::deserialize::from_str(&text).unwrap();
+    d["materials"][0]["emissiveTexture"] = serde_value(r#"{"index": 0}"#);
+    d["materials"][0]["emissiveFactor"] = serde_value("[1, 0.5, 0.25]");
+    d["materials"][0]["extensions"] = serde_value(r#"{"KHR_materials_emissive_strength": {"emissiveStrength": 3}}"#);
+    d["extensionsUsed"].as_array_mut().unwrap().push("KHR_materials_emissive_strength".into());
+    let (job, notes) =
+        gltf::load_bytes(&scene("materials.gltf"), d.to_string().as_bytes(), &Overrides::default()).unwrap();
+    assert!(notes.is_empty(), "{notes:?}");
+    let area: Vec<&Texture> = job
+        .scene
+        .lights
+        .iter()
+        .filter_map(|l| match l {
+            Light::Area(a) => Some(&a.radiance),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(area.len(), 1, "the floor emits");
+    let Texture::Bitmap(b) = area[0] else { panic!("an untextured emission") };
+    let scale = glam::Vec3::new(1.0, 0.5, 0.25) * 3.0;
+    for (x, y, byte) in [(0, 0, 200.0), (1, 0, 60.0)] {
+        let uv = glam::Vec2::new((x as f32 + 0.5) / 8.0, (y as f32 + 0.5) / 8.0);
+        let expect = scale * srgb_to_linear(byte / 255.0);
+        assert!((b.eval(uv) - expect).abs().max_element() < 1e-5, "{} vs {expect}", b.eval(uv));
+    }
+}
