@@ -19,7 +19,16 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("spd", spd),
     ("pfm", pfm),
     ("image", image),
+    #[cfg(feature = "gltf")]
+    ("gltf", gltf),
 ];
+
+/// A glTF file (`.gltf` JSON or `.glb`): parsed, checked and built;
+/// external buffers and images are missing-file errors.
+#[cfg(feature = "gltf")]
+pub fn gltf(data: &[u8]) {
+    let _ = crate::gltf::load_bytes(Path::new("/nonexistent-fuzz-dir/scene.glb"), data, &crate::Overrides::default());
+}
 
 /// A Mitsuba XML scene: parsed, then built (meshes, textures and includes
 /// it names are looked up beside a file that does not exist, so they are
