@@ -675,6 +675,21 @@ impl<'a> Reader<'a> {
             f0,
             specular,
         }));
+        if let Some(nt) = mat.normal_texture() {
+            let p = format!("{place}/normalTexture");
+            let s = nt.scale();
+            let normals = self.texture(&nt.texture(), nt.tex_coord(), None, &p, |c| {
+                // n = normalize((2c − 1) · (scale, scale, 1)), stored back in [0, 1].
+                let v = Vec3::new((2.0 * c[0] - 1.0) * s, (2.0 * c[1] - 1.0) * s, 2.0 * c[2] - 1.0);
+                (v.normalize_or(Vec3::Z) * 0.5 + 0.5).to_array()
+            })?;
+            material = Material::NormalMap { normals, inner: Box::new(material) };
+        }
+        // Two-sided around the normal map, so that the back side's flipped
+        // frame is the one perturbed (as Mitsuba's twosided(normalmap(...))).
+        if mat.double_sided() {
+            material = Material::TwoSided(Box::new(material.clone()), Box::new(material));
+        }
         if let Some(t) = mat.transmission() {
             let w = t.transmission_factor();
             if t.transmission_texture().is_some() {
@@ -699,19 +714,6 @@ impl<'a> Reader<'a> {
                     second: Box::new(glass),
                 };
             }
-        }
-        if let Some(nt) = mat.normal_texture() {
-            let p = format!("{place}/normalTexture");
-            let s = nt.scale();
-            let normals = self.texture(&nt.texture(), nt.tex_coord(), None, &p, |c| {
-                // n = normalize((2c − 1) · (scale, scale, 1)), stored back in [0, 1].
-                let v = Vec3::new((2.0 * c[0] - 1.0) * s, (2.0 * c[1] - 1.0) * s, 2.0 * c[2] - 1.0);
-                (v.normalize_or(Vec3::Z) * 0.5 + 0.5).to_array()
-            })?;
-            material = Material::NormalMap { normals, inner: Box::new(material) };
-        }
-        if mat.double_sided() && !matches!(material, Material::Blend { .. }) {
-            material = Material::TwoSided(Box::new(material.clone()), Box::new(material));
         }
         if alpha.constant() != Some(Vec3::ONE) {
             material = Material::Mask { opacity: alpha, inner: Box::new(material) };
