@@ -96,6 +96,16 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
 pub fn load_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
     let file = Arc::new(path.to_path_buf());
     let at = |place: &str| FileLoc::with_place(file.clone(), place.to_string());
+    if bytes.starts_with(b"glTF") && bytes.len() >= 12 {
+        // The gltf crate subtracts the header's size from this unchecked (1.4.1).
+        let length = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if length < 12 {
+            return Err(LoadError::at(
+                &at("byte 8"),
+                format!("not a valid binary glTF (.glb): its total length {length} is shorter than its 12-byte header"),
+            ));
+        }
+    }
     let gltf = parse(bytes).map_err(|e| parse_error(&file, e))?;
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let buffers = read_buffers(&gltf, &dir, &at)?;
