@@ -186,6 +186,26 @@ fn parse(bytes: &[u8]) -> std::result::Result<gltf::Gltf, gltf::Error> {
             }
         }
     }
+    // Cameras and spot lights whose parameters object is missing (the
+    // crate's accessors unwrap it; its validation does not check it).
+    use gltf::json::validation::{Checked::Valid, Error as E};
+    for (i, c) in json.cameras.iter().enumerate() {
+        let missing = match c.type_ {
+            Valid(gltf::json::camera::Type::Perspective) => c.perspective.is_none().then_some("perspective"),
+            Valid(gltf::json::camera::Type::Orthographic) => c.orthographic.is_none().then_some("orthographic"),
+            _ => None,
+        };
+        if let Some(field) = missing {
+            errors.push((gltf::json::Path(format!("cameras[{i}].{field}")), E::Missing));
+        }
+    }
+    let lights = json.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref());
+    for (i, l) in lights.map_or(&[][..], |l| &l.lights[..]).iter().enumerate() {
+        if l.type_ == Valid(gltf::json::extensions::scene::khr_lights_punctual::Type::Spot) && l.spot.is_none() {
+            let path = format!("extensions.KHR_lights_punctual.lights[{i}].spot");
+            errors.push((gltf::json::Path(path), E::Missing));
+        }
+    }
     if !errors.is_empty() {
         return Err(gltf::Error::Validation(errors));
     }
@@ -542,6 +562,13 @@ impl<'a> Reader<'a> {
         }
         let place = self.at(format!("/images/{index}"));
         let img = self.doc.images().nth(index).ok_or_else(|| LoadError::at(&place, "no such image"))?;
+        // `source()` unwraps these (gltf 1.4.1); its validation does not check them.
+        let json = &self.doc.as_json().images[index];
+        match (&json.buffer_view, &json.uri, &json.mime_type) {
+            (Some(_), _, None) => return Err(LoadError::at(&place, "an image in a bufferView needs a mimeType")),
+            (None, None, _) => return Err(LoadError::at(&place, "the image has neither a uri nor a bufferView")),
+            _ => {}
+        }
         let bytes = match img.source() {
             gltf::image::Source::View { view, .. } => {
                 self.buffers[view.buffer().index()][view.offset()..view.offset() + view.length()].to_vec()

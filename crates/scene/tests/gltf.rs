@@ -186,6 +186,15 @@ fn bad_input_names_the_json_pointer() {
     // A node hierarchy with a cycle.
     let e = load("boxes.gltf", &edited(|d| d["nodes"][2]["children"] = vec![1].into())).unwrap_err();
     assert!(e.contains("/nodes/") && e.contains("cycle"), "{e}");
+    // Parameters the gltf crate's accessors unwrap: refused, not a panic.
+    let e = load("boxes.gltf", &edited(|d| d["cameras"][0] = serde_value(r#"{"type": "perspective"}"#))).unwrap_err();
+    assert!(e.contains("/cameras/0/perspective"), "{e}");
+    let e = load(
+        "boxes.gltf",
+        &edited(|d| d["extensions"]["KHR_lights_punctual"]["lights"][1] = serde_value(r#"{"type": "spot"}"#)),
+    )
+    .unwrap_err();
+    assert!(e.contains("/extensions/KHR_lights_punctual/lights/1/spot"), "{e}");
     // JSON syntax: line and column.
     let e = load("boxes.gltf", b"{\n \"asset\": {\"version\": \"2.0\"},\n oops\n}").unwrap_err();
     assert!(e.contains("boxes.gltf:3:"), "{e}");
