@@ -417,9 +417,15 @@ impl<'a> Reader<'a> {
             return fail("the accessor has no bufferView".into());
         };
         let elem = acc.size();
-        let stride = view.stride().unwrap_or(elem).max(elem);
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return fail(format!(
+                "bufferView {}'s byteStride {stride} is less than the element size {elem}",
+                view.index()
+            ));
+        }
         if acc.count() == 0 {
-            return Ok(());
+            return fail("the accessor's count must be at least 1".into());
         }
         let end = (acc.count() - 1).checked_mul(stride).and_then(|x| x.checked_add(acc.offset() + elem));
         if end.is_none_or(|e| e > view.length()) {
