@@ -8,7 +8,7 @@
 #   tools/fuzz.sh merge TARGET          minimise the corpus and what the runs
 #                                       found into fuzz/corpus/TARGET
 #
-# Targets: xml xml_include obj ply serialized vol spd pfm image pbrt tensor
+# Targets: xml xml_include obj ply serialized vol spd pfm image pbrt tensor gltf
 # (crates/scene/src/fuzzing.rs), checkpoint part (crates/cli/src/fuzzing.rs). A crash is written to
 # $CARGO_TARGET_DIR/fuzz-artifacts/TARGET/; fix it, and add the input to the
 # corpus as regression-NAME (merge keeps those) so that the replay test

@@ -11,8 +11,9 @@ pub struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once per run; boxing buys nothing
 pub enum Command {
-    /// Render a Mitsuba 3 XML scene to an image (.exr, .png, .pfm or .hdr).
+    /// Render a Mitsuba 3 XML or glTF 2.0 (.gltf, .glb) scene to an image (.exr, .png, .pfm or .hdr).
     Render(RenderArgs),
     /// Describe a scene without rendering: plugins by kind, triangles,
     /// emitters, resolution, samples, integrator and approximated features.
@@ -32,7 +33,7 @@ pub enum Command {
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// The scene file (Mitsuba 3 XML).
+    /// The scene file (Mitsuba 3 XML, or glTF 2.0: .gltf, .glb).
     pub scene: PathBuf,
     /// Output image; the extension selects the format.
     #[arg(short, long)]
@@ -46,6 +47,11 @@ pub struct RenderArgs {
     /// Seed of the random sequences (overrides the sampler's seed).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Add an environment map (.exr, .hdr, .png, .jpg; latitude-longitude,
+    /// +y up, as Mitsuba's `envmap`) to the scene's lights; for a glTF scene
+    /// it replaces the white environment given to scenes without lights.
+    #[arg(long, value_name = "FILE")]
+    pub envmap: Option<PathBuf>,
     /// Define a scene parameter, as Mitsuba's -D: fills $name.
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     pub define: Vec<(String, String)>,

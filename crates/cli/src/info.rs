@@ -13,6 +13,10 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     if penumbra_scene::is_pbrt(&a.scene) {
         return run_pbrt(a);
     }
+    let ext = a.scene.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+        return run_other_format(a);
+    }
     let desc = penumbra_scene::mitsuba::parse_file(&a.scene, &a.define).map_err(|e| anyhow!(e))?;
     let mut out = String::new();
     writeln!(out, "scene: {} (format version {})", a.scene.display(), desc.version)?;
@@ -248,4 +252,26 @@ fn approximations(desc: &SceneDesc) -> Vec<String> {
         ));
     }
     notes
+}
+
+/// `info` for a scene that is not Mitsuba XML (glTF): the built job, and
+/// the reader's notes as its approximations.
+fn run_other_format(a: &InfoArgs) -> Result<()> {
+    let (job, notes) = penumbra_scene::load_scene_noted(&a.scene, &a.define, &Overrides::default())
+        .map_err(|e| anyhow!("the scene cannot be rendered by Penumbra: {e}"))?;
+    let mut out = String::new();
+    writeln!(out, "scene: {}", a.scene.display())?;
+    writeln!(out, "integrator: path (the default for glTF scenes)")?;
+    describe_job(&job, &mut out)?;
+    if notes.is_empty() {
+        writeln!(out, "approximations: none")?;
+    } else {
+        writeln!(out, "approximations:")?;
+        for n in &notes {
+            writeln!(out, "  - {n}")?;
+        }
+    }
+    print!("{out}");
+    println!("status: ready to render");
+    Ok(())
 }

@@ -94,7 +94,13 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         }
     }
     let scene_bytes = std::fs::read(&a.scene).with_context(|| format!("cannot read '{}'", a.scene.display()))?;
-    let ov = Overrides { spp: a.spp, seed: a.seed, integrator: a.integrator.clone(), sampler: a.sampler.clone() };
+    let ov = Overrides {
+        spp: a.spp,
+        seed: a.seed,
+        integrator: a.integrator.clone(),
+        sampler: a.sampler.clone(),
+        envmap: a.envmap.clone(),
+    };
     let (mut job, notes) = penumbra_scene::load_scene_noted(&a.scene, &a.define, &ov).map_err(|e| anyhow!(e))?;
     for n in notes {
         eprintln!("note: {n}");
@@ -182,6 +188,11 @@ fn settings(a: &RenderArgs, scene_bytes: &[u8], job: &RenderJob, part: Option<Pa
     }
     if let Some(sampler) = &a.sampler {
         settings.set("sampler", sampler);
+    }
+    if let Some(env) = &a.envmap {
+        // The file's name and contents (an unreadable file failed loading).
+        let bytes = std::fs::read(env).unwrap_or_default();
+        settings.set("envmap", &format!("{} crc32 {:08x}", env.display(), crc32fast::hash(&bytes)));
     }
     if a.denoise {
         settings.set("filter", "box (--denoise)");

@@ -84,8 +84,47 @@ fn describes_a_pbrt_scene() {
     let dir = std::env::temp_dir().join(format!("penumbra-info-pbrt-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("bad.pbrt");
-    std::fs::write(&bad, "WorldBegin\nMaterial \"coatedconductor\"\nShape \"sphere\"\n").unwrap();
+    std::fs::write(&bad, "WorldBegin\nMaterial \"hair\"\nShape \"sphere\"\n").unwrap();
     let (ok, _, err) = info(&bad, &[]);
-    assert!(!ok && err.contains("bad.pbrt:2:1") && err.contains("coatedconductor"), "{err}");
+    assert!(!ok && err.contains("bad.pbrt:2:1") && err.contains("hair"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// glTF: `info` describes the built scene; `render` writes the image; a bad
+/// file fails naming its JSON pointer.
+#[test]
+fn gltf_info_and_render() {
+    let scene = root().join("tests/scenes/gltf/boxes.gltf");
+    let (ok, out, err) = info(&scene, &[]);
+    assert!(ok, "{err}");
+    for needle in [
+        "geometry: 28 triangles in 4 meshes",
+        "emitters: 4 (1 area, 1 directional, 1 point, 1 spot)",
+        "image: 512x384, 64 samples",
+    ] {
+        assert!(out.contains(needle), "'{needle}' not in:\n{out}");
+    }
+    let dir = std::env::temp_dir().join(format!("penumbra-info-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("boxes.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render", "--spp", "1", "--quiet", "-o"])
+        .arg(&png)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(png.exists());
+    let bad = dir.join("bad.gltf");
+    std::fs::write(
+        &bad,
+        r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 5}}]}]}"#,
+    )
+    .unwrap();
+    let (ok, _, err) = info(&bad, &[]);
+    assert!(!ok);
+    assert!(err.contains("bad.gltf at /meshes/0/primitives/0/attributes/POSITION"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -58,7 +58,7 @@ pub fn render<'py>(
     if let Some(a) = &display_server {
         penumbra::tev::parse_address(a).map_err(|e| error(format!("display_server: {e}")))?;
     }
-    let ov = Overrides { spp, seed: Some(seed), integrator: integrator.clone(), sampler: None };
+    let ov = Overrides { spp, seed: Some(seed), integrator: integrator.clone(), sampler: None, envmap: None };
     let job = scene.job(&ov).map_err(|e| load_error(py, &e))?;
     let mut layers = penumbra::layers::parse(&aovs.join(",")).map_err(anyhow_error)?;
     // The integrator's own output channels (`aov`, `moment`), as the command line's EXR layers.

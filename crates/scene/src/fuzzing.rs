@@ -22,7 +22,16 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("xml_include", xml_include),
     ("pbrt", pbrt),
     ("tensor", tensor),
+    #[cfg(feature = "gltf")]
+    ("gltf", gltf),
 ];
+
+/// A glTF file (`.gltf` JSON or `.glb`): parsed, checked and built;
+/// external buffers and images are missing-file errors.
+#[cfg(feature = "gltf")]
+pub fn gltf(data: &[u8]) {
+    let _ = crate::gltf::load_bytes(Path::new("/nonexistent-fuzz-dir/scene.glb"), data, &crate::Overrides::default());
+}
 
 /// A Mitsuba XML scene: parsed, then built (meshes, textures and includes
 /// it names are looked up beside a file that does not exist, so they are

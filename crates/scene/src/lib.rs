@@ -11,6 +11,8 @@ pub mod desc;
 pub mod error;
 #[doc(hidden)]
 pub mod fuzzing;
+#[cfg(feature = "gltf")]
+pub mod gltf;
 pub mod image_io;
 pub mod mitsuba;
 pub mod obj;
@@ -31,16 +33,15 @@ pub use scene_builder::{Location, SceneBuilder};
 use penumbra_render::render::RenderJob;
 use std::path::Path;
 
-/// Whether `path` names a pbrt-v4 scene (`.pbrt`, `.pbrt.gz`); other
-/// files are read as Mitsuba 3 XML.
+/// Whether `path` names a pbrt-v4 scene (`.pbrt`, `.pbrt.gz`).
 pub fn is_pbrt(path: &Path) -> bool {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_ascii_lowercase();
     name.ends_with(".pbrt") || name.ends_with(".pbrt.gz")
 }
 
-/// Loads a scene, its format chosen by the file name ([`is_pbrt`]): a
-/// Mitsuba 3 XML scene with `-D name=value` definitions, or a pbrt-v4
-/// scene (which takes no definitions).
+/// Loads a scene, its format chosen by the file name: Mitsuba 3 XML with
+/// `-D name=value` definitions, a pbrt-v4 scene ([`is_pbrt`]), or glTF 2.0
+/// (`.gltf`, `.glb`; see [`gltf`]); the last two take no definitions.
 pub fn load_scene(path: &Path, defines: &[(String, String)], ov: &Overrides) -> Result<RenderJob> {
     load_scene_noted(path, defines, ov).map(|(job, _)| job)
 }
@@ -56,7 +57,38 @@ pub fn load_scene_noted(path: &Path, defines: &[(String, String)], ov: &Override
         let scene = pbrt::parse_file(path)?;
         return pbrt::translate::translate(&scene, path, ov);
     }
+    if let Some(job) = load_other_format(path, defines, ov) {
+        return job;
+    }
     let desc = mitsuba::parse_file(path, defines)?;
     let job = builder::build(&desc, ov).map_err(|e| desc.explain(e))?;
     Ok((job, desc.upgrade_notes()))
+}
+
+/// The scene of a file that is not Mitsuba XML, chosen by its extension
+/// (`None`: read it as Mitsuba XML).
+fn load_other_format(
+    path: &Path,
+    defines: &[(String, String)],
+    ov: &Overrides,
+) -> Option<Result<(RenderJob, Vec<String>)>> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("gltf" | "glb") => Some(if !defines.is_empty() {
+            Err(LoadError::new(None, "-D definitions apply to Mitsuba XML scenes only, not to glTF"))
+        } else {
+            load_gltf(path, ov)
+        }),
+        _ => None,
+    }
+}
+
+#[cfg(feature = "gltf")]
+fn load_gltf(path: &Path, ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
+    gltf::load(path, ov)
+}
+
+#[cfg(not(feature = "gltf"))]
+fn load_gltf(path: &Path, _ov: &Overrides) -> Result<(RenderJob, Vec<String>)> {
+    Err(LoadError::in_file(path, "this build has no glTF support; build penumbra-scene with the feature `gltf`"))
 }

@@ -22,6 +22,7 @@ pub mod dielectric;
 pub mod difftrans;
 pub mod diffuse;
 pub mod fresnel;
+pub mod gltf_pbr;
 pub mod hair;
 pub mod layered;
 pub mod measured;
@@ -41,6 +42,7 @@ pub use conductor::{Conductor, ConductorParams};
 pub use dielectric::{Dielectric, DielectricParams};
 pub use difftrans::{DiffuseTransmission, DiffuseTransmissionParams};
 pub use diffuse::{Diffuse, DiffuseParams};
+pub use gltf_pbr::{GltfPbr, GltfPbrParams};
 pub use hair::{Hair, HairAbsorption, HairLobes, HairParams};
 pub use layered::{CoatedConductor, CoatedConductorParams, CoatedDiffuse, CoatedDiffuseParams};
 pub use measured::{Measured, MeasuredParams};
@@ -104,6 +106,7 @@ macro_rules! with_model {
             BsdfKind::Measured($b) => $e,
             BsdfKind::Principled($b) => $e,
             BsdfKind::PrincipledThin($b) => $e,
+            BsdfKind::GltfPbr($b) => $e,
             BsdfKind::Blend($b) => $e,
             BsdfKind::Null => $null,
         }
@@ -205,6 +208,8 @@ pub enum BsdfKind<'a> {
     Principled(Principled),
     /// Mitsuba `principledthin`.
     PrincipledThin(PrincipledThin),
+    /// glTF 2.0's metallic-roughness material (its specification's Appendix B).
+    GltfPbr(GltfPbr),
     /// Mitsuba `null`: light passes straight through.
     Null,
     /// Mitsuba `blendbsdf`: two nested BSDFs, resolved with the hit.

@@ -13,8 +13,8 @@ pub mod normalmap;
 
 use crate::bsdf::{
     Blend, Bsdf, BsdfKind, BsdfParams, CoatedConductorParams, CoatedDiffuseParams, ConductorParams, DielectricParams,
-    DiffuseParams, DiffuseTransmissionParams, HairParams, MeasuredParams, Nested, PPlasticParams, Perturbation,
-    PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
+    DiffuseParams, DiffuseTransmissionParams, GltfPbrParams, HairParams, MeasuredParams, Nested, PPlasticParams,
+    Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
     RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
@@ -78,6 +78,8 @@ pub enum Material {
     Principled(Box<PrincipledParams>),
     /// Mitsuba `principledthin` (the thin-sheet Disney BSDF).
     PrincipledThin(Box<PrincipledThinParams>),
+    /// glTF 2.0's metallic-roughness material.
+    GltfPbr(Box<GltfPbrParams>),
     /// Mitsuba `null`: invisible to every ray (a shape that only emits).
     Null,
     /// The front material, and the one seen from the back side.
@@ -187,6 +189,7 @@ impl Material {
                 Material::Measured(p) => BsdfKind::Measured(p.at(si)),
                 Material::Principled(p) => BsdfKind::Principled(p.at(si)),
                 Material::PrincipledThin(p) => BsdfKind::PrincipledThin(p.at(si)),
+                Material::GltfPbr(p) => BsdfKind::GltfPbr(p.at(si)),
                 Material::Null => BsdfKind::Null,
                 Material::Blend { weight, first, second } => {
                     let weight = weight.eval_1(si).clamp(0.0, 1.0);
@@ -227,6 +230,7 @@ impl Material {
             Material::Measured(p) => p.reads_uv(),
             Material::Principled(p) => p.reads_uv(),
             Material::PrincipledThin(p) => p.reads_uv(),
+            Material::GltfPbr(p) => p.reads_uv(),
             Material::Null => false,
             Material::TwoSided(front, back) => front.reads_uv() || back.reads_uv(),
             Material::Mask { opacity, inner } => opacity.constant().is_none() || inner.reads_uv(),
@@ -251,6 +255,7 @@ impl Material {
             Material::RoughPlastic(p) => p.diffuse_reflectance.eval(si),
             Material::Principled(p) => p.base_color.eval(si),
             Material::PrincipledThin(p) => p.base_color.eval(si),
+            Material::GltfPbr(p) => p.at(si).base_color,
             Material::TwoSided(front, back) => {
                 if si.to_local(si.wo).z >= 0.0 {
                     front.diffuse_reflectance(si, scratch)

@@ -208,6 +208,14 @@ fn directional(node: &Node) -> Result<PendingLight> {
     }))
 }
 
+/// An `envmap` light of the image file `path` with the defaults (scale 1, identity transform).
+pub(super) fn envmap_file(path: &std::path::Path) -> Result<Light> {
+    let img = image_io::read_image(path).map_err(|e| LoadError::new(None, format!("--envmap: {e}")))?;
+    let light = EnvMapLight::new(img.width as usize, img.height as usize, img.pixels, glam::Mat4::IDENTITY, 1.0)
+        .map_err(|e| LoadError::new(None, format!("--envmap '{}': {e}", path.display())))?;
+    Ok(Light::EnvMap(light))
+}
+
 fn envmap(node: &Node) -> Result<PendingLight> {
     let (file, loc) = node
         .get_string("filename")?

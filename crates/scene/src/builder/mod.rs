@@ -19,7 +19,7 @@ use bsdf::build_material;
 pub(crate) use integrator::build_integrator;
 pub use integrator::integrator_from_spec;
 use sensor::build_sensor;
-pub use sensor::SAMPLER_OVERRIDES;
+pub use sensor::{sampler_kind, SAMPLER_OVERRIDES};
 use texture::Textures;
 
 use crate::desc::{Kind, Node, SceneDesc};
@@ -46,6 +46,21 @@ pub struct Overrides {
     /// `--sampler NAME`, replacing the scene's sampler type (its sample count
     /// and seed stay): a Mitsuba sampler or `sobol`.
     pub sampler: Option<String>,
+    /// `--envmap FILE`: an environment map added to the scene's lights
+    /// (a glTF file's default white environment is then left out).
+    pub envmap: Option<PathBuf>,
+}
+
+/// The environment map `--envmap` names (Mitsuba's `envmap` with its
+/// defaults: +y up, scale 1).
+pub fn envmap_light(path: &Path) -> Result<penumbra_render::light::Light> {
+    emitter::envmap_file(path)
+}
+
+/// The integrator `--integrator NAME[:key=value,...]` gives, for a scene
+/// without one of its own.
+pub fn integrator_override(spec: &str) -> Result<(Integrator, LightSelection)> {
+    build_integrator(&integrator_from_spec(spec, None)?)
 }
 
 /// The plugins of one kind that Penumbra builds, in the order error messages
@@ -234,6 +249,9 @@ pub fn build_cached_with(
         loc: sensor.loc.clone(),
     });
     let mut scene = b.scene;
+    if let Some(path) = &ov.envmap {
+        scene.add_light(envmap_light(path)?, &sensor.loc)?;
+    }
     scene.set_camera(camera, camera_medium);
     scene.set_film(film, filter);
     scene.set_sampler(sampler);

@@ -445,21 +445,7 @@ fn film_and_sampler(node: &Node, ov: &Overrides) -> Result<(FilmRect, Filter, Sa
             (kind, spp as u32, seed as u64)
         }
     };
-    let kind = match ov.sampler.as_deref() {
-        None => kind,
-        Some("independent") => SamplerKind::Independent,
-        Some("stratified") => SamplerKind::Stratified,
-        Some("multijitter") => SamplerKind::Multijitter { jitter: true },
-        Some("orthogonal") => SamplerKind::Orthogonal { jitter: true },
-        Some("ldsampler") => SamplerKind::LowDiscrepancy,
-        Some("sobol") => SamplerKind::Sobol,
-        Some(other) => {
-            return Err(LoadError::new(
-                None,
-                format!("--sampler {other}: unknown sampler; use one of {}", SAMPLER_OVERRIDES.join(", ")),
-            ))
-        }
-    };
+    let kind = sampler_kind(ov.sampler.as_deref(), kind)?;
     if let Some(o) = ov.spp {
         spp = o;
     }
@@ -517,5 +503,24 @@ fn camera(
             Camera::distant(to_world.as_mat4(), target.map(|t| t.as_vec3()), shape.map(|s| *s))
         }
         SensorModel::Batch => return Err(node.error("a batch sensor cannot be nested in another")),
+    })
+}
+
+/// The sampler `--sampler NAME` selects, else `default`.
+pub fn sampler_kind(name: Option<&str>, default: SamplerKind) -> Result<SamplerKind> {
+    Ok(match name {
+        None => default,
+        Some("independent") => SamplerKind::Independent,
+        Some("stratified") => SamplerKind::Stratified,
+        Some("multijitter") => SamplerKind::Multijitter { jitter: true },
+        Some("orthogonal") => SamplerKind::Orthogonal { jitter: true },
+        Some("ldsampler") => SamplerKind::LowDiscrepancy,
+        Some("sobol") => SamplerKind::Sobol,
+        Some(other) => {
+            return Err(LoadError::new(
+                None,
+                format!("--sampler {other}: unknown sampler; use one of {}", SAMPLER_OVERRIDES.join(", ")),
+            ))
+        }
     })
 }
