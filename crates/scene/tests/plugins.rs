@@ -72,12 +72,30 @@ fn unsupported_plugin_message_format() {
     let e = build_error(Kind::Shape, r#"<shape type="blender"/>"#).unwrap();
     assert!(
         e.ends_with(
-            "shape plugin 'blender' is not supported by Penumbra; supported shape plugins: \
+            "shape plugin 'blender' is not supported by Penumbra (it is the mesh Mitsuba's Blender add-on passes in \
+             memory, which no scene file can describe; export the mesh as ply or serialized); supported shape plugins: \
              rectangle, cube, sphere, disk, cylinder, ellipsoids, ellipsoidsmesh, sdfgrid, linearcurve, \
              bsplinecurve, obj, ply, serialized, shapegroup, instance, merge"
         ),
         "{e}"
     );
+}
+
+/// The README's unsupported plugins fail with their reason.
+#[test]
+fn unsupported_plugins_say_why() {
+    for (kind, object, why) in [
+        (
+            Kind::Film,
+            r#"<sensor type="perspective"><film type="specfilm"/></sensor>"#,
+            "Mitsuba's own RGB variants refuse it",
+        ),
+        (Kind::Bsdf, r#"<bsdf type="polarizer" id="p"/>"#, "Stokes vectors"),
+        (Kind::Integrator, r#"<integrator type="stokes"/>"#, "Stokes vectors"),
+    ] {
+        let e = build_error(kind, object).unwrap_or_else(|| panic!("{object} was accepted"));
+        assert!(e.contains("is not supported by Penumbra (") && e.contains(why), "{e}");
+    }
 }
 
 const README_HEADING: &str = "### Every Mitsuba 3.9.1 plugin";

@@ -91,9 +91,30 @@ fn listed<F>(table: &Plugins<F>) -> Vec<&'static str> {
     table.iter().map(|&(name, _)| name).collect()
 }
 
+/// Mitsuba 3.9.1 plugins Penumbra does not build, with the reason (README,
+/// "Every Mitsuba 3.9.1 plugin").
+const UNSUPPORTED_WHY: &[(&[&str], &str)] = &[
+    (
+        &["measured_polarized", "polarizer", "retarder", "circular", "stokes"],
+        "polarisation needs Stokes vectors, which an RGB renderer does not carry",
+    ),
+    (
+        &["specfilm"],
+        "it records spectral bands, and Mitsuba's own RGB variants refuse it too (spectral variants only)",
+    ),
+    (
+        &["blender"],
+        "it is the mesh Mitsuba's Blender add-on passes in memory, which no scene file can describe; export the mesh as ply or serialized",
+    ),
+];
+
 fn unsupported<F>(node: &Node, table: &Plugins<F>) -> LoadError {
+    let why = UNSUPPORTED_WHY
+        .iter()
+        .find(|(names, _)| names.contains(&node.plugin.as_str()))
+        .map_or(String::new(), |(_, why)| format!(" ({why})"));
     node.error(format!(
-        "{} plugin '{}' is not supported by Penumbra; supported {} plugins: {}",
+        "{} plugin '{}' is not supported by Penumbra{why}; supported {} plugins: {}",
         node.kind.tag(),
         node.plugin,
         node.kind.tag(),
