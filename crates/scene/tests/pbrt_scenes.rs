@@ -266,7 +266,7 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
     let head = "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n";
     let cases = [
         ("Shape \"curve\" \"point3 P\" [0 0 0]", "b.pbrt:3:1", "shape \"curve\" is not supported"),
-        ("Material \"coateddiffuse\"\nShape \"sphere\"", "b.pbrt:3:1", "not supported yet"),
+        ("Material \"hair\"\nShape \"sphere\"", "b.pbrt:3:1", "material \"hair\" is not supported"),
         ("Shape \"sphere\" \"float zmax\" 0.5", "b.pbrt:3:1", "partial shape"),
         ("Shape \"sphere\" \"float radiu\" 1", "b.pbrt:3:", "\"float radiu\""),
         ("Material \"conductor\" \"spectrum eta\" \"metal-Zz-eta\"\nShape \"sphere\"", "b.pbrt:3:", "metal-Cu-eta"),
