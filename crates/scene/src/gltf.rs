@@ -35,8 +35,9 @@
 //!   W/m²), as glTF viewers (the Khronos sample viewer, three.js) use them;
 //!   `range` is ignored (the specification allows physical inverse-square
 //!   fall-off).
-//! - Without any light: a uniform white environment (radiance 1), so the
-//!   scene is not black. Film 512 pixels on the long side, 64 samples per
+//! - Without a punctual light: a uniform white environment (radiance 1), so
+//!   the scene is not black (emissive materials alone light it only where
+//!   they glow). Film 512 pixels on the long side, 64 samples per
 //!   pixel, Mitsuba's `path` integrator, Gaussian filter.
 
 use crate::builder::Overrides;
@@ -360,7 +361,9 @@ struct Reader<'a> {
     groups: HashMap<usize, (GroupId, Vec3, Vec3)>,
     /// The first camera met, with its node's world transform.
     camera: Option<(Mat4, gltf::Camera<'a>, String)>,
-    /// Lights added (punctual and emissive shapes).
+    /// `KHR_lights_punctual` lights added (emissive materials do not count:
+    /// glTF viewers light such models by an environment too, e.g. the
+    /// sample `DamagedHelmet`, whose emission is its small displays).
     lights: usize,
     notes: Vec<String>,
 }
@@ -547,9 +550,6 @@ impl<'a> Reader<'a> {
             let mirror = world.determinant() < 0.0;
             let geometry = data.into_geometry(world, mirror, false, &loc)?;
             let attrs = geometry.1.clone();
-            if emission.is_some() {
-                self.lights += 1;
-            }
             let id = self.scene.add_shape(
                 ShapeDesc { emission: emission.map(Emission::Diffuse), ..ShapeDesc::new(geometry, material) },
                 &loc,
@@ -819,7 +819,7 @@ impl<'a> Reader<'a> {
         if let Some(path) = &ov.envmap {
             self.scene.add_light(crate::builder::envmap_light(path)?, &whole)?;
         } else if self.lights == 0 {
-            self.notes.push("the scene has no lights: lit by a uniform white environment (radiance 1)".into());
+            self.notes.push("the scene has no punctual lights: lit by a uniform white environment (radiance 1)".into());
             self.scene.add_light(Light::Constant(ConstantLight { radiance: Vec3::ONE }), &whole)?;
         }
         let (lo, hi) = self.bounds;
