@@ -162,9 +162,9 @@ fn texture_errors_name_file_and_line() {
 <boolean name="raw" value="true"/></texture>"#);
     assert!(e.contains("'raw'") && e.contains(&format!("{file}:6")), "{e}");
 
-    std::fs::write(scene.with_file_name("tex.tga"), b"not an image").unwrap();
-    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.tga"/></texture>"#);
-    assert!(e.contains("tex.tga") && e.contains("unsupported"), "{e}");
+    std::fs::write(scene.with_file_name("tex.bmp"), b"not an image").unwrap();
+    let e = err(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="tex.bmp"/></texture>"#);
+    assert!(e.contains("tex.bmp") && e.contains("unsupported"), "{e}");
 
     // Non-finite texels are rejected with the file named.
     let hdr = scene.with_file_name("nan.exr");
