@@ -339,7 +339,9 @@ fn adaptive_render_killed_and_resumed_is_bitwise_the_uninterrupted_one() {
     for round in 0..=12 {
         let mut child = render(&cornell(), &out, &ck_args).stderr(Stdio::piped()).spawn().unwrap();
         if round < 12 {
-            std::thread::sleep(Duration::from_secs_f64(rnd() * 0.3 * t_ref));
+            // Early in a full render's time (as production.rs): later kills often
+            // come after a run has already completed the render.
+            std::thread::sleep(Duration::from_secs_f64(rnd() * 0.15 * t_ref));
             if rnd() < 0.5 {
                 signal(child.id(), "TERM");
             } else {
