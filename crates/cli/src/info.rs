@@ -34,14 +34,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     if let Ok(job) = &built {
         describe_job(job, &mut out)?;
     }
-    if notes.is_empty() {
-        writeln!(out, "approximations: none")?;
-    } else {
-        writeln!(out, "approximations:")?;
-        for n in &notes {
-            writeln!(out, "  - {n}")?;
-        }
-    }
+    write_notes(&notes, &mut out)?;
     print!("{out}");
     match built {
         Ok(_) => {
@@ -71,14 +64,7 @@ fn run_pbrt(a: &InfoArgs) -> Result<()> {
         };
         writeln!(out, "integrator: {integrator}")?;
         describe_job(job, &mut out)?;
-        if notes.is_empty() {
-            writeln!(out, "approximations: none")?;
-        } else {
-            writeln!(out, "approximations:")?;
-            for n in notes {
-                writeln!(out, "  - {n}")?;
-            }
-        }
+        write_notes(notes, &mut out)?;
     }
     print!("{out}");
     match built {
@@ -88,6 +74,19 @@ fn run_pbrt(a: &InfoArgs) -> Result<()> {
         }
         Err(e) => Err(anyhow!("the scene cannot be rendered by Penumbra: {e}")),
     }
+}
+
+/// The notes on what Penumbra renders differently, as `info` lists them.
+fn write_notes(notes: &[String], out: &mut String) -> Result<()> {
+    if notes.is_empty() {
+        writeln!(out, "approximations: none")?;
+    } else {
+        writeln!(out, "approximations:")?;
+        for n in notes {
+            writeln!(out, "  - {n}")?;
+        }
+    }
+    Ok(())
 }
 
 /// Geometry, emitters and image of a built scene.
@@ -263,14 +262,7 @@ fn run_other_format(a: &InfoArgs) -> Result<()> {
     writeln!(out, "scene: {}", a.scene.display())?;
     writeln!(out, "integrator: path (the default for glTF scenes)")?;
     describe_job(&job, &mut out)?;
-    if notes.is_empty() {
-        writeln!(out, "approximations: none")?;
-    } else {
-        writeln!(out, "approximations:")?;
-        for n in &notes {
-            writeln!(out, "  - {n}")?;
-        }
-    }
+    write_notes(&notes, &mut out)?;
     print!("{out}");
     println!("status: ready to render");
     Ok(())
