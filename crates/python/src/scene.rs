@@ -5,7 +5,7 @@
 //! (`builder::GeometryCache`), so a parameter sweep does not reload meshes.
 
 use crate::load_error;
-use numpy::{PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use penumbra_render::material::Material;
 use penumbra_render::render::RenderJob;
 use penumbra_scene::builder::{self, GeometryCache};
@@ -27,6 +27,29 @@ enum Source {
         text: String,
         path: PathBuf,
     },
+    /// A pbrt-v4 or glTF 2.0 file, rendered as it is: no definitions,
+    /// `set` or `add_mesh` (those work on Mitsuba's object model).
+    Other(PathBuf),
+}
+
+impl Source {
+    /// `path` as a source, its format chosen by extension as `penumbra render` does.
+    fn file(path: PathBuf) -> Source {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        if penumbra_scene::is_pbrt(&path) || matches!(ext.as_deref(), Some("gltf" | "glb")) {
+            Source::Other(path)
+        } else {
+            Source::File(path)
+        }
+    }
+
+    /// The file the scene comes from (or that its text stands for).
+    fn path(&self) -> &PathBuf {
+        match self {
+            Source::File(p) | Source::Other(p) => p,
+            Source::Text { path, .. } => path,
+        }
+    }
 }
 
 /// A loaded scene (`penumbra.load_file`, `load_string`, `load_dict`).
@@ -86,6 +109,10 @@ fn parse(source: &Source, defines: &[(String, String)], overrides: &[Override]) 
     let desc = match source {
         Source::File(p) => mitsuba::parse_file(p, defines)?,
         Source::Text { text, path } => mitsuba::parse_str(text, path, defines)?,
+        Source::Other(p) => return Err(LoadError::in_file(
+            p,
+            "parameters, set and add_mesh work on Mitsuba XML scenes only; this pbrt-v4 or glTF scene renders as it is",
+        )),
     };
     if overrides.is_empty() {
         return Ok(desc);
@@ -100,6 +127,9 @@ impl Scene {
 
     /// The render job for `ov`, with the values set so far.
     pub(crate) fn job(&mut self, ov: &Overrides) -> Result<RenderJob, LoadError> {
+        if let Source::Other(p) = &self.source {
+            return penumbra_scene::load_scene(p, &[], ov);
+        }
         let desc = self.parse()?;
         let meshes = &self.meshes;
         builder::build_cached_with(&desc, ov, &mut self.cache, &mut |b| meshes.iter().try_for_each(|m| m.add(b)))
@@ -109,7 +139,7 @@ impl Scene {
     /// The bytes that identify the scene's text (checkpoint identity).
     pub(crate) fn source_bytes(&self) -> Vec<u8> {
         match &self.source {
-            Source::File(p) => std::fs::read(p).unwrap_or_default(),
+            Source::File(p) | Source::Other(p) => std::fs::read(p).unwrap_or_default(),
             Source::Text { text, .. } => text.as_bytes().to_vec(),
         }
     }
@@ -121,8 +151,23 @@ impl Scene {
 
     /// The values set, as text (checkpoint identity).
     pub(crate) fn overrides_text(&self) -> String {
-        let mut text =
-            self.overrides.iter().map(|o| format!("{}.{}={:?}", o.id, o.name, o.value)).collect::<Vec<_>>().join(" ");
+        let value = |v: &Value| match v {
+            // An image by its size and a hash of its bits, not pixel by pixel.
+            Value::Image(img) => {
+                let mut h = 0xcbf2_9ce4_8422_2325u64;
+                for c in img.pixels.iter().flatten() {
+                    h = (h ^ c.to_bits() as u64).wrapping_mul(0x100_0000_01b3);
+                }
+                format!("image({}x{} {h:016x})", img.width, img.height)
+            }
+            v => format!("{v:?}"),
+        };
+        let mut text = self
+            .overrides
+            .iter()
+            .map(|o| format!("{}.{}={}", o.id, o.name, value(&o.value)))
+            .collect::<Vec<_>>()
+            .join(" ");
         // Meshes from arrays: their whole content (a checkpoint resumes only the same scene).
         for m in &self.meshes {
             text.push_str(&format!(
@@ -140,12 +185,29 @@ impl Scene {
         text
     }
 
-    fn load(py: Python<'_>, source: Source, defines: Vec<(String, String)>) -> PyResult<Scene> {
+    fn load(
+        py: Python<'_>,
+        source: Source,
+        defines: Vec<(String, String)>,
+        overrides: Vec<Override>,
+    ) -> PyResult<Scene> {
         let mut cache = GeometryCache::default();
-        let job = parse(&source, &defines, &[])
-            .and_then(|desc| builder::build_cached(&desc, &Overrides::default(), &mut cache))
-            .map_err(|e| load_error(py, &e))?;
-        Ok(Scene { source, defines, overrides: Vec::new(), cache, meshes: Vec::new(), job })
+        let job = match &source {
+            Source::Other(p) => {
+                if let Some((name, _)) = defines.first() {
+                    return Err(PyValueError::new_err(format!(
+                        "{name}=...: definitions apply to Mitsuba XML scenes only, not to '{}'",
+                        p.display()
+                    )));
+                }
+                penumbra_scene::load_scene(p, &[], &Overrides::default())
+            }
+            _ => parse(&source, &defines, &overrides).and_then(|desc| {
+                builder::build_cached(&desc, &Overrides::default(), &mut cache).map_err(|e| desc.explain(e))
+            }),
+        }
+        .map_err(|e| load_error(py, &e))?;
+        Ok(Scene { source, defines, overrides, cache, meshes: Vec::new(), job })
     }
 }
 
@@ -166,26 +228,73 @@ fn defines_of(params: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, Strin
     Ok(out)
 }
 
-/// Reads a Mitsuba 3 XML file, `params` as its `-D name=value` definitions.
+/// Reads a scene file, its format chosen by extension as `penumbra render`
+/// does: Mitsuba 3 XML (`params` as its `-D name=value` definitions),
+/// pbrt-v4 (`.pbrt`, `.pbrt.gz`) or glTF 2.0 (`.gltf`, `.glb`).
 #[pyfunction]
 #[pyo3(signature = (path, params=None))]
 pub fn load_file(py: Python<'_>, path: PathBuf, params: Option<&Bound<'_, PyDict>>) -> PyResult<Scene> {
-    Scene::load(py, Source::File(path), defines_of(params)?)
+    Scene::load(py, Source::file(path), defines_of(params)?, Vec::new())
 }
 
 /// Parses Mitsuba 3 XML text; relative file names resolve from `base_dir`
 /// (default: the working directory), and messages name the text `name`.
+/// `images`: `(object id, parameter, array)` set before the first build,
+/// as `Scene.set` would (how `load_dict` passes `data` arrays).
 #[pyfunction]
-#[pyo3(signature = (text, params=None, base_dir=None, name="<string>"))]
+#[pyo3(signature = (text, params=None, base_dir=None, name="<string>", images=None))]
 pub fn load_string(
     py: Python<'_>,
     text: String,
     params: Option<&Bound<'_, PyDict>>,
     base_dir: Option<PathBuf>,
     name: &str,
+    images: Option<Vec<(String, String, Bound<'_, PyAny>)>>,
 ) -> PyResult<Scene> {
     let path = base_dir.unwrap_or_default().join(name);
-    Scene::load(py, Source::Text { text, path }, defines_of(params)?)
+    let mut overrides = Vec::new();
+    for (id, name, a) in images.unwrap_or_default() {
+        let value = to_image(&a, &format!("{id}.{name}"))?;
+        overrides.push(Override { id, name, value });
+    }
+    Scene::load(py, Source::Text { text, path }, defines_of(params)?, overrides)
+}
+
+/// A numpy image as a scene value: `(H, W, 3)` linear RGB, or `(H, W)` /
+/// `(H, W, 1)` grey, any float dtype; every value finite. Row 0 is the
+/// image's top row, as in an image file.
+fn to_image(a: &Bound<'_, PyAny>, what: &str) -> PyResult<Value> {
+    let np = a.py().import("numpy")?;
+    let arr = np
+        .call_method1("asarray", (a, "float32"))
+        .map_err(|e| PyTypeError::new_err(format!("{what}: not an array of numbers ({e})")))?;
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    let (h, w, c) = match shape[..] {
+        [h, w] => (h, w, 1),
+        [h, w, c] if c == 1 || c == 3 => (h, w, c),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "{what}: an image is an (H, W, 3) or (H, W) array, not {shape:?}"
+            )))
+        }
+    };
+    if h == 0 || w == 0 || h > u32::MAX as usize || w > u32::MAX as usize {
+        return Err(PyValueError::new_err(format!("{what}: an image of {w}x{h} pixels")));
+    }
+    let flat: Vec<f32> = np.call_method1("ascontiguousarray", (arr,))?.call_method0("ravel")?.extract()?;
+    if let Some(k) = flat.iter().position(|x| !x.is_finite()) {
+        let (y, x) = (k / c / w, k / c % w);
+        return Err(PyValueError::new_err(format!(
+            "{what}: pixel (row {y}, column {x}) is {}, not a finite number",
+            flat[k]
+        )));
+    }
+    let pixels = flat.chunks_exact(c).map(|p| if c == 1 { [p[0]; 3] } else { [p[0], p[1], p[2]] }).collect();
+    Ok(Value::Image(std::sync::Arc::new(penumbra_scene::image_io::RgbImage {
+        width: w as u32,
+        height: h as u32,
+        pixels,
+    })))
 }
 
 /// The rows of a `(rows, N)` array, each finite; `what` names it in errors.
@@ -318,6 +427,10 @@ fn from_value<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>> {
         Value::Point(p) | Value::Vector(p) => p.to_array().to_vec().into_pyobject(py)?.into_any(),
         Value::SpectrumSampled(s) => s.clone().into_pyobject(py)?.into_any(),
         Value::Transform(m) => matrix(py, m)?.into_any(),
+        Value::Image(img) => {
+            let flat: Vec<f32> = img.pixels.iter().flatten().copied().collect();
+            numpy::PyArray1::from_vec(py, flat).reshape([img.height as usize, img.width as usize, 3])?.into_any()
+        }
     })
 }
 
@@ -415,8 +528,12 @@ impl Scene {
     /// rebuilds what depends on it; geometry is rebuilt only for a shape
     /// whose own parameters change.
     fn set(&mut self, py: Python<'_>, key: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        if matches!(self.source, Source::Other(_)) {
+            return Err(load_error(py, &self.parse().expect_err("not Mitsuba XML")));
+        }
         let (id, name) = split_key(key)?;
-        let value = to_value(value)?;
+        // `data`: a bitmap texture's or an environment map's image, as in Mitsuba.
+        let value = if name == "data" { to_image(value, key)? } else { to_value(value)? };
         self.overrides.push(Override { id, name, value });
         match self.job(&Overrides::default()) {
             Ok(job) => {
@@ -451,6 +568,12 @@ impl Scene {
         emission: Option<[f64; 3]>,
         to_world: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
+        if let Source::Other(p) = &self.source {
+            return Err(PyValueError::new_err(format!(
+                "add_mesh works on Mitsuba XML scenes only; '{}' is a pbrt-v4 or glTF scene",
+                p.display()
+            )));
+        }
         let k = self.meshes.len();
         let what = |name: &str| format!("add_mesh #{k}: {name}");
         let positions = as_array::<f64>(positions, "float64", &what("positions"))?;
@@ -524,10 +647,7 @@ impl Scene {
                 )));
             }
         }
-        let file = match &self.source {
-            Source::File(p) => p.clone(),
-            Source::Text { path, .. } => path.clone(),
-        };
+        let file = self.source.path().clone();
         self.meshes.push(ArrayMesh {
             data: MeshData {
                 positions: positions.into_iter().map(v3).collect(),
@@ -565,7 +685,7 @@ impl Scene {
 
     fn __repr__(&self) -> String {
         let what = match &self.source {
-            Source::File(p) => format!("'{}'", p.display()),
+            Source::File(p) | Source::Other(p) => format!("'{}'", p.display()),
             Source::Text { path, .. } => format!("text '{}'", path.display()),
         };
         format!(

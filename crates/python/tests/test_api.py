@@ -17,6 +17,10 @@ def bits(a):
     return np.ascontiguousarray(a, dtype=np.float32).view(np.uint32)
 
 
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[3]
+PBRT_SCENE = ROOT / "scenes" / "pbrt" / "cornell.pbrt"
+
+
 def run_cli(cli, *args):
     subprocess.run([cli, "render", "--quiet", *map(str, args)], check=True, capture_output=True)
 
@@ -106,7 +110,7 @@ def test_load_dict_furnace_renders_one():
 
 
 def test_load_dict_equals_the_same_xml():
-    xml, _ = penumbra._dict.to_xml(FURNACE)
+    xml, _, _ = penumbra._dict.to_xml(FURNACE)
     a = penumbra.render(penumbra.load_dict(FURNACE), spp=2, progress=False)
     b = penumbra.render(penumbra.load_string(xml), spp=2, progress=False)
     assert np.array_equal(bits(a), bits(b))
@@ -389,3 +393,97 @@ def test_add_mesh_refuses_bad_arrays():
     assert "1 shapes" in repr(s), repr(s)
     s.add_mesh(p, f)
     assert "2 shapes" in repr(s), repr(s)
+
+
+IMAGE_SCENE = """<scene version="3.0.0">
+  <sensor type="perspective">
+    <float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 0.6, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/></film>
+  </sensor>
+  <emitter type="envmap" id="env">{env}</emitter>
+  <texture type="bitmap" id="tex">{tex}</texture>
+  <shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="tex"/></bsdf></shape>
+</scene>
+"""
+
+
+def _images(tmp_path):
+    """Two small linear images written to EXR: a texture and an environment."""
+    y, x = np.mgrid[0:12, 0:16]
+    tex = np.stack([x / 15.0, y / 11.0, 0.25 + 0.5 * ((x + y) % 2)], axis=2).astype(np.float32)
+    env = np.stack([1 + 0 * x, 0.5 + y / 11.0, 2.0 * (x < 4)], axis=2).astype(np.float32)
+    penumbra.write(tmp_path / "tex.exr", tex)
+    penumbra.write(tmp_path / "env.exr", env)
+    return tex, env
+
+
+def _files(tex="tex.exr", env="env.exr"):
+    f = '<string name="filename" value="{}"/>'
+    return IMAGE_SCENE.format(tex=f.format(tex), env=f.format(env))
+
+
+def test_numpy_images_render_as_the_same_images_from_files(tmp_path):
+    """A bitmap texture's and an envmap's `data` set from numpy render
+    bitwise as the same pixels read from EXR files: through `set` on a
+    scene read from files, and through `load_dict`."""
+    tex, env = _images(tmp_path)
+    ref = penumbra.render(penumbra.load_string(_files(), base_dir=tmp_path), progress=False)
+    # The file's image replaced by other pixels: the image changes, and
+    # equals the render of those pixels written to files.
+    s = penumbra.load_string(_files(), base_dir=tmp_path)
+    s.set("tex.data", tex[::-1] * 0.5)
+    s.set("env.data", env[:, ::-1])
+    other = penumbra.render(s, progress=False)
+    assert not np.array_equal(bits(other), bits(ref))
+    penumbra.write(tmp_path / "tex2.exr", tex[::-1] * 0.5)
+    penumbra.write(tmp_path / "env2.exr", env[:, ::-1])
+    from_files = penumbra.load_string(_files("tex2.exr", "env2.exr"), base_dir=tmp_path)
+    assert np.array_equal(bits(other), bits(penumbra.render(from_files, progress=False)))
+    assert np.array_equal(s.get("tex.data"), tex[::-1] * 0.5)
+    # load_dict: arrays instead of file names, also for a nested texture.
+    d = {
+        "type": "scene",
+        "sensor": {
+            "type": "perspective", "fov": 50.0,
+            "to_world": np.array(penumbra.load_string(_files(), base_dir=tmp_path).camera_to_world),
+            "sampler": {"type": "independent", "sample_count": 8},
+            "film": {"type": "hdrfilm", "width": 40, "height": 30},
+        },
+        "env": {"type": "envmap", "data": env},
+        "plane": {"type": "rectangle", "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "data": tex}}},
+    }
+    assert np.array_equal(bits(penumbra.render(penumbra.load_dict(d), progress=False)), bits(ref))
+
+
+def test_numpy_images_are_checked(tmp_path):
+    _images(tmp_path)
+    s = penumbra.load_string(_files(), base_dir=tmp_path)
+    bad = np.ones((4, 5, 3), dtype=np.float32)
+    bad[2, 3, 1] = np.nan
+    with pytest.raises(ValueError, match=r"tex.data: pixel \(row 2, column 3\) is NaN"):
+        s.set("tex.data", bad)
+    with pytest.raises(ValueError, match=r"an \(H, W, 3\) or \(H, W\) array, not \[4, 5, 2\]"):
+        s.set("tex.data", np.ones((4, 5, 2)))
+    # `data` on an object that reads no image is an unused parameter.
+    with pytest.raises(penumbra.Error, match="data"):
+        s.set("sensor.data", np.ones((4, 5)))
+    # Grey arrays are broadcast to RGB.
+    s.set("tex.data", np.full((4, 5), 0.5))
+    assert s.get("tex.data").shape == (4, 5, 3)
+
+
+def test_pbrt_and_gltf_files_render_as_the_command_line_does(cli, tmp_path):
+    """`load_file` chooses the format by extension, as `penumbra render`."""
+    for scene in [ROOT / "tests" / "scenes" / "gltf" / "boxes.gltf", PBRT_SCENE]:
+        out = tmp_path / (scene.stem + ".exr")
+        run_cli(cli, scene, "-o", out, "--spp", 4)
+        s = penumbra.load_file(scene)
+        assert "Scene(" in repr(s)
+        img = penumbra.render(s, spp=4, progress=False)
+        assert np.array_equal(bits(img), bits(penumbra.read(out)))
+        with pytest.raises(penumbra.Error, match="Mitsuba XML scenes only"):
+            s.set("x.y", 1.0)
+        with pytest.raises(ValueError, match="Mitsuba XML scenes only"):
+            s.add_mesh(*_tetra_mesh()[:2])

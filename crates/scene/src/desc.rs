@@ -34,6 +34,9 @@ pub enum Value {
     Vector(DVec3),
     /// `<transform>` composed in the order written (later operations apply after earlier ones).
     Transform(DMat4),
+    /// An image in memory (linear RGB), given from Python as a bitmap
+    /// texture's or an environment map's `data`; no XML form.
+    Image(Arc<crate::image_io::RgbImage>),
 }
 
 impl Value {
@@ -49,6 +52,7 @@ impl Value {
             Value::Point(_) => "point",
             Value::Vector(_) => "vector",
             Value::Transform(_) => "transform",
+            Value::Image(_) => "image",
         }
     }
 }

@@ -91,6 +91,21 @@ impl Node {
             },
         }
     }
+    /// An in-memory image property `name` (see [`Value::Image`]) with its
+    /// position, `None` when absent.
+    pub fn get_image(
+        &self,
+        name: &str,
+    ) -> Result<Option<(std::sync::Arc<crate::image_io::RgbImage>, crate::error::FileLoc)>> {
+        match self.find(name) {
+            None => Ok(None),
+            Some(p) => match &p.value {
+                Value::Image(v) => Ok(Some((v.clone(), p.loc.clone()))),
+                _ => Err(self.type_error(p, "an image (an array given from Python)")),
+            },
+        }
+    }
+
     /// String property `name`, or `default` when absent.
     pub fn string(&self, name: &str, default: &str) -> Result<String> {
         Ok(self.get_string(name)?.map(|s| s.0).unwrap_or_else(|| default.to_string()))

@@ -12,7 +12,9 @@ to its parent. Values: bool, int, float, str; ``{"type": "rgb", "value":
 anything with a ``matrix`` attribute, such as ``mi.ScalarTransform4f``) as a
 transform; three numbers as a point for position-like names (``center``,
 ``origin``, ``target``, ``up``, ``direction``, ``position``) and as an RGB
-colour otherwise.
+colour otherwise. A ``bitmap`` texture's or an ``envmap``'s ``data`` may be a
+numpy image, ``(H, W, 3)`` linear RGB or ``(H, W)`` grey, instead of a
+``filename`` (as in Mitsuba); it is passed beside the XML, not written into it.
 """
 
 import math
@@ -68,11 +70,18 @@ def _matrix(v):
     return None
 
 
+def _is_image(v):
+    """Whether v is an array of two or three dimensions (an image)."""
+    return getattr(v, "ndim", 0) in (2, 3) and not isinstance(v, (str, bytes))
+
+
 class _Writer:
     def __init__(self):
         self.lines = []
         self.keys = []  # the key path of each line
         self.kinds = _kinds()
+        self.images = []  # (object id, "data", array) passed beside the XML
+        self.ids = []  # the id of each open object, innermost last
 
     def emit(self, depth, text, keys):
         self.lines.append("  " * depth + text)
@@ -98,12 +107,17 @@ class _Writer:
         tag = self.tag_of(plugin, key, keys)
         attrs = " type=%s" % quoteattr(plugin)
         ident = d.get("id", key if top else None)
+        if ident is None and _is_image(d.get("data")):
+            # An id to address the array by (ids of nested objects are allowed).
+            ident = "__data_%d" % len(self.images)
         if ident is not None:
             attrs += " id=%s" % quoteattr(str(ident))
         if not top and key is not None:
             attrs += " name=%s" % quoteattr(str(key))
         self.emit(depth, "<%s%s>" % (tag, attrs), keys)
+        self.ids.append(None if ident is None else str(ident))
         self.members(d, depth + 1, keys, top=False)
+        self.ids.pop()
         self.emit(depth, "</%s>" % tag, keys)
 
     def members(self, d, depth, keys, top):
@@ -140,6 +154,9 @@ class _Writer:
                 self.emit(depth, "<ref name=%s id=%s/>" % (name, quoteattr(str(v["id"]))), keys)
             else:
                 self.obj(v, depth, k, keys, top)
+            return
+        if k == "data" and _is_image(v):
+            self.images.append((self.ids[-1], "data", v))
             return
         if top:
             raise Error("%s: a scene holds objects (dicts with a 'type'), not %r" % (_path(keys), type(v).__name__))
@@ -178,15 +195,15 @@ def to_xml(d):
     w.emit(0, '<scene version="3.0.0">', [])
     w.members(d, 1, [], top=True)
     w.emit(0, "</scene>", [])
-    return "\n".join(w.lines) + "\n", w.keys
+    return "\n".join(w.lines) + "\n", w.keys, w.images
 
 
 def load_dict(d, base_dir=None):
     """Loads a scene given in Mitsuba 3's dictionary form (see the module's
     documentation); relative file names resolve from ``base_dir``."""
-    xml, keys = to_xml(d)
+    xml, keys, images = to_xml(d)
     try:
-        return _load_string(xml, {}, None if base_dir is None else str(base_dir), "<dict>")
+        return _load_string(xml, {}, None if base_dir is None else str(base_dir), "<dict>", images)
     except Error as e:
         line = getattr(e, "line", None)
         if getattr(e, "file", None) and e.file.endswith("<dict>") and line and 1 <= line <= len(keys):

@@ -2,7 +2,7 @@
 //! emitters declared at the top level.
 
 use super::texture::Textures;
-use super::{plugin, resolve, Plugins};
+use super::{plugin, Plugins};
 use crate::desc::{Kind, Node};
 use crate::error::{LoadError, Result};
 use crate::image_io;
@@ -217,15 +217,17 @@ pub(super) fn envmap_file(path: &std::path::Path) -> Result<Light> {
 }
 
 fn envmap(node: &Node) -> Result<PendingLight> {
-    let (file, loc) = node
-        .get_string("filename")?
-        .ok_or_else(|| node.error("envmap needs a 'filename' (.exr, .hdr, .png or .jpg)"))?;
-    let path = resolve(&loc, &file, "environment map")?;
-    let img = image_io::read_image(&path).map_err(|e| LoadError::at(&loc, e))?;
+    use super::texture::{image_source, ImageSource};
+    let (img, loc, name) = match image_source(node, "envmap")? {
+        ImageSource::File(path, loc) => {
+            (image_io::read_image(&path).map_err(|e| LoadError::at(&loc, e))?, loc, path.display().to_string())
+        }
+        ImageSource::Data(img, loc) => (img.as_ref().clone(), loc, "data".to_string()),
+    };
     let scale = node.float("scale", 1.0)?;
     let to_world = node.transform("to_world")?;
     let light = EnvMapLight::new(img.width as usize, img.height as usize, img.pixels, to_world.as_mat4(), scale as f32)
-        .map_err(|e| LoadError::at(&loc, format!("'{}': {e}", path.display())))?;
+        .map_err(|e| LoadError::at(&loc, format!("'{name}': {e}")))?;
     Ok(ready(Light::EnvMap(light)))
 }
 

@@ -220,10 +220,7 @@ pub(super) fn build_bitmap_texture(node: &Node) -> Result<Texture> {
 }
 
 fn build_bitmap(node: &Node) -> Result<Texture> {
-    let (file, loc) = node
-        .get_string("filename")?
-        .ok_or_else(|| node.error("bitmap needs a 'filename' (.exr, .hdr, .png or .jpg)"))?;
-    let path = super::resolve(&loc, &file, "bitmap texture")?;
+    let source = image_source(node, "bitmap")?;
     let filter = match node.string("filter_type", "bilinear")?.as_str() {
         "bilinear" => FilterType::Bilinear,
         "nearest" => FilterType::Nearest,
@@ -258,7 +255,37 @@ fn build_bitmap(node: &Node) -> Result<Texture> {
     node.accept(&["accel"]);
     let raw = node.bool("raw", false)?;
     let to_uv = to_uv(node)?;
-    let img = image_io::read_image_with(&path, raw).map_err(|e| LoadError::at(&loc, e))?;
+    let (img, loc, name) = match source {
+        ImageSource::File(path, loc) => (
+            image_io::read_image_with(&path, raw).map_err(|e| LoadError::at(&loc, e))?,
+            loc,
+            path.display().to_string(),
+        ),
+        // Given as linear values: `raw` has nothing to undo.
+        ImageSource::Data(img, loc) => (img.as_ref().clone(), loc, "data".to_string()),
+    };
     image_texture(img, filter, wrap, to_uv, &loc)
-        .map_err(|e| LoadError::at(&loc, format!("bitmap texture '{}': {}", path.display(), e.message)))
+        .map_err(|e| LoadError::at(&loc, format!("bitmap texture '{name}': {}", e.message)))
+}
+
+/// Where a bitmap's or an environment map's pixels come from.
+pub(super) enum ImageSource {
+    /// An image file, resolved.
+    File(std::path::PathBuf, crate::error::FileLoc),
+    /// An image in memory, given from Python as `data` (linear RGB).
+    Data(std::sync::Arc<image_io::RgbImage>, crate::error::FileLoc),
+}
+
+/// `data` (from Python) or else `filename`. `data` set on a texture read
+/// from a file replaces the file's image, as Mitsuba's `params['id.data']`.
+pub(super) fn image_source(node: &Node, what: &str) -> Result<ImageSource> {
+    match (node.get_string("filename")?, node.get_image("data")?) {
+        (_, Some((img, loc))) => Ok(ImageSource::Data(img, loc)),
+        (Some((file, loc)), None) => {
+            let path = super::resolve(&loc, &file, &format!("{what} image"))?;
+            Ok(ImageSource::File(path, loc))
+        }
+        (None, None) => Err(node
+            .error(format!("{what} needs a 'filename' (.exr, .hdr, .png or .jpg), or from Python an array as 'data'"))),
+    }
 }
