@@ -13,7 +13,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 #[allow(clippy::large_enum_variant)] // parsed once per run; boxing buys nothing
 pub enum Command {
-    /// Render a Mitsuba 3 XML or glTF 2.0 (.gltf, .glb) scene to an image (.exr, .png, .pfm or .hdr).
+    /// Render a Mitsuba 3 XML, pbrt-v4 (.pbrt, .pbrt.gz) or glTF 2.0 (.gltf, .glb) scene to an image (.exr, .png, .pfm or .hdr).
     Render(RenderArgs),
     /// Describe a scene without rendering: plugins by kind, triangles,
     /// emitters, resolution, samples, integrator and approximated features.
@@ -33,7 +33,7 @@ pub enum Command {
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// The scene file (Mitsuba 3 XML, or glTF 2.0: .gltf, .glb).
+    /// The scene file (Mitsuba 3 XML, pbrt-v4: .pbrt, .pbrt.gz, or glTF 2.0: .gltf, .glb).
     pub scene: PathBuf,
     /// Output image; the extension selects the format.
     #[arg(short, long)]
