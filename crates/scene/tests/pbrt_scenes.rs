@@ -270,7 +270,9 @@ fn bad_pbrt_input_is_an_error_at_its_position() {
         ("Shape \"sphere\" \"float zmax\" 0.5", "b.pbrt:3:1", "partial shape"),
         ("Shape \"sphere\" \"float radiu\" 1", "b.pbrt:3:", "\"float radiu\""),
         ("Material \"conductor\" \"spectrum eta\" \"metal-Zz-eta\"\nShape \"sphere\"", "b.pbrt:3:", "metal-Cu-eta"),
-        ("LightSource \"goniometric\"", "b.pbrt:3:1", "not supported yet"),
+        ("LightSource \"laser\"", "b.pbrt:3:1", "light \"laser\" is not supported"),
+        ("LightSource \"goniometric\"", "b.pbrt:3:1", "\"filename\" is required"),
+        ("LightSource \"projection\" \"string filename\" \"missing.exr\"", "b.pbrt:3:1", "projection light image"),
         (
             "AreaLightSource \"diffuse\"\nShape \"sphere\" \"float alpha\" 0.5",
             "b.pbrt:4:1",
@@ -910,5 +912,96 @@ fn pbrt_coateddiffuse_without_a_coat_is_diffuse() {
     let ok = scene("Material \"coatedconductor\" \"float interface.roughness\" 0.1 \"rgb reflectance\" [0.9 0.6 0.3]");
     std::fs::write(&c, ok).unwrap();
     load_scene(&c, &[], &Overrides::default()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The lights of one pbrt-v4 scene file, translated.
+fn lights_of(dir: &Path, text: &str) -> Vec<penumbra_render::light::Light> {
+    let path = dir.join("l.pbrt");
+    std::fs::write(
+        &path,
+        format!("Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n{text}\n"),
+    )
+    .unwrap();
+    load_scene(&path, &[], &Overrides::default()).unwrap().scene.lights.clone()
+}
+
+/// `goniometric`: a uniform image gives a point light's I / d² bit for bit
+/// (pbrt-v4's I times the image's grey value); the y-z swap puts the image's
+/// centre (the octahedral +z) at the light's +y: an image lit only in its
+/// centre diamond (the upper hemisphere) lights a point above the light and
+/// not one below, also through the light's own rotation.
+#[test]
+fn pbrt_goniometric_light_is_pbrts() {
+    let dir = temp_dir("gonio");
+    let n = 16;
+    let img = |f: &dyn Fn(f32, f32) -> f32| penumbra_scene::image_io::RgbImage {
+        width: n,
+        height: n,
+        pixels: (0..n * n)
+            .map(|k| {
+                let (u, v) = (((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32);
+                let g = f(u, v);
+                [g, g, g]
+            })
+            .collect(),
+    };
+    penumbra_scene::image_io::write_image(&dir.join("flat.exr"), &img(&|_, _| 0.5)).unwrap();
+    penumbra_scene::image_io::write_image(
+        &dir.join("up.exr"),
+        &img(&|u, v| ((u - 0.5).abs() + (v - 0.5).abs() < 0.5) as u8 as f32),
+    )
+    .unwrap();
+    let g = lights_of(&dir, "Translate 1 2 3\nLightSource \"goniometric\" \"string filename\" \"flat.exr\" \"rgb I\" [2 4 6] \"float scale\" 3");
+    let pt = lights_of(&dir, "Translate 1 2 3\nLightSource \"point\" \"rgb I\" [1 2 3] \"float scale\" 3");
+    assert_eq!(g[0].name(), "goniometric");
+    for p in [glam::Vec3::new(-2.0, 0.5, 1.0), glam::Vec3::new(4.0, 9.0, -3.0)] {
+        let (a, b) =
+            (g[0].sample_li(p, glam::Vec2::ZERO, &[]).unwrap(), pt[0].sample_li(p, glam::Vec2::ZERO, &[]).unwrap());
+        assert_eq!((a.wi, a.dist, a.li), (b.wi, b.dist, b.li), "at {p}");
+    }
+    let up = |rot: &str| lights_of(&dir, &format!("{rot}\nLightSource \"goniometric\" \"string filename\" \"up.exr\""));
+    let lit = |l: &penumbra_render::light::Light, p: glam::Vec3| l.sample_li(p, glam::Vec2::ZERO, &[]).is_some();
+    let l = up("");
+    assert!(lit(&l[0], glam::Vec3::new(0.1, 3.0, 0.2)) && !lit(&l[0], glam::Vec3::new(0.1, -3.0, 0.2)));
+    // Rotated 90 degrees about z: the light's +y now points along world -x.
+    let l = up("Rotate 90 0 0 1");
+    assert!(lit(&l[0], glam::Vec3::new(-3.0, 0.1, 0.2)) && !lit(&l[0], glam::Vec3::new(3.0, 0.1, 0.2)));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `projection`: the image lands as pbrt-v4's screen bounds and y flip put
+/// it (light-space +x to the image's right, +y to its top row), with I =
+/// scale · RGB / d² and no cos³ factor; fov spans the image's shorter side;
+/// nothing behind the light or outside the frustum.
+#[test]
+fn pbrt_projection_light_is_pbrts() {
+    let dir = temp_dir("proj");
+    // 4x2: top row red | green | blue | white, bottom row all grey.
+    let mut pixels = vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
+    pixels.extend([[0.25; 3]; 4]);
+    penumbra_scene::image_io::write_image(
+        &dir.join("p.exr"),
+        &penumbra_scene::image_io::RgbImage { width: 4, height: 2, pixels },
+    )
+    .unwrap();
+    let l =
+        lights_of(&dir, "LightSource \"projection\" \"string filename\" \"p.exr\" \"float fov\" 90 \"float scale\" 2");
+    assert_eq!(l[0].name(), "projection");
+    // fov 90 along y (the shorter side): the image spans x in [-2z, 2z], y in [-z, z].
+    let li = |x: f32, y: f32, z: f32| {
+        let p = glam::Vec3::new(x, y, z);
+        l[0].sample_li(p, glam::Vec2::ZERO, &[]).map(|s| s.li * p.length_squared())
+    };
+    let near = |a: Option<glam::Vec3>, b: [f32; 3]| {
+        let a = a.expect("lit");
+        assert!((a - glam::Vec3::from_array(b)).abs().max_element() < 1e-4, "{a} against {b:?}");
+    };
+    near(li(-3.0, 0.5, 2.0), [2.0, 0.0, 0.0]); // left column, top row
+    near(li(-1.0, 0.5, 2.0), [0.0, 2.0, 0.0]);
+    near(li(1.0, 0.5, 2.0), [0.0, 0.0, 2.0]);
+    near(li(3.0, 0.5, 2.0), [2.0, 2.0, 2.0]); // right column
+    near(li(3.0, -0.5, 2.0), [0.5, 0.5, 0.5]); // bottom row
+    assert!(li(0.0, 0.5, -2.0).is_none() && li(4.5, 0.0, 2.0).is_none() && li(0.0, 2.5, 2.0).is_none());
     std::fs::remove_dir_all(&dir).unwrap();
 }

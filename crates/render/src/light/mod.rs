@@ -27,6 +27,7 @@ pub mod directional;
 pub mod directionalarea;
 pub mod envmap;
 pub mod equal_area;
+pub mod image_point;
 pub mod point;
 pub mod projector;
 pub mod sampler;
@@ -40,6 +41,7 @@ pub use directional::DirectionalLight;
 pub use directionalarea::DirectionalAreaLight;
 pub use envmap::EnvMapLight;
 pub use equal_area::EqualAreaEnvLight;
+pub use image_point::{DirectionMap, ImagePointLight};
 pub use point::PointLight;
 pub use projector::ProjectorLight;
 pub use sampler::{LightSampler, LightSelection};
@@ -85,6 +87,9 @@ pub enum Light {
     EqualAreaEnv(EqualAreaEnvLight),
     /// `projector`: an image projected from a point (delta in position).
     Projector(ProjectorLight),
+    /// pbrt-v4 `goniometric` / `projection`: a point light whose intensity
+    /// is an image over directions (delta in position).
+    ImagePoint(ImagePointLight),
     /// `directionalarea`: emission along a shape's normals (delta in
     /// direction), reached by no path this renderer traces.
     DirectionalArea(DirectionalAreaLight),
@@ -110,6 +115,10 @@ impl Light {
             Light::EnvMap(_) => "envmap",
             Light::EqualAreaEnv(_) => "infinite",
             Light::Projector(_) => "projector",
+            Light::ImagePoint(l) => match l.map() {
+                DirectionMap::EqualArea => "goniometric",
+                DirectionMap::Perspective { .. } => "projection",
+            },
             Light::DirectionalArea(_) => "directionalarea",
             Light::Sunsky { timed: false, .. } => "sunsky",
             Light::Sunsky { timed: true, .. } => "timed_sunsky",
@@ -128,6 +137,7 @@ impl Light {
             Light::EnvMap(e) => e.sample_li(u2),
             Light::EqualAreaEnv(e) => e.sample_li(u2),
             Light::Projector(p) => p.sample_li(p_ref),
+            Light::ImagePoint(l) => l.sample_li(p_ref),
             Light::DirectionalArea(d) => d.sample_li(),
             Light::Sunsky { light, .. } => light.sample_li(u2),
         }
@@ -149,6 +159,7 @@ impl Light {
             | Light::Spot(_)
             | Light::Directional(_)
             | Light::Projector(_)
+            | Light::ImagePoint(_)
             | Light::DirectionalArea(_) => 0.0,
         }
     }
@@ -164,6 +175,7 @@ impl Light {
             | Light::Spot(_)
             | Light::Directional(_)
             | Light::Projector(_)
+            | Light::ImagePoint(_)
             | Light::DirectionalArea(_) => false,
         }
     }
@@ -183,6 +195,7 @@ impl Light {
             | Light::Spot(_)
             | Light::Directional(_)
             | Light::Projector(_)
+            | Light::ImagePoint(_)
             | Light::DirectionalArea(_) => (Spectrum::ZERO, 0.0),
         }
     }
@@ -201,6 +214,7 @@ impl Light {
             | Light::Spot(_)
             | Light::Directional(_)
             | Light::Projector(_)
+            | Light::ImagePoint(_)
             | Light::DirectionalArea(_) => Spectrum::ZERO,
         }
     }
@@ -213,6 +227,7 @@ impl Light {
             | Light::Spot(_)
             | Light::Directional(_)
             | Light::Projector(_)
+            | Light::ImagePoint(_)
             | Light::DirectionalArea(_) => true,
             Light::Area(_) | Light::Constant(_) | Light::EnvMap(_) | Light::EqualAreaEnv(_) | Light::Sunsky { .. } => {
                 false
@@ -234,6 +249,7 @@ impl Light {
             Light::EqualAreaEnv(e) => e.power(scene_radius),
             Light::Sunsky { light, .. } => light.power(scene_radius),
             Light::Projector(p) => p.power(),
+            Light::ImagePoint(l) => l.power(),
             // No weight for a light no sample can reach (see directionalarea.rs).
             Light::DirectionalArea(_) => Spectrum::ZERO,
         }
@@ -249,6 +265,7 @@ impl Light {
             Light::Point(p) => Some(p.bounds()),
             Light::Spot(s) => Some(s.bounds()),
             Light::Projector(p) => Some(p.bounds()),
+            Light::ImagePoint(l) => Some(l.bounds()),
             Light::DirectionalArea(d) => Some(d.bounds(&shapes[d.shape as usize])),
             Light::Constant(_)
             | Light::EnvMap(_)

@@ -9,6 +9,8 @@
 //! | spot        | I, scale, power, from (0 0 0), to (0 0 1), coneangle (30), conedeltaangle (5): pbrt-v4's smoothstep falloff |
 //! | distant     | L, scale, illuminance, from (0 0 0), to (0 0 1)                   |
 //! | infinite    | L (uniform) or filename (a square equal-area octahedral image: .exr, .pfm, .hdr, .png), scale, illuminance (with L only) |
+//! | goniometric | filename (a square equal-area image; R, G, B averaged as pbrt-v4 does), I, scale, power (`light::image_point`) |
+//! | projection  | filename (an RGB image), fov (90, along the image's shorter side), scale, power (`light::image_point`) |
 //! | area diffuse | L, scale, power, twosided                                       |
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
@@ -17,10 +19,12 @@ use super::super::parser::{Entity, LightEntity};
 use super::spectra::{to_rgb, SpectrumUse};
 use crate::error::{FileLoc, LoadError, Result};
 use glam::{DMat4, DVec3, Vec3};
-use penumbra_render::light::{ConstantLight, DirectionalLight, EqualAreaEnvLight, Light, PointLight, SpotLight};
+use penumbra_render::light::{
+    ConstantLight, DirectionMap, DirectionalLight, EqualAreaEnvLight, ImagePointLight, Light, PointLight, SpotLight,
+};
 
 /// Lights Penumbra translates, for error messages.
-pub const LIGHTS: &[&str] = &["point", "spot", "distant", "infinite"];
+pub const LIGHTS: &[&str] = &["point", "spot", "distant", "infinite", "goniometric", "projection"];
 
 /// An illuminant parameter (default: the colour space's white, luminance 1).
 fn illuminant(e: &Entity, name: &str) -> Result<Vec3> {
@@ -110,12 +114,7 @@ pub fn light(l: &LightEntity) -> Result<Light> {
             let frame = DMat4::from_cols(x.extend(0.0), y.extend(0.0), w.extend(0.0), from.extend(1.0));
             Light::Spot(SpotLight::pbrt((*m * frame).as_mat4(), i * scale as f32, cone as f32, delta as f32))
         }
-        "goniometric" | "projection" => {
-            return Err(LoadError::at(
-                at,
-                format!("light \"{}\" is not supported yet; supported: {}", e.kind, LIGHTS.join(", ")),
-            ))
-        }
+        "goniometric" | "projection" => image_point(e, m)?,
         other => {
             return Err(LoadError::at(
                 at,
@@ -125,6 +124,76 @@ pub fn light(l: &LightEntity) -> Result<Light> {
     };
     p.check_unused(&format!("LightSource \"{}\"", e.kind))?;
     Ok(light)
+}
+
+/// `goniometric` and `projection`: pbrt-v4's point lights with an image
+/// of intensities, their own changes of frame (`lights.cpp`: a y-z swap, a
+/// y flip) composed into the light's frame.
+fn image_point(e: &Entity, m: &DMat4) -> Result<Light> {
+    let (p, at) = (&e.params, &e.loc);
+    let f = p.string("filename")?.ok_or_else(|| LoadError::at(at, format!("{}: \"filename\" is required", e.kind)))?;
+    let path = at.file.parent().map(|d| d.join(&f)).unwrap_or_else(|| f.clone().into());
+    let img = crate::image_io::read_image(&path)
+        .map_err(|err| LoadError::at(at, format!("{} light image \"{f}\": {err}", e.kind)))?;
+    let (w, h) = (img.width as usize, img.height as usize);
+    let mut scale = p.float("scale", 1.0)?;
+    let lum = |c: &[f32; 3]| 0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64;
+    let (map, swap, texels) = if e.kind == "goniometric" {
+        if w != h {
+            return Err(LoadError::at(
+                at,
+                format!("goniometric light image \"{f}\" is {w}x{h}: pbrt-v4 takes square equal-area images only"),
+            ));
+        }
+        let i = illuminant(e, "I")?;
+        let grey: Vec<f64> = img.pixels.iter().map(|c| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0).collect();
+        if let Some(phi) = positive_or_unset(e, "power")? {
+            // k_e = 4π · mean(Y).
+            let k_e = 4.0 * std::f64::consts::PI * grey.iter().sum::<f64>() / grey.len() as f64;
+            if !(k_e > 0.0) {
+                return Err(LoadError::at(at, "goniometric: \"power\" with a black image"));
+            }
+            scale *= phi / k_e;
+        }
+        // finalRenderFromLight = renderFromLight · swapYZ (its own inverse).
+        let swap = glam::DMat3::from_cols(DVec3::X, DVec3::Z, DVec3::Y);
+        let texels = grey.iter().map(|&g| i * (g * scale) as f32).collect();
+        (DirectionMap::EqualArea, swap, texels)
+    } else {
+        let fov = p.float("fov", 90.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(LoadError::at(at, format!("projection: fov {fov} must lie in (0, 180)")));
+        }
+        let t = (fov.to_radians() / 2.0).tan();
+        let aspect = w as f64 / h as f64;
+        let tan_half = if aspect > 1.0 { glam::DVec2::new(aspect * t, t) } else { glam::DVec2::new(t, t / aspect) };
+        if let Some(phi) = positive_or_unset(e, "power")? {
+            // pbrt-v4: Σ Y · cos³θ over texel centres, times the image's area A on z = 1.
+            let mut sum = 0.0;
+            for (k, c) in img.pixels.iter().enumerate() {
+                let (x, y) = ((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+                let q =
+                    glam::DVec2::new((2.0 * x / w as f64 - 1.0) * tan_half.x, (2.0 * y / h as f64 - 1.0) * tan_half.y);
+                let cos = 1.0 / (1.0 + q.length_squared()).sqrt();
+                sum += lum(c) * cos * cos * cos;
+            }
+            let area = 4.0 * tan_half.x * tan_half.y;
+            if !(sum > 0.0) {
+                return Err(LoadError::at(at, "projection: \"power\" with a black image"));
+            }
+            scale *= phi / (area * sum / (w * h) as f64);
+        }
+        // renderFromLight · Scale(1, -1, 1).
+        let flip = glam::DMat3::from_diagonal(DVec3::new(1.0, -1.0, 1.0));
+        let texels = img.pixels.iter().map(|c| Vec3::from_array(*c).max(Vec3::ZERO) * scale as f32).collect();
+        (DirectionMap::Perspective { tan_half: tan_half.as_vec2() }, flip, texels)
+    };
+    let linear = glam::DMat3::from_mat4(*m);
+    let light_from_world = (swap * linear.inverse()).as_mat3();
+    let position = m.transform_point3(DVec3::ZERO).as_vec3();
+    let light = ImagePointLight::new(position, light_from_world, map, w, h, texels)
+        .map_err(|err| LoadError::at(at, format!("{} light \"{f}\": {err}", e.kind)))?;
+    Ok(Light::ImagePoint(light))
 }
 
 fn infinite(e: &Entity, m: &DMat4) -> Result<Light> {
