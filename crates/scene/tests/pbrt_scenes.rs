@@ -1005,3 +1005,57 @@ fn pbrt_projection_light_is_pbrts() {
     assert!(li(0.0, 0.5, -2.0).is_none() && li(4.5, 0.0, 2.0).is_none() && li(0.0, 2.5, 2.0).is_none());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `infinite` from a 2:1 latitude-longitude image (pbrt-v3's map: +z up,
+/// u = φ / 2π from +x towards +y, v = θ / π): the radiance from world
+/// directions, through a rotated light frame and `scale`, is the
+/// environment's value in light space, within the map's interpolation
+/// error; a map mirrored in u is caught.
+#[test]
+fn pbrt_latlong_infinite_light_is_pbrt_v3s_map() {
+    use std::f32::consts::PI;
+    let dir = temp_dir("latlong");
+    // A smooth environment in light space, brighter towards +z and +y.
+    let f = |d: glam::Vec3| glam::Vec3::new(1.0 + 0.8 * d.z + 0.3 * d.y, 0.6 + 0.4 * d.x, 0.5 + 0.45 * d.z * d.z);
+    let (w, h) = (512, 256);
+    let map = |mirror: bool| penumbra_scene::image_io::RgbImage {
+        width: w,
+        height: h,
+        pixels: (0..w * h)
+            .map(|k| {
+                let j = if mirror { w - 1 - k % w } else { k % w };
+                // Mitsuba's envmap places row i at θ = π i / (H - 1), column j at φ = 2π (j + ½) / W.
+                let (theta, phi) = (PI * (k / w) as f32 / (h - 1) as f32, 2.0 * PI * (j as f32 + 0.5) / w as f32);
+                f(glam::Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())).to_array()
+            })
+            .collect(),
+    };
+    let light = |mirror: bool| {
+        penumbra_scene::image_io::write_image(&dir.join("ll.exr"), &map(mirror)).unwrap();
+        lights_of(
+            &dir,
+            "Rotate -70 1 0.3 0\nLightSource \"infinite\" \"string filename\" \"ll.exr\" \"float scale\" 0.7",
+        )
+    };
+    let l = light(false);
+    assert_eq!(l[0].name(), "envmap");
+    let rot = glam::Mat3::from_axis_angle(glam::Vec3::new(1.0, 0.3, 0.0).normalize(), (-70.0f32).to_radians());
+    let dirs: Vec<glam::Vec3> = (0..200)
+        .map(|k| {
+            // A spiral over the sphere.
+            let z = 1.0 - 2.0 * (k as f32 + 0.5) / 200.0;
+            let phi = k as f32 * 2.399_963;
+            let r = (1.0 - z * z).sqrt();
+            glam::Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect();
+    let worst = |l: &penumbra_render::light::Light| {
+        dirs.iter()
+            .map(|&wi| (l.environment_radiance(wi) - 0.7 * f(rot.transpose() * wi)).abs().max_element())
+            .fold(0.0, f32::max)
+    };
+    // Bilinear interpolation of this f over texels of 0.7° errs by < 1e-3.
+    assert!(worst(&l[0]) < 2e-3, "largest deviation {}", worst(&l[0]));
+    assert!(worst(&light(true)[0]) > 0.1, "a mirrored map agreed");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -8,7 +8,7 @@
 //! | point       | I (the colour space's illuminant), scale (1), power, from         |
 //! | spot        | I, scale, power, from (0 0 0), to (0 0 1), coneangle (30), conedeltaangle (5): pbrt-v4's smoothstep falloff |
 //! | distant     | L, scale, illuminance, from (0 0 0), to (0 0 1)                   |
-//! | infinite    | L (uniform) or filename (a square equal-area octahedral image: .exr, .pfm, .hdr, .png), scale, illuminance (with L only) |
+//! | infinite    | L (uniform) or filename (a square equal-area octahedral image, as pbrt-v4; or a 2:1 latitude-longitude image, as pbrt-v3: +z up, u = φ / 2π from +x towards +y, v = θ / π, rendered by Mitsuba's `envmap`, whose rows sit at θ = π i / (H − 1) where pbrt-v3's sit half a texel in) , scale, illuminance (with L only) |
 //! | goniometric | filename (a square equal-area image; R, G, B averaged as pbrt-v4 does), I, scale, power (`light::image_point`) |
 //! | projection  | filename (an RGB image), fov (90, along the image's shorter side), scale, power (`light::image_point`) |
 //! | area diffuse | L, scale, power, twosided                                       |
@@ -20,7 +20,8 @@ use super::spectra::{to_rgb, SpectrumUse};
 use crate::error::{FileLoc, LoadError, Result};
 use glam::{DMat4, DVec3, Vec3};
 use penumbra_render::light::{
-    ConstantLight, DirectionMap, DirectionalLight, EqualAreaEnvLight, ImagePointLight, Light, PointLight, SpotLight,
+    ConstantLight, DirectionMap, DirectionalLight, EnvMapLight, EqualAreaEnvLight, ImagePointLight, Light, PointLight,
+    SpotLight,
 };
 
 /// Lights Penumbra translates, for error messages.
@@ -220,12 +221,31 @@ fn infinite(e: &Entity, m: &DMat4) -> Result<Light> {
             let path = at.file.parent().map(|d| d.join(&f)).unwrap_or_else(|| f.clone().into());
             let img = crate::image_io::read_image(&path)
                 .map_err(|e| LoadError::at(at, format!("infinite light image \"{f}\": {e}")))?;
+            if img.width == 2 * img.height {
+                // pbrt-v3's latitude-longitude map, as Mitsuba's envmap: light-space
+                // d_p = P d_m with d_m = (d_p.y, d_p.z, -d_p.x) matches u and v (see the table).
+                let p_m = DMat4::from_cols(
+                    DVec3::Y.extend(0.0),
+                    DVec3::Z.extend(0.0),
+                    (-DVec3::X).extend(0.0),
+                    glam::DVec4::W,
+                );
+                let light = EnvMapLight::new(
+                    img.width as usize,
+                    img.height as usize,
+                    img.pixels,
+                    (*m * p_m).as_mat4(),
+                    scale as f32,
+                )
+                .map_err(|e| LoadError::at(at, e))?;
+                return Ok(Light::EnvMap(light));
+            }
             if img.width != img.height {
                 return Err(LoadError::at(
                     at,
                     format!(
-                        "infinite light image \"{f}\" is {}x{}: pbrt-v4 takes square equal-area octahedral images only \
-                         (convert a latitude-longitude map with pbrt-v4's imgtool makeequiarea)",
+                        "infinite light image \"{f}\" is {}x{}: give a square equal-area octahedral image (pbrt-v4) or a \
+                         2:1 latitude-longitude one (pbrt-v3)",
                         img.width, img.height
                     ),
                 ));
