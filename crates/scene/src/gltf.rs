@@ -20,6 +20,12 @@
 //!   (stochastic opacity) as a mask, `KHR_materials_transmission` as a blend
 //!   with a rough dielectric of the same roughness and IOR tinted by the base
 //!   colour, `KHR_texture_transform` as the textures' uv transform.
+//!   `KHR_materials_volume` on a transmitting material with a thickness
+//!   (not thin-walled) fills the mesh with an absorbing homogeneous medium,
+//!   σ_a = −ln(attenuationColor) / attenuationDistance, σ_s = 0 (the
+//!   specification's Beer–Lambert law), and the scene renders with `volpath`
+//!   unless `--integrator` says otherwise; `thicknessTexture` is not used
+//!   (it serves rasterisers, a path tracer measures the thickness).
 //!   `occlusionTexture` is not used: a path tracer computes occlusion.
 //! - Emission: `emissiveFactor` × `emissiveTexture` × `KHR_materials_emissive_strength`
 //!   as area lights on the triangles (front side).
@@ -77,6 +83,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_volume",
     "KHR_texture_transform",
 ];
 
@@ -117,6 +124,8 @@ pub fn load_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(RenderJo
         buffers,
         scene: SceneBuilder::new(FileLoc::new(file.clone(), 0, 0)),
         materials: HashMap::new(),
+        volumes: HashMap::new(),
+        has_volumes: false,
         images: HashMap::new(),
         vertex_color: Arc::new(MeshAttribute::new("vertex_color".into(), 1.0)),
         color_tables: Vec::new(),
@@ -330,6 +339,11 @@ fn emissive(mesh: &gltf::Mesh) -> bool {
     mesh.primitives().any(|p| p.material().emissive_factor().iter().any(|&e| e > 0.0))
 }
 
+/// Whether a primitive's material has `KHR_materials_volume`.
+fn has_volume(mesh: &gltf::Mesh) -> bool {
+    mesh.primitives().any(|p| p.material().volume().is_some())
+}
+
 /// A decoded image: RGBA texels as stored (not yet sRGB-decoded), top row first.
 struct Image {
     width: u32,
@@ -348,6 +362,10 @@ struct Reader<'a> {
     scene: SceneBuilder,
     /// By (material index, with vertex colours).
     materials: HashMap<(Option<usize>, bool), BuiltMaterial>,
+    /// Whether a material added a medium (the scene then renders with `volpath`).
+    has_volumes: bool,
+    /// The interior medium of each material with `KHR_materials_volume`.
+    volumes: HashMap<Option<usize>, Option<penumbra_render::scene::ShapeMedia>>,
     images: HashMap<usize, Arc<Image>>,
     /// The one `vertex_color` attribute texture of every material used with COLOR_0.
     vertex_color: Arc<MeshAttribute>,
@@ -384,7 +402,9 @@ impl<'a> Reader<'a> {
             return Err(LoadError::at(&self.at(place), "the node's transform is not finite"));
         }
         if let Some(mesh) = n.mesh() {
-            let shared = self.mesh_uses[mesh.index()] > 1 && !emissive(&mesh);
+            // Emitting and volume-filled meshes are baked per node: lights and
+            // media are per shape, not per instance.
+            let shared = self.mesh_uses[mesh.index()] > 1 && !emissive(&mesh) && !has_volume(&mesh);
             if shared && world.determinant() > 0.0 {
                 self.instance(&mesh, &world, &place)?;
             } else {
@@ -545,13 +565,18 @@ impl<'a> Reader<'a> {
             }
             let with_colors = !colors.is_empty();
             let (material, emission) = self.material(prim.material(), with_colors)?;
+            let media = self.volume(&prim.material())?;
             let kept_indices = indices.clone();
             let data = MeshData { positions, indices, normals, uvs, colors, attributes: Vec::new() };
             let mirror = world.determinant() < 0.0;
             let geometry = data.into_geometry(world, mirror, false, &loc)?;
             let attrs = geometry.1.clone();
             let id = self.scene.add_shape(
-                ShapeDesc { emission: emission.map(Emission::Diffuse), ..ShapeDesc::new(geometry, material) },
+                ShapeDesc {
+                    emission: emission.map(Emission::Diffuse),
+                    media: media.unwrap_or_default(),
+                    ..ShapeDesc::new(geometry, material)
+                },
                 &loc,
             )?;
             ids.push(id);
@@ -639,6 +664,46 @@ impl<'a> Reader<'a> {
             pixels: image.rgba.iter().map(|p| texel(*p)).collect(),
         };
         image_texture(rgb, filter, wrap(sampler.wrap_s()), to_uv, &loc)
+    }
+
+    /// The media of a material with `KHR_materials_volume` (see the module
+    /// docs): an absorbing interior, `None` where there is nothing to absorb.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+    fn volume(&mut self, mat: &gltf::Material<'a>) -> Result<Option<penumbra_render::scene::ShapeMedia>> {
+        use penumbra_render::medium::{Medium, MediumKind, PhaseFunction};
+        if let Some(v) = self.volumes.get(&mat.index()) {
+            return Ok(*v);
+        }
+        let place = mat.index().map_or_else(|| "/materials".to_string(), |i| format!("/materials/{i}"));
+        let at = self.at(format!("{place}/extensions/KHR_materials_volume"));
+        let transmits = mat.transmission().is_some_and(|t| t.transmission_factor() > 0.0);
+        let media = match mat.volume() {
+            Some(v) if transmits && v.thickness_factor() > 0.0 => {
+                if v.thickness_texture().is_some() {
+                    self.notes.push(format!("{place}: KHR_materials_volume's thicknessTexture is not used"));
+                }
+                let (d, c) = (v.attenuation_distance(), Vec3::from(v.attenuation_color()));
+                if !(d > 0.0) || !(c.is_finite() && c.min_element() >= 0.0) {
+                    return Err(LoadError::at(&at, "attenuationDistance must be > 0 and attenuationColor in [0, 1]"));
+                }
+                if d.is_infinite() || c == Vec3::ONE {
+                    None
+                } else {
+                    // Beer–Lambert: transmittance c after distance d; c = 0 absorbs all but a trace.
+                    let sigma_a = c.max(Vec3::splat(1e-6)).min(Vec3::ONE).map(|x| -x.ln()) / d;
+                    let id = self.scene.add_medium(Medium {
+                        kind: MediumKind::Homogeneous { sigma_t: sigma_a, albedo: Vec3::ZERO },
+                        phase: PhaseFunction::Isotropic,
+                        sample_emitters: true,
+                    });
+                    self.has_volumes = true;
+                    Some(penumbra_render::scene::ShapeMedia { interior: Some(id), exterior: None })
+                }
+            }
+            _ => None,
+        };
+        self.volumes.insert(mat.index(), media);
+        Ok(media)
     }
 
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
@@ -840,6 +905,11 @@ impl<'a> Reader<'a> {
         self.scene.set_sampler(Sampler::new(kind, ov.seed.unwrap_or(0), ov.spp.unwrap_or(DEFAULT_SPP)));
         if let Some(spec) = &ov.integrator {
             let (integrator, selection) = crate::builder::integrator_override(spec)?;
+            self.scene.set_integrator(integrator, selection, &whole);
+        } else if self.has_volumes {
+            // `path` ignores media: the volumes need the volumetric path tracer.
+            self.notes.push("KHR_materials_volume: rendered by volpath, which absorbs inside the volumes".into());
+            let (integrator, selection) = crate::builder::integrator_override("volpath")?;
             self.scene.set_integrator(integrator, selection, &whole);
         }
         let mut tables = vec![None; self.scene.shape_count()];

@@ -493,3 +493,45 @@ fn emissive_textures() {
         assert!((b.eval(uv) - expect).abs().max_element() < 1e-5, "{} vs {expect}", b.eval(uv));
     }
 }
+
+/// `KHR_materials_volume` on a transmitting material fills its mesh with
+/// the absorbing medium of the specification's Beer–Lambert law, σ_a =
+/// −ln(attenuationColor) / attenuationDistance, σ_s = 0, and the scene
+/// renders with `volpath`; thin-walled (thickness 0) and non-transmitting
+/// materials get no medium.
+#[test]
+fn volume_materials_fill_their_meshes_with_an_absorbing_medium() {
+    use penumbra_render::integrator::Integrator;
+    use penumbra_render::medium::MediumKind;
+    let volume = |thickness: f64, transmission: f64| {
+        edited(|d| {
+            d["materials"][2]["extensions"] = serde_value(&format!(
+                r#"{{"KHR_materials_transmission": {{"transmissionFactor": {transmission}}},
+                    "KHR_materials_volume": {{"thicknessFactor": {thickness}, "attenuationDistance": 0.5,
+                                               "attenuationColor": [0.5, 0.25, 1.0]}}}}"#
+            ));
+        })
+    };
+    let job = load("boxes.gltf", &volume(0.2, 1.0)).unwrap();
+    assert!(matches!(job.integrator, Integrator::VolPath(_)), "{:?}", job.integrator);
+    let s = &job.scene;
+    let filled: Vec<usize> = (0..s.shape_media.len()).filter(|&i| s.shape_media[i].interior.is_some()).collect();
+    assert!(!filled.is_empty() && s.shape_media.iter().all(|m| m.exterior.is_none()));
+    let m = &s.media[s.shape_media[filled[0]].interior.unwrap() as usize];
+    let MediumKind::Homogeneous { sigma_t, albedo } = m.kind else { panic!("{:?}", m.kind) };
+    let want = glam::Vec3::new(-(0.5f32.ln()) / 0.5, -(0.25f32.ln()) / 0.5, 0.0);
+    assert!((sigma_t - want).abs().max_element() < 1e-6 && albedo == glam::Vec3::ZERO, "{sigma_t} {albedo}");
+    for (thickness, transmission) in [(0.0, 1.0), (0.2, 0.0)] {
+        let job = load("boxes.gltf", &volume(thickness, transmission)).unwrap();
+        assert!(job.scene.shape_media.iter().all(|m| m.interior.is_none()), "{thickness} {transmission}");
+        assert!(!matches!(job.integrator, Integrator::VolPath(_)));
+    }
+    let bad = edited(|d| {
+        d["materials"][2]["extensions"] = serde_value(
+            r#"{"KHR_materials_transmission": {"transmissionFactor": 1},
+                "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": -1}}"#,
+        );
+    });
+    let e = load("boxes.gltf", &bad).unwrap_err();
+    assert!(e.contains("/materials/2/extensions/KHR_materials_volume") && e.contains("attenuationDistance"), "{e}");
+}
