@@ -683,7 +683,7 @@ impl<'a> Reader<'a> {
                     self.notes.push(format!("{place}: KHR_materials_volume's thicknessTexture is not used"));
                 }
                 let (d, c) = (v.attenuation_distance(), Vec3::from(v.attenuation_color()));
-                if !(d > 0.0) || !(c.is_finite() && c.min_element() >= 0.0) {
+                if !(d > 0.0 && c.is_finite() && c.min_element() >= 0.0) {
                     return Err(LoadError::at(&at, "attenuationDistance must be > 0 and attenuationColor in [0, 1]"));
                 }
                 if d.is_infinite() || c == Vec3::ONE {
