@@ -88,6 +88,8 @@ pub struct Filter {
 /// Intervals of the tabulated profile; linear interpolation between them
 /// is within 2e-6 of the Gaussian (relative to its peak).
 const TABLE: usize = 1024;
+/// The table's length with its zero padding: index ⌊2.5 · TABLE / 1.5⌋ + 1.
+const TABLE_PADDED: usize = TABLE * 5 / 3 + 3;
 
 impl Filter {
     /// The filter of a kind, tabulated when Gaussian.
@@ -102,7 +104,9 @@ impl Filter {
         let mut f = Filter { kind, radius, table: Vec::new(), inv_step: TABLE as f32 / radius };
         if let FilterKind::Gaussian { .. } = kind {
             f.table = (0..=TABLE).map(|i| f.eval(radius * i as f32 / TABLE as f32)).collect();
-            f.table.push(0.0);
+            // Zeros past the radius, up to the farthest tap of a margin-2
+            // footprint (|x| ≤ 2.5, radius > 1.5), so `taps5` needs no test.
+            f.table.resize(TABLE_PADDED, 0.0);
         }
         f
     }
@@ -121,6 +125,26 @@ impl Filter {
         }
         let f = t - i as f32;
         self.table[i] + f * (self.table[i + 1] - self.table[i])
+    }
+
+    /// The weights of a margin-2 footprint's five taps along one axis, at
+    /// distances `u + 2 − k − 1/2` (k = 0..5) for `u` in [0, 1]: bitwise
+    /// [`Self::weight`] of each, without its tests for the tabulated
+    /// Gaussian (the padded table returns the zeros the test would).
+    #[inline(always)]
+    fn taps5(&self, u: f32) -> [f32; 5] {
+        let x: [f32; 5] = std::array::from_fn(|k| u + (2 - k as i32) as f32 - 0.5);
+        if self.table.len() != TABLE_PADDED {
+            return x.map(|x| self.weight(x));
+        }
+        let table: &[f32; TABLE_PADDED] = self.table[..].try_into().unwrap();
+        x.map(|x| {
+            let t = x.abs() * self.inv_step;
+            // |x| ≤ 2.5 and radius > 1.5 (margin 2): t < TABLE_PADDED − 2.
+            let i = (t as i32).clamp(0, TABLE_PADDED as i32 - 2) as usize;
+            let f = t - i as f32;
+            table[i] + f * (table[i + 1] - table[i])
+        })
     }
 
     /// How many pixels beyond its own a sample can reach: ceil(radius - 1/2).
@@ -333,12 +357,94 @@ impl Film {
     /// `aov`: the sample's AOV values, splatted with the same weights.
     #[inline]
     pub fn splat(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, aov: Option<&[f32]>, filter: &Filter) {
+        let m = filter.margin();
+        if m == 2
+            && aov.is_none()
+            && self.moments.is_empty()
+            && l.is_finite()
+            && (0.0..=1.0).contains(&u.x)
+            && (0.0..=1.0).contains(&u.y)
+            && px >= 2
+            && py >= 2
+            && px + 2 < self.width as i32
+            && py + 2 < self.height as i32
+        {
+            return self.splat_5x5(px, py, u, l, filter);
+        }
         // Weight arrays sized for the filter: zeroing 2 × 33 taps for a
         // Gaussian that uses 5 cost more than splatting its pixels.
-        if filter.margin() <= 2 {
+        if m <= 2 {
             self.splat_taps::<5>(px, py, u, l, aov, filter)
         } else {
             self.splat_taps::<{ 2 * MAX_MARGIN as usize + 1 }>(px, py, u, l, aov, filter)
+        }
+    }
+
+    /// Splats the samples of one pixel, in order, as [`Self::splat`] of
+    /// each with no AOVs would: `samples` are (position in the pixel,
+    /// radiance), non-finite radiance is skipped by the caller. Where the
+    /// footprint is 5 x 5 and inside the film, each footprint pixel's sums
+    /// are loaded once and every sample added to them in order, so the
+    /// additions, and the bits, are those of one splat after another.
+    pub fn splat_pixel(&mut self, px: i32, py: i32, samples: &[(Vec2, Spectrum)], filter: &Filter) {
+        let inside = filter.margin() == 2
+            && self.moments.is_empty()
+            && px >= 2
+            && py >= 2
+            && px + 2 < self.width as i32
+            && py + 2 < self.height as i32
+            && samples.iter().all(|(u, l)| l.is_finite() && (0.0..=1.0).contains(&u.x) && (0.0..=1.0).contains(&u.y));
+        if !inside {
+            for &(u, l) in samples {
+                self.splat(px, py, u, l, None, filter);
+            }
+            return;
+        }
+        // Per sample its radiance and weight, and its tap weights.
+        const GROUP: usize = 16;
+        let width = self.width as usize;
+        let first = (py - 2) as usize * width + (px - 2) as usize;
+        for group in samples.chunks(GROUP) {
+            let mut lw = [glam::Vec4::ZERO; GROUP];
+            let mut wx = [[0.0f32; 5]; GROUP];
+            let mut wy = [[0.0f32; 5]; GROUP];
+            for (i, &(u, l)) in group.iter().enumerate() {
+                lw[i] = l.extend(1.0);
+                wx[i] = filter.taps5(u.x);
+                wy[i] = filter.taps5(u.y);
+            }
+            let n = group.len();
+            for ky in 0..5 {
+                let row: &mut [[f64; 4]; 5] = (&mut self.acc[first + ky * width..][..5]).try_into().unwrap();
+                for (kx, a) in row.iter_mut().enumerate() {
+                    let mut sum = *a;
+                    for i in 0..n {
+                        add_widened(&mut sum, lw[i] * (wx[i][kx] * wy[i][ky]));
+                    }
+                    *a = sum;
+                }
+            }
+        }
+    }
+
+    /// [`Self::splat`] of a sample whose 5 x 5 footprint (margin 2: the
+    /// default Gaussian, Mitchell, Catmull-Rom, Lanczos 2) lies inside the
+    /// film, beauty and weight only: every tap unrolled, none trimmed. A
+    /// zero-weight tap adds ±0 to a sum that is never −0 (sums start at +0,
+    /// and x + (−x) rounds to +0), which leaves its bits unchanged, so this
+    /// is bitwise the trimming loop of [`Self::splat_taps`] at less than half
+    /// its instructions (the bench's sky-only scene: 800 → 300 per sample).
+    #[inline(always)]
+    fn splat_5x5(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
+        let (wx, wy) = (filter.taps5(u.x), filter.taps5(u.y));
+        let lw = l.extend(1.0);
+        let width = self.width as usize;
+        let first = (py - 2) as usize * width + (px - 2) as usize;
+        for (ky, &wy) in wy.iter().enumerate() {
+            let row: &mut [[f64; 4]; 5] = (&mut self.acc[first + ky * width..][..5]).try_into().unwrap();
+            for (a, &wx) in row.iter_mut().zip(&wx) {
+                add_widened(a, lw * (wx * wy));
+            }
         }
     }
 
@@ -576,6 +682,67 @@ mod tests {
     }
     use crate::testing::TestRng;
 
+    /// The unrolled 5 x 5 splat gives the trimming loop's bits: random
+    /// samples (zero, negative and large radiance too) near and away from
+    /// the film's edges, for every margin-2 filter.
+    #[test]
+    fn unrolled_splat_is_the_trimming_splat() {
+        let mut rng = TestRng::new(7);
+        let kinds = [
+            FilterKind::Gaussian { stddev: 0.5 },
+            FilterKind::Gaussian { stddev: 0.376 },
+            FilterKind::Gaussian { stddev: 0.624 },
+            FilterKind::Mitchell { b: 1.0 / 3.0, c: 1.0 / 3.0 },
+            FilterKind::CatmullRom,
+            FilterKind::Lanczos { lobes: 2 },
+        ];
+        for kind in kinds {
+            let filter = Filter::new(kind);
+            assert_eq!(filter.margin(), 2, "{kind:?}");
+            let (mut fast, mut slow, mut slow2) = (Film::new(9, 7), Film::new(9, 7), Film::new(9, 7));
+            let bits = |f: &Film| f.acc.iter().flat_map(|a| a.map(f64::to_bits)).collect::<Vec<_>>();
+            let mut unrolled = 0;
+            for i in 0..4000 {
+                let (px, py) = ((rng.next_f32() * 9.0) as i32, (rng.next_f32() * 7.0) as i32);
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                let c = |r: &mut TestRng| match i % 4 {
+                    0 => 0.0,
+                    1 => -r.next_f32(),
+                    2 => r.next_f32() * 1e6,
+                    _ => r.next_f32(),
+                };
+                let l = Spectrum::new(c(&mut rng), c(&mut rng), c(&mut rng));
+                fast.splat(px, py, u, l, None, &filter);
+                slow.splat_taps::<5>(px, py, u, l, None, &filter);
+                unrolled += (px >= 2 && py >= 2 && px + 2 < 9 && py + 2 < 7) as usize;
+            }
+            assert!(unrolled > 500, "{unrolled}");
+            // The same samples a pixel at a time (runs of 1 to 40 samples,
+            // with non-finite ones left out as `add_sample` leaves them).
+            let mut grouped = Film::new(9, 7);
+            let mut rng2 = TestRng::new(7);
+            let mut i = 0;
+            while i < 4000 {
+                let (px, py) = ((rng2.next_f32() * 9.0) as i32, (rng2.next_f32() * 7.0) as i32);
+                let run = 1 + (rng2.next_f32() * 40.0) as usize;
+                let samples: Vec<(Vec2, Spectrum)> = (0..run)
+                    .map(|j| {
+                        let u = Vec2::new(rng2.next_f32(), rng2.next_f32());
+                        let l = Spectrum::new(rng2.next_f32(), -rng2.next_f32(), rng2.next_f32() * 1e6);
+                        (u, l * ((i + j) % 5) as f32)
+                    })
+                    .collect();
+                for &(u, l) in &samples {
+                    slow2.splat(px, py, u, l, None, &filter);
+                }
+                grouped.splat_pixel(px, py, &samples, &filter);
+                i += run;
+            }
+            assert_eq!(bits(&grouped), bits(&slow2), "{kind:?}, by pixel");
+            assert_eq!(bits(&fast), bits(&slow), "{kind:?}");
+        }
+    }
+
     /// Equal weights: the layer is s²/n, the unbiased variance of a mean.
     #[test]
     fn equal_weights_give_s2_over_n() {
@@ -671,6 +838,8 @@ mod tests {
             FilterKind::Box,
             FilterKind::Tent { radius: 1.0 },
             FilterKind::Gaussian { stddev: 0.5 },
+            FilterKind::Gaussian { stddev: 0.376 },
+            FilterKind::Gaussian { stddev: 0.624 },
             FilterKind::Mitchell { b: 1.0 / 3.0, c: 1.0 / 3.0 },
             FilterKind::CatmullRom,
             FilterKind::Lanczos { lobes: 3 },

@@ -214,6 +214,7 @@ impl RenderJob {
         let mut tile = Tile {
             film: Film::with_layers(w + 2 * m, h + 2 * m, layers),
             aov_values: Vec::new(),
+            splat_buf: Vec::new(),
             scratch: Scratch::new(),
             camera_from_world: self.camera.world_from_camera.inverse(),
             stats: RenderStats::default(),
@@ -226,7 +227,11 @@ impl RenderJob {
             _ => {
                 // The integrator's own output channels (the `aov` and `moment` integrators').
                 let mut ch = vec![0f32; self.integrator.channel_names().len()];
+                // Without AOVs, a pixel's samples are splatted together.
+                let by_pixel = !tile.has_aovs();
+                let mut pixel: Vec<(Vec2, Spectrum)> = Vec::with_capacity(samples.len());
                 for p in &pixels {
+                    pixel.clear();
                     for s in samples.clone() {
                         let mut rng = self.sampler.stream(p.global, s);
                         let (u, ray) = self.camera_sample(p.global, &mut rng);
@@ -238,7 +243,14 @@ impl RenderJob {
                             let diff = self.ray_diff(p.global, u, &ray);
                             self.integrator.sample(scene, &ray, diff.as_ref(), &mut rng, stats, scratch, &mut ch)
                         };
-                        self.add_sample(&mut tile, p, s, u, &ray, l, &ch);
+                        if by_pixel {
+                            pixel.push((u, l));
+                        } else {
+                            self.add_sample(&mut tile, p, s, u, &ray, l, &ch);
+                        }
+                    }
+                    if by_pixel {
+                        self.add_pixel_samples(&mut tile, p, &pixel);
                     }
                 }
             }
@@ -314,6 +326,26 @@ impl RenderJob {
             o_y: ray.o + (o_y - ray.o) * scale,
             d_y: ray.d + (d_y - ray.d) * scale,
         })
+    }
+
+    /// The samples of pixel `p` in sample order (position in the pixel,
+    /// radiance), added as [`Self::add_sample`] adds them one by one, for a
+    /// tile without AOVs or channels ([`Tile::has_aovs`]): the film's sums get the same
+    /// additions in the same order, a footprint pixel at a time.
+    pub(crate) fn add_pixel_samples(&self, tile: &mut Tile, p: &TilePixel, samples: &[(Vec2, Spectrum)]) {
+        debug_assert!(!tile.has_aovs());
+        tile.splat_buf.clear();
+        for &(u, l) in samples {
+            tile.stats.samples += 1;
+            let l = l * self.camera.ray_weight(self.film_position(p.global, u));
+            if l.is_finite() {
+                tile.splat_buf.push((u, l));
+            } else {
+                tile.stats.non_finite += 1;
+            }
+        }
+        let (x, y) = p.local;
+        tile.film.splat_pixel((x + tile.margin) as i32, (y + tile.margin) as i32, &tile.splat_buf, &self.filter);
     }
 
     /// Splats sample `s` of pixel `p` (taken at `u` in the pixel, along
@@ -398,8 +430,17 @@ pub(crate) struct TilePixel {
 pub(crate) struct Tile {
     film: Film,
     aov_values: Vec<f32>,
+    /// A pixel's finite samples on their way into [`Film::splat_pixel`].
+    splat_buf: Vec<(Vec2, Spectrum)>,
     pub scratch: Scratch,
     camera_from_world: glam::Mat4,
     pub stats: RenderStats,
     margin: u32,
+}
+
+impl Tile {
+    /// Whether samples carry AOVs or integrator channels besides radiance.
+    pub(crate) fn has_aovs(&self) -> bool {
+        !self.aov_values.is_empty()
+    }
 }

@@ -156,10 +156,19 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             keep
         });
     }
-    // Splat in canonical order.
-    for (k, r) in results.iter().enumerate() {
-        let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
-        job.add_sample(tile, p, s, r.u, &r.ray, r.l, &[]);
+    // Splat in canonical order, a pixel's samples at a time where no AOVs need the rays.
+    if tile.has_aovs() {
+        for (k, r) in results.iter().enumerate() {
+            let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
+            job.add_sample(tile, p, s, r.u, &r.ray, r.l, &[]);
+        }
+    } else {
+        let mut pixel: Vec<(Vec2, Spectrum)> = Vec::with_capacity(spp);
+        for (p, rs) in pixels.iter().zip(results.chunks(spp.max(1))) {
+            pixel.clear();
+            pixel.extend(rs.iter().map(|r| (r.u, r.l)));
+            job.add_pixel_samples(tile, p, &pixel);
+        }
     }
 }
 
