@@ -23,6 +23,35 @@ fn every_corpus_directory_belongs_to_a_target() {
     assert_eq!(dirs, names, "fuzz/corpus/ must hold one directory per target");
 }
 
+/// fuzz/Cargo.toml (a manifest outside the workspace, so no workspace
+/// build reads it) declares each target once, as one `[[bin]]` table with
+/// its name, its `fuzz_targets/NAME.rs` and no second key of either.
+#[test]
+fn the_fuzz_manifest_declares_every_target_once() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/Cargo.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut declared: Vec<String> = Vec::new();
+    for (i, table) in text.split("[[bin]]").enumerate().skip(1) {
+        let values = |key: &str| -> Vec<String> {
+            table
+                .lines()
+                .take_while(|l| !l.trim_start().starts_with('['))
+                .filter_map(|l| l.split_once('=').filter(|(k, _)| k.trim() == key))
+                .map(|(_, v)| v.trim().trim_matches('"').to_string())
+                .collect()
+        };
+        let (names, paths) = (values("name"), values("path"));
+        assert!(names.len() == 1 && paths.len() == 1, "[[bin]] table {i}: names {names:?}, paths {paths:?}");
+        assert_eq!(paths[0], format!("fuzz_targets/{}.rs", names[0]), "[[bin]] table {i}");
+        declared.push(names[0].clone());
+    }
+    declared.sort();
+    let mut names: Vec<&str> =
+        penumbra::fuzzing::TARGETS.iter().chain(penumbra_scene::fuzzing::TARGETS).map(|t| t.0).collect();
+    names.sort();
+    assert_eq!(declared, names, "fuzz/Cargo.toml must declare one [[bin]] per target");
+}
+
 #[test]
 fn the_cli_fuzzing_corpus_replays_without_a_panic_or_a_hang() {
     let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus");
