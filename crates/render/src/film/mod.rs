@@ -127,14 +127,16 @@ impl Filter {
         self.table[i] + f * (self.table[i + 1] - self.table[i])
     }
 
-    /// The weights of a margin-2 footprint's five taps along one axis, at
-    /// distances `u + 2 − k − 1/2` (k = 0..5) for `u` in [0, 1]: bitwise
+    /// The weights of a footprint's `N` = 2m + 1 taps along one axis, at
+    /// distances `u + m − k − 1/2` (k = 0..N) for `u` in [0, 1]: bitwise
     /// [`Self::weight`] of each, without its tests for the tabulated
-    /// Gaussian (the padded table returns the zeros the test would).
+    /// Gaussian of margin 2 (the padded table returns the zeros the test
+    /// would).
     #[inline(always)]
-    fn taps5(&self, u: f32) -> [f32; 5] {
-        let x: [f32; 5] = std::array::from_fn(|k| u + (2 - k as i32) as f32 - 0.5);
-        if self.table.len() != TABLE_PADDED {
+    fn taps<const N: usize>(&self, u: f32) -> [f32; N] {
+        let m = (N / 2) as i32;
+        let x: [f32; N] = std::array::from_fn(|k| u + (m - k as i32) as f32 - 0.5);
+        if N != 5 || self.table.len() != TABLE_PADDED {
             return x.map(|x| self.weight(x));
         }
         let table: &[f32; TABLE_PADDED] = self.table[..].try_into().unwrap();
@@ -383,16 +385,31 @@ impl Film {
     /// Splats the samples of one pixel, in order, as [`Self::splat`] of
     /// each with no AOVs would: `samples` are (position in the pixel,
     /// radiance), non-finite radiance is skipped by the caller. Where the
-    /// footprint is 5 x 5 and inside the film, each footprint pixel's sums
+    /// footprint is at most 5 x 5 (margin ≤ 2) and inside the film, each footprint pixel's sums
     /// are loaded once and every sample added to them in order, so the
     /// additions, and the bits, are those of one splat after another.
     pub fn splat_pixel(&mut self, px: i32, py: i32, samples: &[(Vec2, Spectrum)], filter: &Filter) {
-        let inside = filter.margin() == 2
-            && self.moments.is_empty()
-            && px >= 2
-            && py >= 2
-            && px + 2 < self.width as i32
-            && py + 2 < self.height as i32
+        match filter.margin() {
+            0 => self.splat_pixel_taps::<1>(px, py, samples, filter),
+            1 => self.splat_pixel_taps::<3>(px, py, samples, filter),
+            2 => self.splat_pixel_taps::<5>(px, py, samples, filter),
+            _ => {
+                for &(u, l) in samples {
+                    self.splat(px, py, u, l, None, filter);
+                }
+            }
+        }
+    }
+
+    /// [`Self::splat_pixel`] for a footprint of `N` x `N` pixels (N ≤ 5).
+    #[inline(always)]
+    fn splat_pixel_taps<const N: usize>(&mut self, px: i32, py: i32, samples: &[(Vec2, Spectrum)], filter: &Filter) {
+        let m = (N / 2) as i32;
+        let inside = self.moments.is_empty()
+            && px >= m
+            && py >= m
+            && px + m < self.width as i32
+            && py + m < self.height as i32
             && samples.iter().all(|(u, l)| l.is_finite() && (0.0..=1.0).contains(&u.x) && (0.0..=1.0).contains(&u.y));
         if !inside {
             for &(u, l) in samples {
@@ -400,26 +417,29 @@ impl Film {
             }
             return;
         }
-        // Per sample its radiance and weight, and its tap weights.
         const GROUP: usize = 16;
         let width = self.width as usize;
-        let first = (py - 2) as usize * width + (px - 2) as usize;
+        let first = (py - m) as usize * width + (px - m) as usize;
         for group in samples.chunks(GROUP) {
+            // w[k][i]: the weight wx·wy of tap k (row-major) for sample i.
             let mut lw = [glam::Vec4::ZERO; GROUP];
-            let mut wx = [[0.0f32; 5]; GROUP];
-            let mut wy = [[0.0f32; 5]; GROUP];
+            let mut w = [[0.0f32; GROUP]; 25];
             for (i, &(u, l)) in group.iter().enumerate() {
                 lw[i] = l.extend(1.0);
-                wx[i] = filter.taps5(u.x);
-                wy[i] = filter.taps5(u.y);
+                let (wx, wy) = (filter.taps::<N>(u.x), filter.taps::<N>(u.y));
+                for (ky, wy) in wy.iter().enumerate() {
+                    for (kx, wx) in wx.iter().enumerate() {
+                        w[ky * N + kx][i] = wx * wy;
+                    }
+                }
             }
-            let n = group.len();
-            for ky in 0..5 {
-                let row: &mut [[f64; 4]; 5] = (&mut self.acc[first + ky * width..][..5]).try_into().unwrap();
+            let lw = &lw[..group.len()];
+            for ky in 0..N {
+                let row: &mut [[f64; 4]; N] = (&mut self.acc[first + ky * width..][..N]).try_into().unwrap();
                 for (kx, a) in row.iter_mut().enumerate() {
                     let mut sum = *a;
-                    for i in 0..n {
-                        add_widened(&mut sum, lw[i] * (wx[i][kx] * wy[i][ky]));
+                    for (lw, &w) in lw.iter().zip(&w[ky * N + kx]) {
+                        add_widened(&mut sum, *lw * w);
                     }
                     *a = sum;
                 }
@@ -436,7 +456,7 @@ impl Film {
     /// its instructions (the bench's sky-only scene: 800 → 300 per sample).
     #[inline(always)]
     fn splat_5x5(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
-        let (wx, wy) = (filter.taps5(u.x), filter.taps5(u.y));
+        let (wx, wy) = (filter.taps::<5>(u.x), filter.taps::<5>(u.y));
         let lw = l.extend(1.0);
         let width = self.width as usize;
         let first = (py - 2) as usize * width + (px - 2) as usize;
@@ -682,9 +702,10 @@ mod tests {
     }
     use crate::testing::TestRng;
 
-    /// The unrolled 5 x 5 splat gives the trimming loop's bits: random
-    /// samples (zero, negative and large radiance too) near and away from
-    /// the film's edges, for every margin-2 filter.
+    /// The unrolled 5 x 5 splat and the splat of a pixel's samples together
+    /// give the trimming loop's bits: random samples (zero, negative and
+    /// large radiance too) near and away from the film's edges, for filters
+    /// of margins 0, 1 and 2.
     #[test]
     fn unrolled_splat_is_the_trimming_splat() {
         let mut rng = TestRng::new(7);
@@ -695,10 +716,16 @@ mod tests {
             FilterKind::Mitchell { b: 1.0 / 3.0, c: 1.0 / 3.0 },
             FilterKind::CatmullRom,
             FilterKind::Lanczos { lobes: 2 },
+            // Margins 0 and 1: pixel groups only.
+            FilterKind::Box,
+            FilterKind::Tent { radius: 1.0 },
+            FilterKind::Tent { radius: 1.4 },
+            FilterKind::Gaussian { stddev: 0.3 },
         ];
         for kind in kinds {
             let filter = Filter::new(kind);
-            assert_eq!(filter.margin(), 2, "{kind:?}");
+            let m = filter.margin() as i32;
+            assert!(m <= 2, "{kind:?}");
             let (mut fast, mut slow, mut slow2) = (Film::new(9, 7), Film::new(9, 7), Film::new(9, 7));
             let bits = |f: &Film| f.acc.iter().flat_map(|a| a.map(f64::to_bits)).collect::<Vec<_>>();
             let mut unrolled = 0;
@@ -714,7 +741,7 @@ mod tests {
                 let l = Spectrum::new(c(&mut rng), c(&mut rng), c(&mut rng));
                 fast.splat(px, py, u, l, None, &filter);
                 slow.splat_taps::<5>(px, py, u, l, None, &filter);
-                unrolled += (px >= 2 && py >= 2 && px + 2 < 9 && py + 2 < 7) as usize;
+                unrolled += (px >= m && py >= m && px + m < 9 && py + m < 7) as usize;
             }
             assert!(unrolled > 500, "{unrolled}");
             // The same samples a pixel at a time (runs of 1 to 40 samples,
