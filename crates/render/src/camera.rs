@@ -26,6 +26,7 @@ use crate::geometry::{offset_origin, Ray, Shape};
 use crate::math::{Frame, Mat4, PI};
 use crate::sampling::warp::{sample_concentric_disk, sample_cosine_hemisphere};
 use crate::sampling::SampleStream;
+use crate::simd::Float;
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
@@ -322,6 +323,48 @@ impl Camera {
         self.generate_ray_with_aperture(s, Vec2::splat(0.5))
     }
 
+    /// Whether [`Self::pinhole_rays`] serves this camera: a pinhole, not a batch.
+    #[inline]
+    pub fn has_pinhole_lanes(&self) -> bool {
+        matches!(self.projection, Projection::Pinhole)
+    }
+
+    /// The pinhole rays through film positions (`sx`, `sy`), `F::WIDTH` at
+    /// once: bitwise [`Self::generate_ray_with_aperture`] lane by lane (the
+    /// same operations in the same order, glam's included: a normalisation
+    /// is v · (1 / √((x² + y²) + z²)), a matrix-vector product
+    /// (x_axis x + y_axis y) + z_axis z). Only for [`Self::has_pinhole_lanes`].
+    pub fn pinhole_rays<F: Float>(&self, sx: F, sy: F) -> [Ray; 16] {
+        debug_assert!(self.has_pinhole_lanes());
+        let one = F::splat(1.0);
+        let lx = (one - F::splat(2.0) * sx) * F::splat(self.tan_half.x);
+        let ly = (one - F::splat(2.0) * sy) * F::splat(self.tan_half.y);
+        let r = one / ((lx * lx + ly * ly) + one).sqrt();
+        let (lx, ly, lz) = (lx * r, ly * r, one * r);
+        let m = &self.world_from_camera;
+        let t = |a: f32, b: f32, c: f32| (F::splat(a) * lx + F::splat(b) * ly) + F::splat(c) * lz;
+        let (tx, ty, tz) = (
+            t(m.x_axis.x, m.y_axis.x, m.z_axis.x),
+            t(m.x_axis.y, m.y_axis.y, m.z_axis.y),
+            t(m.x_axis.z, m.y_axis.z, m.z_axis.z),
+        );
+        let r = one / ((tx * tx + ty * ty) + tz * tz).sqrt();
+        let (dx, dy, dz) = (tx * r, ty * r, tz * r);
+        let inv_z = one / lz;
+        let near = F::splat(self.near_clip) * inv_z;
+        let o = self.world_from_camera.transform_point3(Vec3::ZERO);
+        let (ox, oy, oz) = (F::splat(o.x) + dx * near, F::splat(o.y) + dy * near, F::splat(o.z) + dz * near);
+        let t_max = F::splat(self.far_clip - self.near_clip) * inv_z;
+        let a = |v: F| v.to_array();
+        let (ox, oy, oz, dx, dy, dz, t_max) = (a(ox), a(oy), a(oz), a(dx), a(dy), a(dz), a(t_max));
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z, 0.0); 16];
+        for (l, ray) in rays.iter_mut().enumerate().take(F::WIDTH) {
+            let at = |v: &F::Array| v.as_ref()[l];
+            *ray = Ray::new(Vec3::new(at(&ox), at(&oy), at(&oz)), Vec3::new(at(&dx), at(&dy), at(&dz)), at(&t_max));
+        }
+        rays
+    }
+
     /// Ray through film position `s` in [0, 1)² and aperture sample `a` in [0, 1)².
     #[inline]
     pub fn generate_ray_with_aperture(&self, s: Vec2, a: Vec2) -> Ray {
@@ -401,6 +444,64 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `pinhole_rays` is `generate_ray_with_aperture` lane by lane, bit for
+    /// bit, with every lane width built: random film positions, the film's
+    /// corners and centre, under a rotated, scaled and translated camera.
+    #[test]
+    fn pinhole_lanes_are_the_scalar_rays_bitwise() {
+        use crate::simd::check::{each_simd, Visit};
+        struct V(Vec<PerspectiveCamera>, Vec<Vec2>);
+        impl Visit for V {
+            fn visit<F: Float>(&mut self) {
+                for c in &self.0 {
+                    assert!(c.has_pinhole_lanes());
+                    for chunk in self.1.chunks_exact(F::WIDTH) {
+                        let lane = |f: fn(&Vec2) -> f32| {
+                            let mut a = F::Array::default();
+                            for (x, s) in a.as_mut().iter_mut().zip(chunk) {
+                                *x = f(s);
+                            }
+                            F::from_array(a)
+                        };
+                        let rays = c.pinhole_rays(lane(|s| s.x), lane(|s| s.y));
+                        for (r, s) in rays.iter().zip(chunk) {
+                            let want = c.generate_ray_with_aperture(*s, Vec2::splat(0.5));
+                            let bits = |r: &Ray| {
+                                (r.o.to_array().map(f32::to_bits), r.d.to_array().map(f32::to_bits), r.t_max.to_bits())
+                            };
+                            assert_eq!(bits(r), bits(&want), "{} at {s}", F::NAME);
+                        }
+                    }
+                }
+            }
+        }
+        let mut rng = crate::testing::TestRng::new(11);
+        let mut s: Vec<Vec2> = (0..2048).map(|_| rng.next_2d()).collect();
+        s.extend([Vec2::ZERO, Vec2::ONE, Vec2::new(0.0, 1.0), Vec2::new(1.0, 0.0), Vec2::splat(0.5)]);
+        s.resize(s.len().next_multiple_of(16), Vec2::new(0.25, 0.75));
+        let to_world = Mat4::from_scale_rotation_translation(
+            Vec3::new(1.0, 1.0, 1.0),
+            glam::Quat::from_euler(glam::EulerRot::YXZ, 0.7, -0.3, 0.2),
+            Vec3::new(3.0, -1.5, 8.25),
+        );
+        let cams = vec![
+            PerspectiveCamera::new(Mat4::IDENTITY, 39.3, FovAxis::X, 64, 48, 0.01, 1e4),
+            PerspectiveCamera::new(to_world, 70.0, FovAxis::Y, 30, 64, 0.5, 100.0),
+            PerspectiveCamera::new(
+                to_world * Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)),
+                20.0,
+                FovAxis::X,
+                64,
+                64,
+                1e-3,
+                1e3,
+            ),
+        ];
+        let mut v = V(cams, s);
+        v.visit::<f32>();
+        each_simd(&mut v);
+    }
 
     #[test]
     fn fov_axes_agree_on_square_images() {

@@ -335,6 +335,20 @@ impl Scene {
         self.env_lights.iter().map(|&i| self.lights[i as usize].environment_radiance(d)).sum()
     }
 
+    /// The scene's environment when it is one `envmap` and nothing else:
+    /// then [`Self::environment_radiance`] of a direction d is
+    /// `Spectrum::ZERO + e.eval(d)` (the sum above), which
+    /// [`crate::light::EnvMapLight::eval_lanes`] computes for many directions at once.
+    pub fn single_envmap(&self) -> Option<&crate::light::EnvMapLight> {
+        match self.env_lights[..] {
+            [i] => match &self.lights[i as usize] {
+                Light::EnvMap(e) => Some(e),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
     /// Radiance from lights at infinity along direction `d`, and the
     /// solid-angle density (selection included) with which `sample_light`
     /// for a receiver at (`p_ref`, `n_ref`) samples that direction.

@@ -159,8 +159,8 @@ impl PathIntegrator {
             // Escaped: environment emission, MIS-weighted against light sampling.
             if st.prev_delta {
                 // Camera ray or specular bounce: weight 1, no density needed.
-                if !(st.depth == 0 && self.hide_emitters) {
-                    st.l += st.beta * scene.environment_radiance(st.ray.d);
+                if self.delta_miss_seen(st) {
+                    Self::add_delta_miss(st, scene.environment_radiance(st.ray.d));
                 }
             } else {
                 let (le, env_pdf) = scene.environment(st.prev_p, st.prev_n, st.ray.d);
@@ -232,6 +232,23 @@ impl PathIntegrator {
             None => false,
         };
         Vertex { shadow, go_on }
+    }
+
+    /// Whether a path whose ray escapes sees the environment with weight 1:
+    /// its last vertex was the camera or a specular bounce, and the
+    /// environment is not hidden from camera rays.
+    #[inline]
+    pub fn delta_miss_seen(&self, st: &PathState) -> bool {
+        st.prev_delta && !(st.depth == 0 && self.hide_emitters)
+    }
+
+    /// The escape of a path for which [`Self::delta_miss_seen`] holds, with
+    /// `le` = [`Scene::environment_radiance`] of its ray: all of
+    /// [`Self::vertex`] for that path (it ends), so a stream may evaluate
+    /// `le` for many paths at once.
+    #[inline]
+    pub fn add_delta_miss(st: &mut PathState, le: Spectrum) {
+        st.l += st.beta * le;
     }
 
     /// MIS weight of emission found by BSDF sampling after a non-delta

@@ -30,6 +30,7 @@
 use super::LightSample;
 use crate::math::{fast, luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
 use crate::sampling::Distribution2D;
+use crate::simd::{self, Float};
 use glam::{Vec2, Vec3};
 
 /// Mitsuba's `envmap` emitter (mapping and sampling in the module docs).
@@ -156,11 +157,44 @@ impl EnvMapLight {
         self.lookup(u, v) * self.scale
     }
 
+    /// [`Self::eval`] of `F::WIDTH` directions (x, y and z lanes), bitwise
+    /// lane by lane: the rotation, the inverse trigonometry (the lane forms
+    /// of `math::fast`) and the texel coordinates in lanes, the bilinear
+    /// blend of each lane's four texels by [`Self::blend`], as `eval`.
+    pub fn eval_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [Spectrum; 16] {
+        // glam's Mat3 · Vec3: x_axis·x + y_axis·y + z_axis·z, left to right.
+        let m = &self.light_from_world;
+        let row = |a: f32, b: f32, c: f32| F::splat(a) * wx + F::splat(b) * wy + F::splat(c) * wz;
+        let (dx, dy, dz) = (
+            row(m.x_axis.x, m.y_axis.x, m.z_axis.x),
+            row(m.x_axis.y, m.y_axis.y, m.z_axis.y),
+            row(m.x_axis.z, m.y_axis.z, m.z_axis.z),
+        );
+        let u = simd::atan2(dx, -dz) * F::splat(INV_2PI);
+        let v = simd::acos(dy) * F::splat(INV_PI);
+        // As `lookup`; f32::clamp's NaN passes through minps / maxps too.
+        let x = (u - u.floor()) * F::splat(self.width as f32) - F::splat(0.5);
+        let y = F::splat(1.0).min(F::splat(0.0).max(v)) * F::splat((self.height - 1) as f32);
+        let (x, y) = (x.to_array(), y.to_array());
+        let mut out = [Spectrum::ZERO; 16];
+        for (o, (&x, &y)) in out.iter_mut().zip(x.as_ref().iter().zip(y.as_ref())) {
+            *o = self.blend(x, y) * self.scale;
+        }
+        out
+    }
+
     /// Bilinear lookup, texel (i, j) at (u, v) = ((j + ½) / W, i / (H - 1)).
     fn lookup(&self, u: f32, v: f32) -> Spectrum {
         let (w, h) = (self.width, self.height);
         let x = (u - u.floor()) * w as f32 - 0.5;
         let y = v.clamp(0.0, 1.0) * (h - 1) as f32;
+        self.blend(x, y)
+    }
+
+    /// The bilinear blend at texel coordinates (x, y) = (u W − ½, v (H − 1)).
+    #[inline(always)]
+    fn blend(&self, x: f32, y: f32) -> Spectrum {
+        let (w, h) = (self.width, self.height);
         let x0 = x.floor();
         let i0 = fast::index(y).min(h - 2);
         let (fx, fy) = (x - x0, y - i0 as f32);
@@ -265,6 +299,54 @@ mod tests {
     fn assert_close(a: Vec3, b: [f32; 3], what: &str) {
         let b = Vec3::from(b);
         assert!((a - b).abs().max_element() <= 2e-5 * b.abs().max_element().max(1.0), "{what}: {a} vs Mitsuba {b}");
+    }
+
+    /// `eval_lanes` is `eval` lane by lane, bit for bit, with every lane
+    /// width (f32 and each SIMD instance built): random directions, the
+    /// poles, the u = 0/1 seam, axis directions and NaN.
+    #[test]
+    fn lanes_are_eval_bitwise() {
+        use crate::simd::check::{each_simd, Visit};
+        struct V(Vec<EnvMapLight>, Vec<Vec3>);
+        impl Visit for V {
+            fn visit<F: Float>(&mut self) {
+                for light in &self.0 {
+                    for chunk in self.1.chunks(F::WIDTH).filter(|c| c.len() == F::WIDTH) {
+                        let lane = |f: fn(&Vec3) -> f32| {
+                            F::from_array({
+                                let mut a = F::Array::default();
+                                for (x, d) in a.as_mut().iter_mut().zip(chunk) {
+                                    *x = f(d);
+                                }
+                                a
+                            })
+                        };
+                        let got = light.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                        for (g, d) in got.iter().zip(chunk) {
+                            let want = light.eval(*d);
+                            let bits = |v: Vec3| v.to_array().map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() });
+                            assert_eq!(bits(*g), bits(want), "{} at {d}: {g} vs {want}", F::NAME);
+                        }
+                    }
+                }
+            }
+        }
+        let mut rng = crate::testing::TestRng::new(3);
+        let mut dirs: Vec<Vec3> =
+            (0..4096).map(|_| crate::sampling::warp::sample_uniform_sphere(rng.next_2d())).collect();
+        dirs.extend([Vec3::Y, -Vec3::Y, Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z, Vec3::new(0.0, 0.5, -0.0)]);
+        dirs.extend([Vec3::new(1e-30, 0.3, -1.0), Vec3::new(-1e-30, 0.3, -1.0), Vec3::splat(f32::NAN)]);
+        while dirs.len() % 16 != 0 {
+            dirs.push(Vec3::new(0.1, 0.2, 0.3));
+        }
+        let lights = vec![
+            EnvMapLight::new(6, 4, ramp_map(), rotation(), 1.5).unwrap(),
+            EnvMapLight::new(6, 4, ramp_map(), Mat4::from_scale(Vec3::new(1.0, 3.0, 1.0)), 1.0).unwrap(),
+            EnvMapLight::new(1, 2, vec![[1.0, 2.0, 3.0], [5.0, 6.0, 7.0]], Mat4::IDENTITY, 1.0).unwrap(),
+        ];
+        let mut v = V(lights, dirs);
+        v.visit::<f32>();
+        each_simd(&mut v);
     }
 
     /// Values printed by Mitsuba 3.9.1 (scalar_rgb):

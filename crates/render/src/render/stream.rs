@@ -29,7 +29,7 @@ use crate::integrator::path::{PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::simd::Float;
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use std::ops::Range;
 
 /// The lane widths this build can trace packets with, widest first: 16
@@ -92,10 +92,44 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     let mut shadow_slots: Vec<usize> = Vec::with_capacity(POOL);
     let mut shadow_rays: Vec<Ray> = Vec::with_capacity(POOL);
     let mut ended: Vec<bool> = Vec::with_capacity(POOL);
+    // Pinhole camera rays are made a lane group at a time.
+    let camera_lanes = job.camera.has_pinhole_lanes() && F::WIDTH > 1;
+    let mut starts: Vec<(SampleStream, Vec2, Vec2)> = Vec::with_capacity(F::WIDTH);
+    // Escaping rays that see a lone envmap are evaluated in lanes.
+    let sky = scene.single_envmap().filter(|_| F::WIDTH > 1);
+    let mut sky_slots: Vec<usize> = Vec::with_capacity(POOL);
     let mut next = 0;
     loop {
         // Refill: the next samples in canonical order take the free slots.
         while slots.len() < POOL && next < total {
+            let n = (POOL - slots.len()).min(total - next).min(F::WIDTH);
+            if camera_lanes && n == F::WIDTH {
+                // As `camera_sample` for a pinhole (no aperture sample), the
+                // rays of F::WIDTH samples at once.
+                starts.clear();
+                for k in next..next + n {
+                    let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
+                    let mut rng = job.sampler.stream(p.global, s);
+                    let u = rng.next_2d();
+                    starts.push((rng, u, job.film_position(p.global, u)));
+                }
+                let lane = |f: fn(&(SampleStream, Vec2, Vec2)) -> f32| {
+                    let mut a = F::Array::default();
+                    for (x, st) in a.as_mut().iter_mut().zip(&starts) {
+                        *x = f(st);
+                    }
+                    F::from_array(a)
+                };
+                let rays = job.camera.pinhole_rays(lane(|s| s.2.x), lane(|s| s.2.y));
+                for ((rng, u, _), ray) in starts.drain(..).zip(rays) {
+                    results.push(Sample { u, ray, l: Spectrum::ZERO });
+                    if let Some(state) = path.start(&ray) {
+                        slots.push(Slot { sample: next, state, rng });
+                    }
+                    next += 1;
+                }
+                continue;
+            }
             let (p, s) = (&pixels[next / spp], samples.start + (next % spp) as u32);
             let mut rng = job.sampler.stream(p.global, s);
             let (u, ray) = job.camera_sample(p.global, &mut rng);
@@ -118,11 +152,36 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         let packets = slots.len().div_ceil(F::WIDTH) as u64;
         tile.stats.rays.packets += packets;
         tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
+        // Escapes into a lone envmap after the camera or a specular bounce:
+        // the environment's radiance in lanes (bitwise `vertex`'s).
+        sky_slots.clear();
+        if let Some(env) = sky {
+            sky_slots.extend((0..slots.len()).filter(|&i| hits[i].is_none() && path.delta_miss_seen(&slots[i].state)));
+            for chunk in sky_slots.chunks(F::WIDTH) {
+                let lane = |c: fn(Vec3) -> f32| {
+                    let mut a = F::Array::default();
+                    for (j, x) in a.as_mut().iter_mut().enumerate() {
+                        // Short chunks repeat their last direction.
+                        *x = c(slots[chunk[j.min(chunk.len() - 1)]].state.ray.d);
+                    }
+                    F::from_array(a)
+                };
+                let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                for (&i, le) in chunk.iter().zip(le) {
+                    PathIntegrator::add_delta_miss(&mut slots[i].state, Spectrum::ZERO + le);
+                }
+            }
+        }
         // One vertex per path.
         shadow_slots.clear();
         shadow_rays.clear();
         ended.clear();
+        let mut sky_done = sky_slots.iter().peekable();
         for (i, slot) in slots.iter_mut().enumerate() {
+            if sky_done.next_if_eq(&&i).is_some() {
+                ended.push(true);
+                continue;
+            }
             let ray = slot.state.ray;
             let si = hits[i].map(|h| scene.interaction(&ray, &h));
             tile.scratch.reset();
