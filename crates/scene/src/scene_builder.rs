@@ -359,6 +359,18 @@ impl SceneBuilder {
         if shape.prim_count() == 0 {
             return Err(LoadError::at(at, "the shape has no triangles"));
         }
+        // Finite inputs can still overflow once transformed (3e38 scaled by 2).
+        if let Some(i) = (0..shape.prim_count()).find(|&i| {
+            let b = shape.prim_bounds(i);
+            !(b.min.is_finite() && b.max.is_finite())
+        }) {
+            return Err(LoadError::at(
+                at,
+                format!(
+                    "primitive {i} of the shape lies beyond single precision in world space                      (its coordinates times its transform overflow 3.4e38); scale the scene down"
+                ),
+            ));
+        }
         if material as usize >= self.materials.len() {
             return Err(LoadError::at(at, format!("material {material} does not exist")));
         }
@@ -443,8 +455,17 @@ impl SceneBuilder {
         if to_world.determinant() == 0.0 || !to_world.is_finite() {
             return Err(LoadError::at(at, "the instance's transform is singular"));
         }
+        let instance = Instance::new(g.clone(), to_world);
+        let b = instance.bounds();
+        if !(b.min.is_finite() && b.max.is_finite()) {
+            return Err(LoadError::at(
+                at,
+                "the instance lies beyond single precision in world space (its group's bounds times \
+                 its transform overflow 3.4e38); scale the scene down",
+            ));
+        }
         self.placed.push(Primitive::Instance(self.instances.len() as u32));
-        self.instances.push(Instance::new(g.clone(), to_world));
+        self.instances.push(instance);
         Ok(())
     }
 

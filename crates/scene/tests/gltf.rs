@@ -535,3 +535,27 @@ fn volume_materials_fill_their_meshes_with_an_absorbing_medium() {
     let e = load("boxes.gltf", &bad).unwrap_err();
     assert!(e.contains("/materials/2/extensions/KHR_materials_volume") && e.contains("attenuationDistance"), "{e}");
 }
+
+/// Finite node transforms whose product with the mesh overflows single
+/// precision are an error at the node or primitive, for a mesh placed once
+/// (transformed into world space) and for one shared by two nodes
+/// (instanced; found by fuzzing: the BVH was built over infinite boxes).
+#[test]
+fn world_space_overflow_is_an_error_at_the_node() {
+    for shared in [false, true] {
+        let bad = edited(|d| {
+            d["nodes"][0]["translation"] = serde_value("[3e38, 0, 0]");
+            d["nodes"][0]["scale"] = serde_value("[3e38, 1, 1]");
+            if shared {
+                d["nodes"][3]["mesh"] = serde_value("0");
+                d["nodes"][3].as_object_mut().unwrap().remove("matrix");
+            }
+        });
+        let e = load("boxes.gltf", &bad).unwrap_err();
+        if shared {
+            assert!(e.contains("/nodes/0") && e.contains("beyond single precision in world space"), "{e}");
+        } else {
+            assert!(e.contains("/meshes/0/primitives/0") && e.contains("not finite"), "{e}");
+        }
+    }
+}

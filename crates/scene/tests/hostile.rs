@@ -53,6 +53,19 @@ fn non_finite_and_out_of_range_parameters_name_file_and_line() {
             "hostile.xml:3:",
             "not finite in single precision",
         ),
+        // Finite coordinates and transforms whose product overflows.
+        (
+            r#"<shape type="cube"><transform name="to_world"><scale value="3e38"/><translate x="3e38"/></transform></shape>"#
+                .to_string(),
+            "hostile.xml:3:",
+            "beyond single precision in world space",
+        ),
+        (
+            r#"<shape type="sphere"><float name="radius" value="3e38"/><point name="center" x="3e38" y="0" z="0"/></shape>"#
+                .to_string(),
+            "hostile.xml:3:",
+            "beyond single precision in world space",
+        ),
         // A spectrum file with NaN or an overflowing number: its line.
         (emitter(r#"<spectrum name="radiance" filename="nan.spd"/>"#), "hostile.xml:3:", "line 3: \"500 nan\""),
         (emitter(r#"<spectrum name="radiance" filename="inf.spd"/>"#), "hostile.xml:3:", "line 3: \"1e400 0.5\""),
