@@ -136,14 +136,18 @@ impl Filter {
     fn taps<const N: usize>(&self, u: f32) -> [f32; N] {
         let m = (N / 2) as i32;
         let x: [f32; N] = std::array::from_fn(|k| u + (m - k as i32) as f32 - 0.5);
-        if N != 5 || self.table.len() != TABLE_PADDED {
+        if N != 5 || self.table.len() != TABLE_PADDED || !(0.0..=1.0).contains(&u) {
             return x.map(|x| self.weight(x));
         }
         let table: &[f32; TABLE_PADDED] = self.table[..].try_into().unwrap();
         x.map(|x| {
+            // |x| ≤ 2.5 and radius > 1.5 (margin 2): 0 ≤ t < TABLE_PADDED − 2.
             let t = x.abs() * self.inv_step;
-            // |x| ≤ 2.5 and radius > 1.5 (margin 2): t < TABLE_PADDED − 2.
-            let i = (t as i32).clamp(0, TABLE_PADDED as i32 - 2) as usize;
+            debug_assert!((0.0..(TABLE_PADDED - 2) as f32).contains(&t));
+            // SAFETY: t is finite and in [0, 2^31) (above), where the
+            // truncation is exact; `as i32` would add NaN and range tests.
+            let i = unsafe { t.to_int_unchecked::<i32>() } as usize;
+            let i = i.min(TABLE_PADDED - 2);
             let f = t - i as f32;
             table[i] + f * (table[i + 1] - table[i])
         })
@@ -421,28 +425,31 @@ impl Film {
         let width = self.width as usize;
         let first = (py - m) as usize * width + (px - m) as usize;
         for group in samples.chunks(GROUP) {
-            // w[k][i]: the weight wx·wy of tap k (row-major) for sample i.
+            // Per sample its radiance and weight, and the weights wx·wy of
+            // its taps, a row of N at a time.
             let mut lw = [glam::Vec4::ZERO; GROUP];
-            let mut w = [[0.0f32; GROUP]; 25];
+            let mut w = [[[0.0f32; N]; N]; GROUP];
             for (i, &(u, l)) in group.iter().enumerate() {
                 lw[i] = l.extend(1.0);
                 let (wx, wy) = (filter.taps::<N>(u.x), filter.taps::<N>(u.y));
                 for (ky, wy) in wy.iter().enumerate() {
                     for (kx, wx) in wx.iter().enumerate() {
-                        w[ky * N + kx][i] = wx * wy;
+                        w[i][ky][kx] = wx * wy;
                     }
                 }
             }
-            let lw = &lw[..group.len()];
+            let (lw, w) = (&lw[..group.len()], &w[..group.len()]);
+            // A footprint row's N sums stay in registers while every
+            // sample is added to them, in sample order.
             for ky in 0..N {
                 let row: &mut [[f64; 4]; N] = (&mut self.acc[first + ky * width..][..N]).try_into().unwrap();
-                for (kx, a) in row.iter_mut().enumerate() {
-                    let mut sum = *a;
-                    for (lw, &w) in lw.iter().zip(&w[ky * N + kx]) {
-                        add_widened(&mut sum, *lw * w);
+                let mut sums = *row;
+                for (lw, w) in lw.iter().zip(w) {
+                    for (sum, &w) in sums.iter_mut().zip(&w[ky]) {
+                        add_widened(sum, *lw * w);
                     }
-                    *a = sum;
                 }
+                *row = sums;
             }
         }
     }
