@@ -425,28 +425,24 @@ impl Film {
         let width = self.width as usize;
         let first = (py - m) as usize * width + (px - m) as usize;
         for group in samples.chunks(GROUP) {
-            // Per sample its radiance and weight, and the weights wx·wy of
-            // its taps, a row of N at a time.
+            // Per sample its radiance and weight, and its taps' weights
+            // along x and along y.
             let mut lw = [glam::Vec4::ZERO; GROUP];
-            let mut w = [[[0.0f32; N]; N]; GROUP];
+            let mut wx = [[0.0f32; N]; GROUP];
+            let mut wy = [[0.0f32; N]; GROUP];
             for (i, &(u, l)) in group.iter().enumerate() {
                 lw[i] = l.extend(1.0);
-                let (wx, wy) = (filter.taps::<N>(u.x), filter.taps::<N>(u.y));
-                for (ky, wy) in wy.iter().enumerate() {
-                    for (kx, wx) in wx.iter().enumerate() {
-                        w[i][ky][kx] = wx * wy;
-                    }
-                }
+                (wx[i], wy[i]) = (filter.taps::<N>(u.x), filter.taps::<N>(u.y));
             }
-            let (lw, w) = (&lw[..group.len()], &w[..group.len()]);
+            let n = group.len();
             // A footprint row's N sums stay in registers while every
             // sample is added to them, in sample order.
             for ky in 0..N {
                 let row: &mut [[f64; 4]; N] = (&mut self.acc[first + ky * width..][..N]).try_into().unwrap();
                 let mut sums = *row;
-                for (lw, w) in lw.iter().zip(w) {
-                    for (sum, &w) in sums.iter_mut().zip(&w[ky]) {
-                        add_widened(sum, *lw * w);
+                for ((lw, wx), wy) in lw[..n].iter().zip(&wx[..n]).zip(&wy[..n]) {
+                    for (sum, &wx) in sums.iter_mut().zip(wx) {
+                        add_widened(sum, *lw * (wx * wy[ky]));
                     }
                 }
                 *row = sums;
