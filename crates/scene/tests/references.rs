@@ -103,6 +103,12 @@ fn envmap_sun_matches_mitsuba() {
     compare("envmap_sun", 512);
 }
 
+/// The sky alone: pinhole rays and envmap escapes evaluated in lanes.
+#[test]
+fn sky_matches_mitsuba() {
+    compare("sky", 64);
+}
+
 #[test]
 fn many_lights_match_mitsuba() {
     compare("many_lights", 256);
