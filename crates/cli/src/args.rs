@@ -94,10 +94,12 @@ pub struct RenderArgs {
     /// Ignore (and replace) an existing checkpoint: start over.
     #[arg(long)]
     pub fresh: bool,
-    /// The memory the film may take (its sums, the image and the
-    /// checkpoint's encoding), as bytes or with K, M, G or T: 512M, 8G. A
-    /// render predicted to need more is refused before it starts. Default:
-    /// the memory the system reports as available.
+    /// The memory the render may take: the scene as loaded (meshes,
+    /// textures, acceleration structures) and the film (its sums, the image
+    /// and the checkpoint's encoding), as bytes or with K, M, G or T: 512M,
+    /// 8G. A render predicted to need more is refused before its film is
+    /// allocated. Default: the film may take the memory the system reports
+    /// as available.
     #[arg(long, value_name = "SIZE", value_parser = crate::memory::parse_size)]
     pub max_memory: Option<u64>,
     /// Keep the checkpoint after the render completes.

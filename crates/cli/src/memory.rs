@@ -1,8 +1,11 @@
-//! The render's memory, predicted before the film is allocated: the film's
-//! f64 sums (and layers and moments), the image developed from it, and a
-//! checkpoint's encoding when checkpoints are written. A render that would
-//! exceed the limit (`--max-memory`, else the memory the system says is
-//! available) is refused with the size asked for; a large one is announced.
+//! The render's memory, predicted before the film is allocated: the scene
+//! as loaded (meshes, textures, acceleration structures: the process's
+//! resident memory once loading is done), and the film's f64 sums (and
+//! layers and moments), the image developed from it, and a checkpoint's
+//! encoding when checkpoints are written. A render whose whole would
+//! exceed `--max-memory`, or whose film would exceed the memory the system
+//! says is available, is refused with the sizes asked for; a large one is
+//! announced.
 
 use anyhow::{bail, Result};
 use penumbra_render::film::{channel_count, FilmLayers, MOMENTS};
@@ -38,6 +41,15 @@ pub fn available() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// The resident memory of this process (Linux `VmRSS`): once the scene is
+/// loaded, what its meshes, textures and acceleration structures take.
+pub fn resident() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
 /// Bytes the film and what is made from it take for a `width` x `height`
 /// render with `layers`: the f64 sums, the developed f32 image with its
 /// layers, and (with `checkpoint`) the checkpoint's encoding.
@@ -66,27 +78,51 @@ pub fn human(bytes: u128) -> String {
     }
 }
 
-/// Refuses a film whose predicted memory exceeds `limit` (`--max-memory`)
-/// or, without one, the memory available; announces one above 1 GiB.
-pub fn check(width: u32, height: u32, layers: &FilmLayers, checkpoint: bool, limit: Option<u64>) -> Result<()> {
-    let need = predict(width, height, layers, checkpoint);
-    let (limit, what) = match limit {
-        Some(l) => (Some(l), "the limit set by --max-memory"),
-        None => (available(), "the memory available (MemAvailable in /proc/meminfo)"),
-    };
-    if let Some(limit) = limit {
-        if need > limit as u128 {
-            bail!(
-                "the {width} x {height} film needs about {} (its sums, the image{}), more than {what}, {}; \
-                 render a smaller film, fewer layers, or parts of it (--crop, --part), or raise --max-memory",
-                human(need),
-                if checkpoint { " and the checkpoint" } else { "" },
-                human(limit as u128)
-            );
+/// Refuses a render whose film and `scene` (bytes already taken by the
+/// loaded scene) exceed `limit` (`--max-memory`) or, without one, whose
+/// film exceeds the memory available (which the scene has already
+/// lowered); announces one above 1 GiB in all.
+pub fn check(
+    width: u32,
+    height: u32,
+    layers: &FilmLayers,
+    checkpoint: bool,
+    limit: Option<u64>,
+    scene: u64,
+) -> Result<()> {
+    let film = predict(width, height, layers, checkpoint);
+    let parts = format!(
+        "the {width} x {height} film needs about {} (its sums, the image{})",
+        human(film),
+        if checkpoint { " and the checkpoint" } else { "" }
+    );
+    let fix = "render a smaller film, fewer layers, or parts of it (--crop, --part)";
+    match limit {
+        Some(limit) if film + scene as u128 > limit as u128 => bail!(
+            "{parts} and the scene as loaded {} (meshes, textures, acceleration structures), {} in all, more than \
+             the limit set by --max-memory, {}; {fix}, or raise --max-memory",
+            human(scene as u128),
+            human(film + scene as u128),
+            human(limit as u128)
+        ),
+        None => {
+            if let Some(available) = available().filter(|&a| film > a as u128) {
+                bail!(
+                    "{parts}, more than the memory available (MemAvailable in /proc/meminfo), {}; {fix}, or set \
+                     a larger --max-memory",
+                    human(available as u128)
+                );
+            }
         }
+        Some(_) => {}
     }
-    if need > 1 << 30 {
-        eprintln!("note: the {width} x {height} film will take about {} of memory", human(need));
+    if film + scene as u128 > 1 << 30 {
+        eprintln!(
+            "note: the render will take about {} of memory: the scene {}, the {width} x {height} film {}",
+            human(film + scene as u128),
+            human(scene as u128),
+            human(film)
+        );
     }
     Ok(())
 }
@@ -114,10 +150,17 @@ mod tests {
         assert_eq!(predict(10, 10, &layers, false), 4400);
         assert_eq!(predict(10, 10, &layers, true), 7600);
         assert_eq!(predict(65536, 65536, &layers, false), 44 << 32);
-        check(10, 10, &layers, false, Some(4400)).unwrap();
-        let e = check(10, 10, &layers, false, Some(4399)).unwrap_err().to_string();
+        check(10, 10, &layers, false, Some(4400), 0).unwrap();
+        let e = check(10, 10, &layers, false, Some(4399), 0).unwrap_err().to_string();
         assert!(e.contains("10 x 10 film needs about 4.30 KiB") && e.contains("--max-memory, 4.30 KiB"), "{e}");
-        let e = check(65536, 65536, &layers, true, Some(8 << 30)).unwrap_err().to_string();
+        let e = check(65536, 65536, &layers, true, Some(8 << 30), 0).unwrap_err().to_string();
         assert!(e.contains("needs about 304.00 GiB") && e.contains("8.00 GiB"), "{e}");
+        // The scene counts against --max-memory: 4400 + 1 bytes is one too many.
+        check(10, 10, &layers, false, Some(4400 + 2048), 2048).unwrap();
+        let e = check(10, 10, &layers, false, Some(4400 + 2047), 2048).unwrap_err().to_string();
+        assert!(e.contains("the scene as loaded 2.00 KiB") && e.contains("6.30 KiB in all"), "{e}");
+        // Without a limit, only the film is compared with what is available
+        // (the scene's memory is already taken from it).
+        check(10, 10, &layers, false, None, u64::MAX / 2).unwrap();
     }
 }

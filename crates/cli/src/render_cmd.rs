@@ -289,7 +289,8 @@ fn resume(plan: &Plan) -> Result<State> {
             eprintln!("removed '{}', left by a run killed while writing", tmp.display());
         }
     }
-    crate::memory::check(job.width, job.height, layers, a.checkpoint.is_some(), a.max_memory)?;
+    let scene = crate::memory::resident().unwrap_or(0);
+    crate::memory::check(job.width, job.height, layers, a.checkpoint.is_some(), a.max_memory, scene)?;
     let empty = State { film: Film::with_layers(job.width, job.height, layers), passes: 0, spp: 0, seconds: 0.0 };
     let Some(ck) = &a.checkpoint else { return Ok(empty) };
     if a.fresh {

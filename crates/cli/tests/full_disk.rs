@@ -87,8 +87,9 @@ fn writes_past_a_file_size_limit_fail_cleanly_and_keep_the_previous_files() {
     fs::remove_dir_all(&d).ok();
 }
 
-/// A film predicted to exceed --max-memory is refused before anything is
-/// allocated or written, with the size asked for and the limit.
+/// A film predicted to exceed --max-memory, alone or with the scene as
+/// loaded, is refused before anything is allocated or written, with the
+/// sizes asked for and the limit.
 #[test]
 fn a_film_past_max_memory_is_refused_before_rendering() {
     let d = common::tmpdir("fulldisk", "memory");
@@ -106,10 +107,23 @@ fn a_film_past_max_memory_is_refused_before_rendering() {
     assert!(files(&d).is_empty());
     let o = bin().arg("render").arg(common::cornell()).args(["--max-memory", "5Q", "-o"]).arg(&out).output().unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown unit"));
+    // The scene as loaded counts against the limit too: a 40 x 40 film
+    // needs 69 KiB, the process with its scene more than 2 MiB.
+    let o = bin()
+        .arg("render")
+        .arg(common::cornell())
+        .args(["-D", "res=40", "--spp", "1", "--quiet", "--max-memory", "2M", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("40 x 40 film needs about 68.75 KiB") && err.contains("the scene as loaded"), "{err}");
+    assert!(files(&d).is_empty());
     ok(bin()
         .arg("render")
         .arg(common::cornell())
-        .args(["-D", "res=40", "--spp", "1", "--quiet", "--max-memory", "4M", "-o"])
+        .args(["-D", "res=40", "--spp", "1", "--quiet", "--max-memory", "256M", "-o"])
         .arg(&out)
         .output()
         .unwrap());

@@ -335,14 +335,14 @@ impl Scene {
         self.env_lights.iter().map(|&i| self.lights[i as usize].environment_radiance(d)).sum()
     }
 
-    /// The scene's environment when it is one `envmap` and nothing else:
-    /// then [`Self::environment_radiance`] of a direction d is
-    /// `Spectrum::ZERO + e.eval(d)` (the sum above), which
+    /// The scene's environment, with its light index, when it is one
+    /// `envmap` and nothing else: then [`Self::environment_radiance`] of a
+    /// direction d is `Spectrum::ZERO + e.eval(d)` (the sum above), which
     /// [`crate::light::EnvMapLight::eval_lanes`] computes for many directions at once.
-    pub fn single_envmap(&self) -> Option<&crate::light::EnvMapLight> {
+    pub fn single_envmap(&self) -> Option<(usize, &crate::light::EnvMapLight)> {
         match self.env_lights[..] {
             [i] => match &self.lights[i as usize] {
-                Light::EnvMap(e) => Some(e),
+                Light::EnvMap(e) => Some((i as usize, e)),
                 _ => None,
             },
             _ => None,
@@ -354,14 +354,27 @@ impl Scene {
     /// for a receiver at (`p_ref`, `n_ref`) samples that direction.
     #[inline]
     pub fn environment(&self, p_ref: Vec3, n_ref: Vec3, d: Vec3) -> (Spectrum, f32) {
-        let mut le = Spectrum::ZERO;
-        let mut pdf = 0.0;
+        let mut sum = (Spectrum::ZERO, 0.0);
         for &i in &self.env_lights {
-            let (l, p) = self.lights[i as usize].environment(d);
-            le += l;
-            pdf += p * self.light_pmf(p_ref, n_ref, i as usize);
+            self.add_environment(&mut sum, p_ref, n_ref, i as usize, self.lights[i as usize].environment(d));
         }
-        (le, pdf)
+        sum
+    }
+
+    /// Adds environment light `i`'s (radiance, solid-angle density) of a
+    /// direction to `sum` as [`Self::environment`] does, the density times
+    /// the light's selection probability for (`p_ref`, `n_ref`).
+    #[inline]
+    pub fn add_environment(
+        &self,
+        sum: &mut (Spectrum, f32),
+        p_ref: Vec3,
+        n_ref: Vec3,
+        i: usize,
+        (l, p): (Spectrum, f32),
+    ) {
+        sum.0 += l;
+        sum.1 += p * self.light_pmf(p_ref, n_ref, i);
     }
 
     /// Bounds of all geometry.

@@ -70,6 +70,19 @@ impl PathState {
         self.l
     }
 
+    /// Whether the last bounce was specular (or the path is a camera ray).
+    #[inline]
+    pub fn prev_delta(&self) -> bool {
+        self.prev_delta
+    }
+
+    /// The last vertex's position and normal (the receiver whose light
+    /// sampling an escape is weighted against).
+    #[inline]
+    pub fn prev_vertex(&self) -> (Vec3, Vec3) {
+        (self.prev_p, self.prev_n)
+    }
+
     /// The verdict on the shadow ray of the last vertex ([`Vertex::shadow`]):
     /// the light sample counts if it was not blocked. Called before the
     /// next vertex, so radiance is summed in the same order as in one loop.
@@ -164,9 +177,7 @@ impl PathIntegrator {
                 }
             } else {
                 let (le, env_pdf) = scene.environment(st.prev_p, st.prev_n, st.ray.d);
-                if le != Spectrum::ZERO {
-                    st.l += st.beta * le * self.bsdf_weight(st.prev_bsdf_pdf, env_pdf);
-                }
+                self.add_mis_miss(st, le, env_pdf);
             }
             return Vertex::DONE;
         };
@@ -249,6 +260,17 @@ impl PathIntegrator {
     #[inline]
     pub fn add_delta_miss(st: &mut PathState, le: Spectrum) {
         st.l += st.beta * le;
+    }
+
+    /// The escape of a path whose last bounce was not specular, with (`le`,
+    /// `env_pdf`) = [`Scene::environment`] of its ray from its last vertex
+    /// ([`PathState::prev_vertex`]): the environment's radiance weighted
+    /// against light sampling there. All of [`Self::vertex`] for that path.
+    #[inline]
+    pub fn add_mis_miss(&self, st: &mut PathState, le: Spectrum, env_pdf: f32) {
+        if le != Spectrum::ZERO {
+            st.l += st.beta * le * self.bsdf_weight(st.prev_bsdf_pdf, env_pdf);
+        }
     }
 
     /// MIS weight of emission found by BSDF sampling after a non-delta

@@ -162,7 +162,35 @@ impl EnvMapLight {
     /// of `math::fast`) and the texel coordinates in lanes, the bilinear
     /// blend of each lane's four texels by [`Self::blend`], as `eval`.
     pub fn eval_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [Spectrum; 16] {
-        // glam's Mat3 · Vec3: x_axis·x + y_axis·y + z_axis·z, left to right.
+        let (_, u, theta) = self.local_lanes(wx, wy, wz);
+        let (x, y) = self.texel_lanes(u, theta);
+        let mut out = [Spectrum::ZERO; 16];
+        for (o, (&x, &y)) in out.iter_mut().zip(x.as_ref().iter().zip(y.as_ref())) {
+            *o = self.blend(x, y) * self.scale;
+        }
+        out
+    }
+
+    /// [`Self::eval_pdf`] of `F::WIDTH` directions, bitwise lane by lane as
+    /// [`Self::eval_lanes`]; each lane's density by `pdf_local`.
+    pub fn eval_pdf_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [(Spectrum, f32); 16] {
+        let (d, u, theta) = self.local_lanes(wx, wy, wz);
+        let (x, y) = self.texel_lanes(u, theta);
+        let (d, u, theta) = (d.map(F::to_array), u.to_array(), theta.to_array());
+        let mut out = [(Spectrum::ZERO, 0.0); 16];
+        for (l, o) in out.iter_mut().enumerate().take(F::WIDTH) {
+            let dl = Vec3::new(d[0].as_ref()[l], d[1].as_ref()[l], d[2].as_ref()[l]);
+            let le = self.blend(x.as_ref()[l], y.as_ref()[l]) * self.scale;
+            *o = (le, self.pdf_local(dl, u.as_ref()[l], theta.as_ref()[l]));
+        }
+        out
+    }
+
+    /// The light-space direction d = A⁻¹ w, u = atan2(d.x, −d.z) / 2π and
+    /// θ = acos(d.y) in lanes, as `eval` and `eval_pdf` form them (glam's
+    /// Mat3 · Vec3: x_axis·x + y_axis·y + z_axis·z, left to right).
+    #[inline(always)]
+    fn local_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> ([F; 3], F, F) {
         let m = &self.light_from_world;
         let row = |a: f32, b: f32, c: f32| F::splat(a) * wx + F::splat(b) * wy + F::splat(c) * wz;
         let (dx, dy, dz) = (
@@ -170,17 +198,17 @@ impl EnvMapLight {
             row(m.x_axis.y, m.y_axis.y, m.z_axis.y),
             row(m.x_axis.z, m.y_axis.z, m.z_axis.z),
         );
-        let u = simd::atan2(dx, -dz) * F::splat(INV_2PI);
-        let v = simd::acos(dy) * F::splat(INV_PI);
+        ([dx, dy, dz], simd::atan2(dx, -dz) * F::splat(INV_2PI), simd::acos(dy))
+    }
+
+    /// The texel coordinates of `lookup(u, θ/π)` in lanes.
+    #[inline(always)]
+    fn texel_lanes<F: Float>(&self, u: F, theta: F) -> (F::Array, F::Array) {
+        let v = theta * F::splat(INV_PI);
         // As `lookup`; f32::clamp's NaN passes through minps / maxps too.
         let x = (u - u.floor()) * F::splat(self.width as f32) - F::splat(0.5);
         let y = F::splat(1.0).min(F::splat(0.0).max(v)) * F::splat((self.height - 1) as f32);
-        let (x, y) = (x.to_array(), y.to_array());
-        let mut out = [Spectrum::ZERO; 16];
-        for (o, (&x, &y)) in out.iter_mut().zip(x.as_ref().iter().zip(y.as_ref())) {
-            *o = self.blend(x, y) * self.scale;
-        }
-        out
+        (x.to_array(), y.to_array())
     }
 
     /// Bilinear lookup, texel (i, j) at (u, v) = ((j + ½) / W, i / (H - 1)).
@@ -301,7 +329,8 @@ mod tests {
         assert!((a - b).abs().max_element() <= 2e-5 * b.abs().max_element().max(1.0), "{what}: {a} vs Mitsuba {b}");
     }
 
-    /// `eval_lanes` is `eval` lane by lane, bit for bit, with every lane
+    /// `eval_lanes` is `eval` and `eval_pdf_lanes` is `eval_pdf` lane by
+    /// lane, bit for bit, with every lane
     /// width (f32 and each SIMD instance built): random directions, the
     /// poles, the u = 0/1 seam, axis directions and NaN.
     #[test]
@@ -322,10 +351,14 @@ mod tests {
                             })
                         };
                         let got = light.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
-                        for (g, d) in got.iter().zip(chunk) {
+                        let got_pdf = light.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                        let f = |c: f32| if c.is_nan() { u32::MAX } else { c.to_bits() };
+                        let bits = |v: Vec3| v.to_array().map(f);
+                        for ((g, (gp, p)), d) in got.iter().zip(got_pdf).zip(chunk) {
                             let want = light.eval(*d);
-                            let bits = |v: Vec3| v.to_array().map(|c| if c.is_nan() { u32::MAX } else { c.to_bits() });
                             assert_eq!(bits(*g), bits(want), "{} at {d}: {g} vs {want}", F::NAME);
+                            let (wl, wp) = light.eval_pdf(*d);
+                            assert_eq!((bits(gp), f(p)), (bits(wl), f(wp)), "{} eval_pdf at {d}", F::NAME);
                         }
                     }
                 }

@@ -152,11 +152,13 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         let packets = slots.len().div_ceil(F::WIDTH) as u64;
         tile.stats.rays.packets += packets;
         tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
-        // Escapes into a lone envmap after the camera or a specular bounce:
-        // the environment's radiance in lanes (bitwise `vertex`'s).
+        // Escapes into a lone envmap: its radiance (after the camera or a
+        // specular bounce) or radiance and density (after other bounces, for
+        // the MIS weight) in lanes, bitwise `vertex`'s.
         sky_slots.clear();
-        if let Some(env) = sky {
-            sky_slots.extend((0..slots.len()).filter(|&i| hits[i].is_none() && path.delta_miss_seen(&slots[i].state)));
+        if let Some((env_index, env)) = sky {
+            let seen = |st: &PathState| !st.prev_delta() || path.delta_miss_seen(st);
+            sky_slots.extend((0..slots.len()).filter(|&i| hits[i].is_none() && seen(&slots[i].state)));
             for chunk in sky_slots.chunks(F::WIDTH) {
                 let lane = |c: fn(Vec3) -> f32| {
                     let mut a = F::Array::default();
@@ -166,9 +168,24 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                     }
                     F::from_array(a)
                 };
-                let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
-                for (&i, le) in chunk.iter().zip(le) {
-                    PathIntegrator::add_delta_miss(&mut slots[i].state, Spectrum::ZERO + le);
+                if chunk.iter().all(|&i| slots[i].state.prev_delta()) {
+                    let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                    for (&i, le) in chunk.iter().zip(le) {
+                        PathIntegrator::add_delta_miss(&mut slots[i].state, Spectrum::ZERO + le);
+                    }
+                    continue;
+                }
+                let le_pdf = env.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                for (&i, (le, pdf)) in chunk.iter().zip(le_pdf) {
+                    let st = &mut slots[i].state;
+                    if st.prev_delta() {
+                        PathIntegrator::add_delta_miss(st, Spectrum::ZERO + le);
+                    } else {
+                        let (p_ref, n_ref) = st.prev_vertex();
+                        let mut sum = (Spectrum::ZERO, 0.0);
+                        scene.add_environment(&mut sum, p_ref, n_ref, env_index, (le, pdf));
+                        path.add_mis_miss(st, sum.0, sum.1);
+                    }
                 }
             }
         }
