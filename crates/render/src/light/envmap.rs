@@ -160,7 +160,7 @@ impl EnvMapLight {
     /// [`Self::eval`] of `F::WIDTH` directions (x, y and z lanes), bitwise
     /// lane by lane: the rotation, the inverse trigonometry (the lane forms
     /// of `math::fast`) and the texel coordinates in lanes, the bilinear
-    /// blend of each lane's four texels by [`Self::blend`], as `eval`.
+    /// blend of each lane's four texels by `blend`, as `eval`.
     pub fn eval_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [Spectrum; 16] {
         let (_, u, theta) = self.local_lanes(wx, wy, wz);
         let (x, y) = self.texel_lanes(u, theta);
