@@ -451,20 +451,14 @@ mod tests {
     #[test]
     fn pinhole_lanes_are_the_scalar_rays_bitwise() {
         use crate::simd::check::{each_simd, Visit};
+        use crate::simd::gather;
         struct V(Vec<PerspectiveCamera>, Vec<Vec2>);
         impl Visit for V {
             fn visit<F: Float>(&mut self) {
                 for c in &self.0 {
                     assert!(c.has_pinhole_lanes());
                     for chunk in self.1.chunks_exact(F::WIDTH) {
-                        let lane = |f: fn(&Vec2) -> f32| {
-                            let mut a = F::Array::default();
-                            for (x, s) in a.as_mut().iter_mut().zip(chunk) {
-                                *x = f(s);
-                            }
-                            F::from_array(a)
-                        };
-                        let rays = c.pinhole_rays(lane(|s| s.x), lane(|s| s.y));
+                        let rays = c.pinhole_rays::<F>(gather(|l| chunk[l].x), gather(|l| chunk[l].y));
                         for (r, s) in rays.iter().zip(chunk) {
                             let want = c.generate_ray_with_aperture(*s, Vec2::splat(0.5));
                             let bits = |r: &Ray| {

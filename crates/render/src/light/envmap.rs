@@ -341,15 +341,7 @@ mod tests {
             fn visit<F: Float>(&mut self) {
                 for light in &self.0 {
                     for chunk in self.1.chunks(F::WIDTH).filter(|c| c.len() == F::WIDTH) {
-                        let lane = |f: fn(&Vec3) -> f32| {
-                            F::from_array({
-                                let mut a = F::Array::default();
-                                for (x, d) in a.as_mut().iter_mut().zip(chunk) {
-                                    *x = f(d);
-                                }
-                                a
-                            })
-                        };
+                        let lane = |f: fn(&Vec3) -> f32| crate::simd::gather::<F>(|l| f(&chunk[l]));
                         let got = light.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
                         let got_pdf = light.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
                         let f = |c: f32| if c.is_nan() { u32::MAX } else { c.to_bits() };

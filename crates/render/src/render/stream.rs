@@ -28,7 +28,7 @@ use crate::geometry::Ray;
 use crate::integrator::path::{PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
-use crate::simd::Float;
+use crate::simd::{gather, Float};
 use glam::{Vec2, Vec3};
 use std::ops::Range;
 
@@ -113,14 +113,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                     let u = rng.next_2d();
                     starts.push((rng, u, job.film_position(p.global, u)));
                 }
-                let lane = |f: fn(&(SampleStream, Vec2, Vec2)) -> f32| {
-                    let mut a = F::Array::default();
-                    for (x, st) in a.as_mut().iter_mut().zip(&starts) {
-                        *x = f(st);
-                    }
-                    F::from_array(a)
-                };
-                let rays = job.camera.pinhole_rays(lane(|s| s.2.x), lane(|s| s.2.y));
+                let rays = job.camera.pinhole_rays::<F>(gather(|l| starts[l].2.x), gather(|l| starts[l].2.y));
                 for ((rng, u, _), ray) in starts.drain(..).zip(rays) {
                     results.push(Sample { u, ray, l: Spectrum::ZERO });
                     if let Some(state) = path.start(&ray) {
@@ -160,14 +153,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             let seen = |st: &PathState| !st.prev_delta() || path.delta_miss_seen(st);
             sky_slots.extend((0..slots.len()).filter(|&i| hits[i].is_none() && seen(&slots[i].state)));
             for chunk in sky_slots.chunks(F::WIDTH) {
-                let lane = |c: fn(Vec3) -> f32| {
-                    let mut a = F::Array::default();
-                    for (j, x) in a.as_mut().iter_mut().enumerate() {
-                        // Short chunks repeat their last direction.
-                        *x = c(slots[chunk[j.min(chunk.len() - 1)]].state.ray.d);
-                    }
-                    F::from_array(a)
-                };
+                // Short chunks repeat their last direction.
+                let d = |l: usize| slots[chunk[l.min(chunk.len() - 1)]].state.ray.d;
+                let lane = |c: fn(Vec3) -> f32| gather::<F>(|l| c(d(l)));
                 if chunk.iter().all(|&i| slots[i].state.prev_delta()) {
                     let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
                     for (&i, le) in chunk.iter().zip(le) {

@@ -54,6 +54,17 @@ pub use funcs::{acos, atan, atan2, cos, erf, erfinv, exp, ln, sin, sin_cos, SIN_
 use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
+/// Lane `l` = `f(l)` for every lane: the inputs of a lane stage gathered
+/// from wherever each lane's path keeps them.
+#[inline(always)]
+pub fn gather<F: Float>(f: impl Fn(usize) -> f32) -> F {
+    let mut a = F::Array::default();
+    for (l, x) in a.as_mut().iter_mut().enumerate() {
+        *x = f(l);
+    }
+    F::from_array(a)
+}
+
 /// Lane-wise booleans, the result of comparisons on [`Float`] and [`Int`].
 pub trait Mask:
     Copy + Debug + BitAnd<Output = Self> + BitOr<Output = Self> + BitXor<Output = Self> + Not<Output = Self>
