@@ -328,6 +328,19 @@ impl RenderJob {
         })
     }
 
+    /// A sample's radiance times its camera weight, counted in the tile's
+    /// statistics; `None` (counted as non-finite) when it is not finite.
+    #[inline]
+    fn weighted(&self, tile: &mut Tile, p: &TilePixel, u: Vec2, l: Spectrum) -> Option<Spectrum> {
+        tile.stats.samples += 1;
+        let l = l * self.camera.ray_weight(self.film_position(p.global, u));
+        if !l.is_finite() {
+            tile.stats.non_finite += 1;
+            return None;
+        }
+        Some(l)
+    }
+
     /// The samples of pixel `p` in sample order (position in the pixel,
     /// radiance), added as [`Self::add_sample`] adds them one by one, for a
     /// tile without AOVs or channels ([`Tile::has_aovs`]): the film's sums get the same
@@ -336,12 +349,8 @@ impl RenderJob {
         debug_assert!(!tile.has_aovs());
         tile.splat_buf.clear();
         for &(u, l) in samples {
-            tile.stats.samples += 1;
-            let l = l * self.camera.ray_weight(self.film_position(p.global, u));
-            if l.is_finite() {
+            if let Some(l) = self.weighted(tile, p, u, l) {
                 tile.splat_buf.push((u, l));
-            } else {
-                tile.stats.non_finite += 1;
             }
         }
         let (x, y) = p.local;
@@ -364,12 +373,7 @@ impl RenderJob {
         l: Spectrum,
         ch: &[f32],
     ) {
-        tile.stats.samples += 1;
-        let l = l * self.camera.ray_weight(self.film_position(p.global, u));
-        if !l.is_finite() {
-            tile.stats.non_finite += 1;
-            return;
-        }
+        let Some(l) = self.weighted(tile, p, u, l) else { return };
         let (gx, gy) = p.global;
         let kinds = tile.aov_values.len() - tile.film.channels.len();
         if kinds < tile.aov_values.len() {
