@@ -62,6 +62,8 @@ pub struct Scene {
     /// ([`Material::reads_uv`] of its material, or an area light with a
     /// textured radiance); hits on the others skip it.
     reads_uv: Vec<bool>,
+    /// Per shape: its reflectance where [`Scene::lane_diffuse`] has one.
+    lane_diffuse: Vec<Option<Spectrum>>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
     pub ray_log: Option<RayLog>,
@@ -136,7 +138,7 @@ impl Scene {
     ) -> Scene {
         assert_eq!(shapes.len(), shape_info.len());
         let env_lights = lights.iter().enumerate().filter(|(_, l)| l.is_environment()).map(|(i, _)| i as u32).collect();
-        let reads_uv = shape_info
+        let reads_uv: Vec<bool> = shape_info
             .iter()
             .map(|info| {
                 let textured =
@@ -145,6 +147,18 @@ impl Scene {
             })
             .collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };
+        let lane_diffuse = shapes
+            .iter()
+            .zip(&shape_info)
+            .zip(&reads_uv)
+            .map(|((shape, info), &uv)| {
+                let flat = matches!(shape, Shape::Mesh(m) | Shape::CulledMesh(m) if m.face_normals || m.mesh.normals.is_empty());
+                match materials.get(info.material as usize) {
+                    Some(Material::Diffuse(d)) if flat && !uv && info.light.is_none() => d.reflectance.constant(),
+                    _ => None,
+                }
+            })
+            .collect();
         Scene {
             shapes,
             shape_info,
@@ -156,6 +170,7 @@ impl Scene {
             accel,
             light_sampler,
             reads_uv,
+            lane_diffuse,
             ray_log: None,
             media: Vec::new(),
             shape_media: Vec::new(),
@@ -227,6 +242,29 @@ impl Scene {
             shape.interaction_with(id, i, ray, t, uv, param)
         } else {
             self.instances[hit.instance as usize].interaction_with(shape, id, i, ray, t, uv, param)
+        }
+    }
+
+    /// The reflectance of shape `shape` when its hits can be shaded in
+    /// lanes (the `path` integrator's lane vertex): a mesh shaded with its
+    /// face normals, not an emitter, whose material is a plain `diffuse`
+    /// of constant reflectance (no texture, mask, bump or two-sided wrapper).
+    #[inline]
+    pub fn lane_diffuse(&self, shape: u32) -> Option<Spectrum> {
+        self.lane_diffuse[shape as usize]
+    }
+
+    /// Light `i` when its samples can be drawn in lanes: an area light of
+    /// constant, non-zero radiance on a mesh; with the mesh, the radiance
+    /// and whether it emits from both sides.
+    #[inline]
+    pub fn lane_area_light(&self, i: usize) -> Option<(&crate::geometry::Mesh, Spectrum, bool)> {
+        match &self.lights[i] {
+            Light::Area(a) => match (&self.shapes[a.shape as usize], a.radiance.constant()) {
+                (Shape::Mesh(m) | Shape::CulledMesh(m), Some(li)) if li != Spectrum::ZERO => Some((m, li, a.two_sided)),
+                _ => None,
+            },
+            _ => None,
         }
     }
 

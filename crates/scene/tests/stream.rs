@@ -18,13 +18,15 @@ fn bits(v: impl IntoIterator<Item = f32>) -> Vec<u32> {
 }
 
 /// Renders `scene` both ways; panics at the first difference. Returns
-/// whether the scene's integrator is `path` (the others render one way).
-fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> bool {
+/// whether the scene's integrator is `path` (the others render one way),
+/// and how many vertices the packets of more than one lane shaded in lanes.
+fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64) {
     let ov = Overrides { spp: Some(spp), ..Default::default() };
     let mut job = load_scene(scene, defines, &ov).unwrap_or_else(|e| panic!("{e}"));
     let layers = FilmLayers { aovs: AovKind::ALL.to_vec(), variance: true, ..Default::default() };
     let name = scene.file_name().unwrap().to_string_lossy();
     let is_path = matches!(job.integrator, penumbra_render::integrator::Integrator::Path(_));
+    let mut lane_vertices = 0;
     for range in [0..spp, 3..spp] {
         let render = |job: &penumbra_render::render::RenderJob| {
             let mut film = Film::with_layers(job.width, job.height, &layers);
@@ -37,6 +39,9 @@ fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> bool {
             job.stream = true;
             job.packet_lanes = lanes;
             let (b, sb) = render(&job);
+            if lanes > 1 {
+                lane_vertices += sb.rays.lane_vertices;
+            }
             let (a, sa, b, sb) = (&a, &sa, &b, &sb);
             let what = format!("{name}, samples {range:?}, packets of {lanes}");
             assert_eq!(
@@ -59,7 +64,7 @@ fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> bool {
             assert!(a.develop().iter().flatten().any(|&c| c > 0.0), "{what}: a black image proves little");
         }
     }
-    is_path
+    (is_path, lane_vertices)
 }
 
 #[test]
@@ -72,16 +77,23 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
     scenes.sort();
     assert!(scenes.len() >= 15, "tests/scenes has {} scenes", scenes.len());
     let res = |n: &str| vec![("res".to_string(), n.to_string())];
-    let mut path_scenes = 0;
+    let (mut path_scenes, mut lane_scenes) = (0, 0);
+    let mut tally = |(is_path, lane_vertices): (bool, u64)| {
+        path_scenes += is_path as usize;
+        lane_scenes += (lane_vertices > 0) as usize;
+    };
     for s in &scenes {
-        path_scenes += check(s, &[], 8) as usize;
+        tally(check(s, &[], 8));
     }
     for s in ["scenes/cornell-box.xml", "scenes/material-showcase.xml"] {
-        path_scenes += check(&root().join(s), &res("48"), 8) as usize;
+        tally(check(&root().join(s), &res("48"), 8));
     }
     eprintln!(
-        "{} scenes, {path_scenes} rendered by `path` both ways (packets of {LANE_WIDTHS:?}): bitwise equal",
+        "{} scenes, {path_scenes} rendered by `path` both ways (packets of {LANE_WIDTHS:?}), \
+         {lane_scenes} with vertices shaded in lanes: bitwise equal",
         scenes.len() + 2
     );
     assert!(path_scenes >= 10);
+    // Diffuse vertices (the Cornell boxes') run in lanes where packets are wider than 1.
+    assert!(LANE_WIDTHS.len() == 1 || lane_scenes >= 3, "{lane_scenes} scenes had lane vertices");
 }

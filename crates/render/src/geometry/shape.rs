@@ -66,6 +66,21 @@ impl Mesh {
         let face_normals = face_normals || normals_are_flat(&mesh);
         Mesh { area_distrib: Distribution1D::new(&areas), mesh, face_normals, rectangle: false }
     }
+    /// A triangle chosen with probability proportional to its area with
+    /// `u`, and `u` rescaled for reuse, as [`Shape::sample_point`] picks it;
+    /// `None` for a mesh without area.
+    #[inline]
+    pub fn pick_triangle(&self, u: f32) -> Option<(usize, f32)> {
+        let (i, _, ux) = self.area_distrib.as_ref()?.sample_discrete(u);
+        Some((i, ux))
+    }
+
+    /// The density per unit area of [`Shape::sample_point`] on this mesh.
+    #[inline]
+    pub fn area_pdf(&self) -> f32 {
+        self.area_distrib.as_ref().map_or(0.0, |d| 1.0 / d.total as f32)
+    }
+
     /// Corner positions of triangle `i`.
     #[inline]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {

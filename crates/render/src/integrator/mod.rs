@@ -68,6 +68,9 @@ pub struct RayStats {
     /// The lanes those packets offered (packets × lane width): the rays
     /// above over these lanes is the lane occupancy.
     pub packet_lanes: u64,
+    /// Path vertices the stream integrator shaded in lanes
+    /// (`PathIntegrator::lane_vertices`); over `rays`, their share.
+    pub lane_vertices: u64,
 }
 
 impl RayStats {
@@ -77,6 +80,7 @@ impl RayStats {
         self.shadow_rays += o.shadow_rays;
         self.packets += o.packets;
         self.packet_lanes += o.packet_lanes;
+        self.lane_vertices += o.lane_vertices;
     }
 }
 

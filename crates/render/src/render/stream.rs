@@ -6,9 +6,11 @@
 //! first rays of a packet are consecutive samples of one pixel and nearly
 //! identical. Each round traces the closest hit of every live path's ray
 //! in packets of up to 16 ([`Accel::intersect_packet`]), runs each path's
-//! vertex ([`PathIntegrator::vertex`]: emission, light sample, BSDF sample,
-//! Russian roulette; scalar code, one path at a time, so every BSDF and
-//! light works), traces the light samples' shadow rays in packets
+//! vertex (emission, light sample, BSDF sample, Russian roulette): diffuse
+//! vertices lit by area lights on meshes in lanes
+//! ([`PathIntegrator::lane_vertices`]), every other one with the scalar
+//! [`PathIntegrator::vertex`], so every BSDF and light works), traces the
+//! light samples' shadow rays in packets
 //! ([`Accel::occluded_packet`]), and refills the slots of paths that ended.
 //!
 //! **Bitwise the scalar loop.** A path's vertices run the same code in the
@@ -25,7 +27,7 @@
 use super::{RenderJob, Tile, TilePixel};
 use crate::accel::Hit;
 use crate::geometry::Ray;
-use crate::integrator::path::{PathIntegrator, PathState};
+use crate::integrator::path::{LaneOutcome, LaneVertex, PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::simd::{gather, Float};
@@ -98,6 +100,10 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     // Escaping rays that see a lone envmap are evaluated in lanes.
     let sky = scene.single_envmap().filter(|_| F::WIDTH > 1);
     let mut sky_slots: Vec<usize> = Vec::with_capacity(POOL);
+    // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`).
+    let vertex_lanes = F::WIDTH > 1;
+    let mut lane_slots: Vec<usize> = Vec::with_capacity(POOL);
+    let mut lane_vertices: Vec<LaneVertex> = Vec::with_capacity(POOL);
     let mut next = 0;
     loop {
         // Refill: the next samples in canonical order take the free slots.
@@ -177,15 +183,26 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                 }
             }
         }
-        // One vertex per path.
+        // One vertex per path: diffuse vertices gathered for lanes, the
+        // others one at a time.
         shadow_slots.clear();
         shadow_rays.clear();
         ended.clear();
+        lane_slots.clear();
+        lane_vertices.clear();
         let mut sky_done = sky_slots.iter().peekable();
         for (i, slot) in slots.iter_mut().enumerate() {
             if sky_done.next_if_eq(&&i).is_some() {
                 ended.push(true);
                 continue;
+            }
+            if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
+                if let Some(v) = path.lane_vertex(scene, &slot.state, h, &mut slot.rng) {
+                    lane_slots.push(i);
+                    lane_vertices.push(v);
+                    ended.push(false);
+                    continue;
+                }
             }
             let ray = slot.state.ray;
             let si = hits[i].map(|h| scene.interaction(&ray, &h));
@@ -197,6 +214,21 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             }
             ended.push(!v.go_on);
         }
+        for (k, chunk) in lane_vertices.chunks(F::WIDTH).enumerate() {
+            let mut out = [LaneOutcome::default(); 16];
+            path.lane_vertices::<F>(chunk, &mut out);
+            for (j, (v, out)) in chunk.iter().zip(&out).enumerate() {
+                let i = lane_slots[k * F::WIDTH + j];
+                let slot = &mut slots[i];
+                let done = path.lane_vertex_done(&mut slot.state, v, out, &mut slot.rng);
+                if let Some(r) = done.shadow {
+                    shadow_slots.push(i);
+                    shadow_rays.push(r);
+                }
+                ended[i] = !done.go_on;
+            }
+        }
+        tile.stats.rays.lane_vertices += lane_vertices.len() as u64;
         // Shadow rays, then each verdict before the path's next vertex.
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
         let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;

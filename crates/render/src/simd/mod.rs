@@ -34,6 +34,7 @@
 
 mod funcs;
 mod scalar;
+mod vec3;
 
 // Documented on x86-64 even where the documentation build lacks the
 // features (rustdoc does not see `target-cpu=native`).
@@ -50,6 +51,7 @@ pub use avx2::{F32x8, I32x8, M32x8};
 #[cfg(all(target_arch = "x86_64", any(doc, target_feature = "avx512f")))]
 pub use avx512::{F32x16, I32x16, M32x16};
 pub use funcs::{acos, atan, atan2, cos, erf, erfinv, exp, ln, sin, sin_cos, SIN_COS_MAX};
+pub use vec3::V3;
 
 use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};

@@ -11,6 +11,10 @@
 //! | mis           | boolean | true: power heuristic; false: the lecture's split, emitted light only through light samples, reflected light only through BSDF samples |
 //! | throughput_threshold | float | 0 (off): stop when max(β) falls below it; biased |
 
+mod lanes;
+
+pub use lanes::{LaneOutcome, LaneVertex};
+
 use super::{RayStats, Termination};
 use crate::geometry::{Ray, SurfaceInteraction};
 use crate::material::Scratch;
@@ -234,15 +238,20 @@ impl PathIntegrator {
         st.prev_delta = bs.delta;
         st.ray = scene.spawn_ray(&si, wi);
         st.depth += 1;
+        Vertex { shadow, go_on: self.roulette(st, rng) }
+    }
 
-        let go_on = match self.term.survive(st.beta, st.eta, st.depth, rng) {
+    /// Russian roulette after a bounce: whether the path goes on (its
+    /// throughput divided by the survival probability).
+    #[inline]
+    fn roulette(&self, st: &mut PathState, rng: &mut SampleStream) -> bool {
+        match self.term.survive(st.beta, st.eta, st.depth, rng) {
             Some(q) => {
                 st.beta /= q;
                 true
             }
             None => false,
-        };
-        Vertex { shadow, go_on }
+        }
     }
 
     /// Whether a path whose ray escapes sees the environment with weight 1:
