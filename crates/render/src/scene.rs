@@ -152,7 +152,11 @@ impl Scene {
             .zip(&shape_info)
             .zip(&reads_uv)
             .map(|((shape, info), &uv)| {
-                let flat = matches!(shape, Shape::Mesh(m) | Shape::CulledMesh(m) if m.face_normals || m.mesh.normals.is_empty());
+                let flat = match shape {
+                    Shape::Mesh(m) | Shape::CulledMesh(m) => m.face_normals || m.mesh.normals.is_empty(),
+                    Shape::Sphere(_) | Shape::Disk(_) => true,
+                    _ => false,
+                };
                 match materials.get(info.material as usize) {
                     Some(Material::Diffuse(d)) if flat && !uv && info.light.is_none() => d.reflectance.constant(),
                     _ => None,
@@ -247,7 +251,7 @@ impl Scene {
 
     /// The reflectance of shape `shape` when its hits can be shaded in
     /// lanes (the `path` integrator's lane vertex): a mesh shaded with its
-    /// face normals, not an emitter, whose material is a plain `diffuse`
+    /// face normals, a sphere or a disk, not an emitter, whose material is a plain `diffuse`
     /// of constant reflectance (no texture, mask, bump or two-sided wrapper).
     #[inline]
     pub fn lane_diffuse(&self, shape: u32) -> Option<Spectrum> {

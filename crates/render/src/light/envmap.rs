@@ -30,7 +30,7 @@
 use super::LightSample;
 use crate::math::{fast, luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
 use crate::sampling::Distribution2D;
-use crate::simd::{self, Float};
+use crate::simd::{self, Float, V3};
 use glam::{Vec2, Vec3};
 
 /// Mitsuba's `envmap` emitter (mapping and sampling in the module docs).
@@ -238,21 +238,40 @@ impl EnvMapLight {
     /// Importance-samples a direction by luminance (see the module docs).
     /// `None` for a black map.
     pub fn sample_li(&self, u2: Vec2) -> Option<LightSample> {
+        let (x, cos_t, pdf_row) = self.sample_cell(u2)?;
+        let (w, pdf) = self.sample_direction::<f32>(x, cos_t, pdf_row);
+        let wi = Vec3::new(w.x, w.y, w.z);
+        Some(LightSample { wi, dist: f32::INFINITY, pdf, li: self.eval(wi), delta: false })
+    }
+
+    /// The table lookups of [`Self::sample_li`]: the sampled point's u, its
+    /// cos θ (interpolated between the row's edges) and its density over
+    /// the square times the row's 1 / solid angle; `None` for a black map.
+    #[inline]
+    pub fn sample_cell(&self, u2: Vec2) -> Option<(f32, f32, f32)> {
         let (p, pdf_uv) = self.distribution.as_ref()?.sample(u2);
         let rows = self.height - 1;
         let y = p.y * rows as f32;
         let r = fast::index(y).min(rows - 1);
         let (c0, c1) = (self.cos_theta[r], self.cos_theta[r + 1]);
         let cos_t = (c0 + (y - r as f32) * (c1 - c0)).clamp(-1.0, 1.0);
-        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let (sin_p, cos_p) = crate::simd::sin_cos((p.x + 0.5 / self.width as f32) * (2.0 * PI));
-        let w = self.world_from_light * Vec3::new(sin_p * sin_t, cos_t, -cos_p * sin_t);
+        Some((p.x, cos_t, pdf_uv * self.inv_row_solid_angle[r]))
+    }
+
+    /// The arithmetic of [`Self::sample_li`] after [`Self::sample_cell`],
+    /// for any number of lanes: the unit direction and its solid-angle density.
+    #[inline(always)]
+    pub fn sample_direction<F: Float>(&self, x: F, cos_t: F, pdf_row: F) -> (V3<F>, F) {
+        let sin_t = (F::splat(1.0) - cos_t * cos_t).max(F::splat(0.0)).sqrt();
+        let (sin_p, cos_p) = simd::sin_cos((x + F::splat(0.5 / self.width as f32)) * F::splat(2.0 * PI));
+        let m = &self.world_from_light;
+        let (ax, ay, az) = (V3::splat(m.x_axis), V3::splat(m.y_axis), V3::splat(m.z_axis));
+        // glam's Mat3 * Vec3: (x_axis x + y_axis y) + z_axis z.
+        let w = ax * (sin_p * sin_t) + ay * cos_t + az * (-cos_p * sin_t);
         let len = w.length();
-        let wi = w / len;
         // Times |A d|³ / |det A|, the solid-angle Jacobian of d ↦ A d / |A d|
         // (1 for a rotation).
-        let pdf = pdf_uv * self.inv_row_solid_angle[r] * (len * len * len / self.abs_det);
-        Some(LightSample { wi, dist: f32::INFINITY, pdf, li: self.eval(wi), delta: false })
+        (w / len, pdf_row * (len * len * len / F::splat(self.abs_det)))
     }
 
     /// `(eval(wi), pdf(wi))`, sharing the change of frame and the atan2 /

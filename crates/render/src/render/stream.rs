@@ -27,7 +27,7 @@
 use super::{RenderJob, Tile, TilePixel};
 use crate::accel::Hit;
 use crate::geometry::Ray;
-use crate::integrator::path::{LaneOutcome, LaneVertex, PathIntegrator, PathState};
+use crate::integrator::path::{LaneKind, LaneOutcome, LaneVertex, PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::simd::{gather, Float};
@@ -102,8 +102,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     let mut sky_slots: Vec<usize> = Vec::with_capacity(POOL);
     // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`).
     let vertex_lanes = F::WIDTH > 1;
-    let mut lane_slots: Vec<usize> = Vec::with_capacity(POOL);
-    let mut lane_vertices: Vec<LaneVertex> = Vec::with_capacity(POOL);
+    let env = scene.single_envmap();
+    let mut lane_bins: [Vec<(usize, LaneVertex)>; LaneKind::COUNT] = Default::default();
+    let mut lane_vertices: Vec<LaneVertex> = Vec::with_capacity(F::WIDTH);
     let mut next = 0;
     loop {
         // Refill: the next samples in canonical order take the free slots.
@@ -188,8 +189,6 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         shadow_slots.clear();
         shadow_rays.clear();
         ended.clear();
-        lane_slots.clear();
-        lane_vertices.clear();
         let mut sky_done = sky_slots.iter().peekable();
         for (i, slot) in slots.iter_mut().enumerate() {
             if sky_done.next_if_eq(&&i).is_some() {
@@ -197,9 +196,8 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                 continue;
             }
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                if let Some(v) = path.lane_vertex(scene, &slot.state, h, &mut slot.rng) {
-                    lane_slots.push(i);
-                    lane_vertices.push(v);
+                if let Some(v) = path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng) {
+                    lane_bins[PathIntegrator::lane_kind(&v).index()].push((i, v));
                     ended.push(false);
                     continue;
                 }
@@ -214,21 +212,25 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             }
             ended.push(!v.go_on);
         }
-        for (k, chunk) in lane_vertices.chunks(F::WIDTH).enumerate() {
-            let mut out = [LaneOutcome::default(); 16];
-            path.lane_vertices::<F>(chunk, &mut out);
-            for (j, (v, out)) in chunk.iter().zip(&out).enumerate() {
-                let i = lane_slots[k * F::WIDTH + j];
-                let slot = &mut slots[i];
-                let done = path.lane_vertex_done(&mut slot.state, v, out, &mut slot.rng);
-                if let Some(r) = done.shadow {
-                    shadow_slots.push(i);
-                    shadow_rays.push(r);
+        for bin in &mut lane_bins {
+            for chunk in bin.chunks(F::WIDTH) {
+                let mut out = [LaneOutcome::default(); 16];
+                lane_vertices.clear();
+                lane_vertices.extend(chunk.iter().map(|(_, v)| *v));
+                path.lane_vertices::<F>(env.map(|e| e.1), &lane_vertices, &mut out);
+                for (&(i, ref v), out) in chunk.iter().zip(&out) {
+                    let slot = &mut slots[i];
+                    let done = path.lane_vertex_done(&mut slot.state, v, out, &mut slot.rng);
+                    if let Some(r) = done.shadow {
+                        shadow_slots.push(i);
+                        shadow_rays.push(r);
+                    }
+                    ended[i] = !done.go_on;
                 }
-                ended[i] = !done.go_on;
             }
+            tile.stats.rays.lane_vertices += bin.len() as u64;
+            bin.clear();
         }
-        tile.stats.rays.lane_vertices += lane_vertices.len() as u64;
         // Shadow rays, then each verdict before the path's next vertex.
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
         let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;

@@ -13,7 +13,7 @@
 
 mod lanes;
 
-pub use lanes::{LaneOutcome, LaneVertex};
+pub use lanes::{LaneKind, LaneOutcome, LaneVertex};
 
 use super::{RayStats, Termination};
 use crate::geometry::{Ray, SurfaceInteraction};
