@@ -5,7 +5,7 @@ use crate::accel::{Accel, Hit, Instance, Primitive};
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::{Light, LightSample, LightSampler, LightSelection};
-use crate::material::{Material, Scratch};
+use crate::material::{LaneMaterial, Material, Scratch};
 use crate::math::{Spectrum, SHADOW_EPSILON};
 use crate::medium::Medium;
 use glam::{Vec2, Vec3};
@@ -62,8 +62,8 @@ pub struct Scene {
     /// ([`Material::reads_uv`] of its material, or an area light with a
     /// textured radiance); hits on the others skip it.
     reads_uv: Vec<bool>,
-    /// Per shape: its reflectance where [`Scene::lane_diffuse`] has one.
-    lane_diffuse: Vec<Option<Spectrum>>,
+    /// Per shape: [`Scene::lane_material`].
+    lane_material: Vec<Option<LaneMaterial>>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
     pub ray_log: Option<RayLog>,
@@ -147,7 +147,7 @@ impl Scene {
             })
             .collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };
-        let lane_diffuse = shapes
+        let lane_material = shapes
             .iter()
             .zip(&shape_info)
             .zip(&reads_uv)
@@ -157,10 +157,8 @@ impl Scene {
                     Shape::Sphere(_) | Shape::Disk(_) => true,
                     _ => false,
                 };
-                match materials.get(info.material as usize) {
-                    Some(Material::Diffuse(d)) if flat && !uv && info.light.is_none() => d.reflectance.constant(),
-                    _ => None,
-                }
+                let m = materials.get(info.material as usize).filter(|_| flat && !uv && info.light.is_none());
+                m.and_then(Material::lane_material)
             })
             .collect();
         Scene {
@@ -174,7 +172,7 @@ impl Scene {
             accel,
             light_sampler,
             reads_uv,
-            lane_diffuse,
+            lane_material,
             ray_log: None,
             media: Vec::new(),
             shape_media: Vec::new(),
@@ -249,13 +247,13 @@ impl Scene {
         }
     }
 
-    /// The reflectance of shape `shape` when its hits can be shaded in
-    /// lanes (the `path` integrator's lane vertex): a mesh shaded with its
-    /// face normals, a sphere or a disk, not an emitter, whose material is a plain `diffuse`
-    /// of constant reflectance (no texture, mask, bump or two-sided wrapper).
+    /// The material of shape `shape` when its hits can be shaded in lanes
+    /// (the `path` integrator's lane vertex): a mesh shaded with its face
+    /// normals, a sphere or a disk, not an emitter, whose material is a
+    /// [`Material::lane_material`].
     #[inline]
-    pub fn lane_diffuse(&self, shape: u32) -> Option<Spectrum> {
-        self.lane_diffuse[shape as usize]
+    pub fn lane_material(&self, shape: u32) -> Option<LaneMaterial> {
+        self.lane_material[shape as usize]
     }
 
     /// Light `i` when its samples can be drawn in lanes: an area light of

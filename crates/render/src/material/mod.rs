@@ -18,7 +18,7 @@ use crate::bsdf::{
     RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
-use crate::math::Frame;
+use crate::math::{Frame, Spectrum};
 use crate::texture::Texture;
 use glam::Vec3;
 
@@ -132,6 +132,33 @@ fn perturb(si: &mut SurfaceInteraction, rel: Frame) -> Option<Perturbation> {
     Some(Perturbation { n_orig: Vec3::new(rel.s.z, rel.t.z, rel.n.z), alpha2: (0.125 * tan2).min(1.0) })
 }
 
+/// A material of [`Material::lane_material`], with its constant parameters
+/// (those of [`crate::bsdf::Diffuse`], [`crate::bsdf::Conductor`] and
+/// [`crate::bsdf::Dielectric`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LaneMaterial {
+    /// Lambertian: the reflectance.
+    Diffuse(Spectrum),
+    /// A smooth conductor.
+    Conductor {
+        /// Real part of the relative complex IOR.
+        eta: Spectrum,
+        /// Its imaginary part.
+        k: Spectrum,
+        /// Multiplier of the Fresnel reflectance.
+        specular_reflectance: Spectrum,
+    },
+    /// A smooth dielectric.
+    Dielectric {
+        /// Relative IOR.
+        eta: f32,
+        /// Multiplier of the Fresnel reflectance.
+        specular_reflectance: Spectrum,
+        /// Multiplier of the Fresnel transmittance.
+        specular_transmittance: Spectrum,
+    },
+}
+
 impl Material {
     /// The BSDF at a hit. Wrappers may replace `si.sh_frame` (a flipped
     /// frame on the back of `twosided`, a perturbed one for normal and
@@ -204,6 +231,26 @@ impl Material {
                 }
             };
             return Bsdf { kind, opacity, perturbation };
+        }
+    }
+
+    /// The material as the `path` integrator's lane vertex shades it: a
+    /// plain `diffuse`, `conductor` or `dielectric` whose parameters are
+    /// constants (no texture, mask, bump, normal map or two-sided wrapper).
+    pub fn lane_material(&self) -> Option<LaneMaterial> {
+        match self {
+            Material::Diffuse(d) => Some(LaneMaterial::Diffuse(d.reflectance.constant()?)),
+            Material::Conductor(c) => Some(LaneMaterial::Conductor {
+                eta: c.eta.constant()?,
+                k: c.k.constant()?,
+                specular_reflectance: c.specular_reflectance.constant()?,
+            }),
+            Material::Dielectric(d) => Some(LaneMaterial::Dielectric {
+                eta: d.eta,
+                specular_reflectance: d.specular_reflectance.constant()?,
+                specular_transmittance: d.specular_transmittance.constant()?,
+            }),
+            _ => None,
         }
     }
 

@@ -218,9 +218,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                 lane_vertices.clear();
                 lane_vertices.extend(chunk.iter().map(|(_, v)| *v));
                 path.lane_vertices::<F>(env.map(|e| e.1), &lane_vertices, &mut out);
-                for (&(i, ref v), out) in chunk.iter().zip(&out) {
+                for (&(i, _), out) in chunk.iter().zip(&out) {
                     let slot = &mut slots[i];
-                    let done = path.lane_vertex_done(&mut slot.state, v, out, &mut slot.rng);
+                    let done = path.lane_vertex_done(&mut slot.state, out, &mut slot.rng);
                     if let Some(r) = done.shadow {
                         shadow_slots.push(i);
                         shadow_rays.push(r);

@@ -1,10 +1,11 @@
-//! The `path` integrator's vertex in lanes for the commonest vertex: a hit
-//! with a plain `diffuse` material on a flat-shaded mesh, a sphere or a disk
-//! ([`Scene::lane_diffuse`]), lit by an area light on a mesh
+//! The `path` integrator's vertex in lanes for the commonest vertices: a
+//! hit on a flat-shaded mesh, a sphere or a disk with a plain `diffuse`,
+//! `conductor` or `dielectric` material of constant parameters
+//! ([`Scene::lane_material`]); a diffuse one lit by an area light on a mesh
 //! ([`Scene::lane_area_light`]) or by the scene's one environment map. A
 //! stream gathers such vertices of many paths, bins them by [`LaneKind`]
-//! (shape and light) and runs each bin [`Float::WIDTH`] at a time; every
-//! other vertex runs [`PathIntegrator::vertex`].
+//! (shape, material and light) and runs each bin [`Float::WIDTH`] at a
+//! time; every other vertex runs [`PathIntegrator::vertex`].
 //!
 //! **Bitwise [`PathIntegrator::vertex`].** The random numbers are drawn per
 //! path in the scalar order ([`PathIntegrator::lane_vertex`] draws the light
@@ -19,36 +20,42 @@
 //! `AreaLight::sample_li`) or the environment's direction
 //! ([`EnvMapLight::sample_direction`], the code of its `sample_li`), the Lambertian value and
 //! density with the power heuristic, the shadow ray (`Scene::shadow_ray`)
-//! and the cosine-weighted sample (`warp::sample_cosine_hemisphere`) with
-//! the next ray (`Scene::spawn_ray`).
+//! and the cosine-weighted sample (`warp::sample_cosine_hemisphere`); the
+//! smooth conductor's and dielectric's Fresnel terms and mirror or
+//! refracted directions (`fresnel_conductor`, `fresnel_dielectric`); the
+//! next ray (`Scene::spawn_ray`).
 
 use super::{PathIntegrator, PathState, Vertex};
 use crate::accel::Hit;
 use crate::geometry::{Ray, Shape};
 use crate::light::{EnvMapLight, LightSelection};
+use crate::material::LaneMaterial;
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
 use crate::simd::{gather, sin_cos, Float, Mask, V3};
 use glam::{Vec2, Vec3};
 
-/// The shape and light of a lane vertex: vertices of one kind run together.
+/// The shape, material and light of a lane vertex: vertices of one kind
+/// run together.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LaneKind {
     /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk.
     shape: u8,
-    /// 0: an area light on a mesh, 1: the environment map.
-    light: u8,
+    /// 0: diffuse lit by an area light on a mesh, 1: diffuse lit by the
+    /// environment map, 2: a smooth conductor, 3: a smooth dielectric (no
+    /// light sample).
+    bsdf: u8,
 }
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 6;
+    pub const COUNT: usize = 12;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        (self.shape * 2 + self.light) as usize
+        (self.shape * 4 + self.bsdf) as usize
     }
 }
 
@@ -67,8 +74,11 @@ pub struct LaneVertex {
     b: Vec2,
     radius: f32,
     flip: bool,
-    /// The reflectance there.
-    reflectance: Spectrum,
+    /// The material's constants: diffuse: the reflectance; conductor: η,
+    /// k and the specular reflectance; dielectric: the specular reflectance
+    /// and transmittance, and η in `eta`.
+    mat: [Spectrum; 3],
+    eta: f32,
     /// The path's throughput.
     beta: Spectrum,
     /// An area light: its picked triangle's corners, (area density,
@@ -82,7 +92,8 @@ pub struct LaneVertex {
     li: Spectrum,
     two_sided: bool,
     u_light: Vec2,
-    /// The BSDF sample's 2D number.
+    /// The BSDF sample's numbers.
+    u_bsdf1: f32,
     u_bsdf: Vec2,
 }
 
@@ -91,9 +102,22 @@ pub struct LaneVertex {
 pub struct LaneOutcome {
     /// The light sample's contribution if unblocked, and its shadow ray.
     shadow: Option<(Spectrum, Ray)>,
-    /// The BSDF sample: the next ray, the vertex's point and normal, and
-    /// the sample's density; `None` when sampling failed (the path ends).
-    next: Option<(Ray, Vec3, Vec3, f32)>,
+    /// The BSDF sample: the next ray, the vertex's point and normal, the
+    /// sample's density, weight and relative IOR, and whether it is
+    /// specular; `None` when sampling failed (the path ends).
+    next: Option<LaneSample>,
+}
+
+/// A BSDF sample of [`LaneOutcome`].
+#[derive(Debug, Clone, Copy)]
+struct LaneSample {
+    ray: Ray,
+    p: Vec3,
+    n: Vec3,
+    pdf: f32,
+    weight: Spectrum,
+    eta: f32,
+    delta: bool,
 }
 
 impl LaneOutcome {
@@ -149,14 +173,81 @@ fn transform_xy0<F: Float>(c: [V3<F>; 4], x: F, y: F, point: bool) -> V3<F> {
     }
 }
 
+/// Lane `l` set where `f(l)` holds.
+#[inline(always)]
+fn gather_mask<F: Float>(f: impl Fn(usize) -> bool) -> F::Mask {
+    gather::<F>(|l| if f(l) { 1.0 } else { 0.0 }).cmp_eq(F::splat(1.0))
+}
+
+/// `fresnel_conductor_1` in lanes, for one channel.
+#[inline(always)]
+fn fresnel_conductor<F: Float>(cos_i: F, eta_r: F, eta_i: F) -> F {
+    let (zero, half) = (F::splat(0.0), F::splat(0.5));
+    let c2 = cos_i * cos_i;
+    let s2 = F::splat(1.0) - c2;
+    let s4 = s2 * s2;
+    let temp1 = eta_r * eta_r - eta_i * eta_i - s2;
+    let a2pb2 = (temp1 * temp1 + F::splat(4.0) * eta_i * eta_i * eta_r * eta_r).max(zero).sqrt();
+    let a = (half * (a2pb2 + temp1)).max(zero).sqrt();
+    let term1 = a2pb2 + c2;
+    let term2 = F::splat(2.0) * cos_i * a;
+    let r_s = (term1 - term2) / (term1 + term2);
+    let term3 = a2pb2 * c2 + s4;
+    let term4 = term2 * s2;
+    let r_p = r_s * (term3 - term4) / (term3 + term4);
+    half * (r_s + r_p)
+}
+
+/// `fresnel_dielectric` in lanes: (R, cos θ_t signed, η_it, η_ti).
+#[inline(always)]
+fn fresnel_dielectric<F: Float>(cos_i: F, eta: F) -> (F, F, F, F) {
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
+    let outside = cos_i.cmp_ge(zero);
+    let inv = one / eta;
+    let (eta_it, eta_ti) = (F::select(outside, eta, inv), F::select(outside, inv, eta));
+    let cos_t_sqr = (-(-cos_i).mul_add(cos_i, one)).mul_add(eta_ti * eta_ti, one);
+    let ci = cos_i.abs();
+    let ct = cos_t_sqr.max(zero).sqrt();
+    let a_s = (eta_it * ct - ci) / (eta_it * ct + ci);
+    let a_p = (eta_it * ci - ct) / (eta_it * ci + ct);
+    let r = F::splat(0.5) * (a_s * a_s + a_p * a_p);
+    let r = F::select(eta.cmp_eq(one), zero, F::select(ci.cmp_eq(zero), one, r));
+    (r, F::select(outside, -ct, ct), eta_it, eta_ti)
+}
+
+/// The hit of a lane vertex: point, geometric normal, shading frame (s, t;
+/// its normal is the geometric one) and the outgoing direction in it.
+struct LaneHit<F> {
+    p: V3<F>,
+    n: V3<F>,
+    fs: V3<F>,
+    ft: V3<F>,
+    wo: V3<F>,
+}
+
+impl<F: Float> LaneHit<F> {
+    /// A world direction in the shading frame (`Frame::to_local`).
+    #[inline(always)]
+    fn to_local(&self, w: V3<F>) -> V3<F> {
+        V3::new(w.dot(self.fs), w.dot(self.ft), w.dot(self.n))
+    }
+
+    /// A shading-frame direction in the world (`Frame::to_world`).
+    #[inline(always)]
+    fn to_world(&self, w: V3<F>) -> V3<F> {
+        self.fs * w.x + self.ft * w.y + self.n * w.z
+    }
+}
+
 impl PathIntegrator {
     /// The vertex of `st` at `hit` (the closest hit of `st.ray`) prepared
     /// for [`Self::lane_vertices`] when it qualifies: a non-instanced hit on
-    /// a [`Scene::lane_diffuse`] shape, before the last segment, with a light
-    /// picked (uniformly or by power) that is a [`Scene::lane_area_light`] or
-    /// `env`, the scene's one environment map ([`Scene::single_envmap`]).
-    /// Its light and BSDF random numbers are drawn here, as `vertex` draws
-    /// them. `None`, with `rng` as it was, otherwise: run [`Self::vertex`].
+    /// a [`Scene::lane_material`] shape, before the last segment; for a
+    /// diffuse one, with a light picked (uniformly or by power) that is a
+    /// [`Scene::lane_area_light`] or `env`, the scene's one environment map
+    /// ([`Scene::single_envmap`]). Its light and BSDF random numbers are
+    /// drawn here, as `vertex` draws them. `None`, with `rng` as it was,
+    /// otherwise: run [`Self::vertex`].
     pub fn lane_vertex(
         &self,
         scene: &Scene,
@@ -168,19 +259,29 @@ impl PathIntegrator {
         if hit.instance != Hit::NOT_INSTANCED || st.depth + 1 >= self.term.max_depth {
             return None;
         }
-        let reflectance = scene.lane_diffuse(hit.shape)?;
-        // The light BVH's choice depends on the point, found in lanes.
-        if scene.light_sampler().kind() == LightSelection::Bvh {
-            return None;
-        }
+        let material = scene.lane_material(hit.shape)?;
+        let (bsdf, mat, eta) = match material {
+            LaneMaterial::Diffuse(r) => {
+                // The light BVH's choice depends on the point, found in lanes.
+                if scene.light_sampler().kind() == LightSelection::Bvh {
+                    return None;
+                }
+                (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0)
+            }
+            LaneMaterial::Conductor { eta, k, specular_reflectance } => (2, [eta, k, specular_reflectance], 1.0),
+            LaneMaterial::Dielectric { eta, specular_reflectance, specular_transmittance } => {
+                (3, [specular_reflectance, specular_transmittance, Spectrum::ZERO], eta)
+            }
+        };
         let mut v = LaneVertex {
-            kind: LaneKind { shape: 0, light: 0 },
+            kind: LaneKind { shape: 0, bsdf },
             d: st.ray.d,
             geo: [Vec3::ZERO; 5],
             b: hit.uv,
             radius: 0.0,
             flip: false,
-            reflectance,
+            mat,
+            eta,
             beta: st.beta,
             light_tri: [Vec3::ZERO; 3],
             area_pdf: 0.0,
@@ -188,6 +289,7 @@ impl PathIntegrator {
             li: Spectrum::ZERO,
             two_sided: false,
             u_light: Vec2::ZERO,
+            u_bsdf1: 0.0,
             u_bsdf: Vec2::ZERO,
         };
         match &scene.shapes[hit.shape as usize] {
@@ -207,29 +309,31 @@ impl PathIntegrator {
             }
             _ => return None,
         }
-        let saved = rng.clone();
+        let saved = if bsdf == 0 { Some(rng.clone()) } else { None };
         let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
-        // Uniform and power selection ignore the receiver.
-        let picked = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel).and_then(|(i, pmf)| {
-            v.pmf = pmf;
-            if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
-                let (x, cos_t, pdf_row) = e.sample_cell(u_light)?;
-                v.kind.light = 1;
-                (v.u_light, v.area_pdf) = (Vec2::new(x, cos_t), pdf_row);
-                return Some(());
+        if let Some(saved) = saved {
+            // Uniform and power selection ignore the receiver.
+            let picked = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel).and_then(|(i, pmf)| {
+                v.pmf = pmf;
+                if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
+                    let (x, cos_t, pdf_row) = e.sample_cell(u_light)?;
+                    v.kind.bsdf = 1;
+                    (v.u_light, v.area_pdf) = (Vec2::new(x, cos_t), pdf_row);
+                    return Some(());
+                }
+                let (mesh, li, two_sided) = scene.lane_area_light(i)?;
+                let (t, ux) = mesh.pick_triangle(u_light.x)?;
+                v.light_tri = mesh.vertices(t);
+                (v.area_pdf, v.li, v.two_sided, v.u_light) = (mesh.area_pdf(), li, two_sided, Vec2::new(ux, u_light.y));
+                Some(())
+            });
+            if picked.is_none() {
+                *rng = saved;
+                return None;
             }
-            let (mesh, li, two_sided) = scene.lane_area_light(i)?;
-            let (t, ux) = mesh.pick_triangle(u_light.x)?;
-            v.light_tri = mesh.vertices(t);
-            (v.area_pdf, v.li, v.two_sided, v.u_light) = (mesh.area_pdf(), li, two_sided, Vec2::new(ux, u_light.y));
-            Some(())
-        });
-        if picked.is_none() {
-            *rng = saved;
-            return None;
         }
-        // `vertex` draws the BSDF's 1D number too; a diffuse sample ignores it.
-        let _ = rng.next_1d();
+        // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
+        v.u_bsdf1 = rng.next_1d();
         v.u_bsdf = rng.next_2d();
         Some(v)
     }
@@ -245,69 +349,35 @@ impl PathIntegrator {
     pub fn lane_vertices<F: Float>(&self, env: Option<&EnvMapLight>, v: &[LaneVertex], out: &mut [LaneOutcome]) {
         let Some(first) = v.first() else { return };
         debug_assert!(v.len() <= F::WIDTH && out.len() >= v.len() && v.iter().all(|w| w.kind == first.kind));
-        match (first.kind.shape, first.kind.light) {
-            (0, 0) => self.kernel::<F, 0, 0>(None, v, out),
-            (1, 0) => self.kernel::<F, 1, 0>(None, v, out),
-            (2, 0) => self.kernel::<F, 2, 0>(None, v, out),
-            (0, _) => self.kernel::<F, 0, 1>(env, v, out),
-            (1, _) => self.kernel::<F, 1, 1>(env, v, out),
-            _ => self.kernel::<F, 2, 1>(env, v, out),
+        match (first.kind.shape, first.kind.bsdf) {
+            (0, 0) => self.diffuse::<F, 0, 0>(None, v, out),
+            (1, 0) => self.diffuse::<F, 1, 0>(None, v, out),
+            (2, 0) => self.diffuse::<F, 2, 0>(None, v, out),
+            (0, 1) => self.diffuse::<F, 0, 1>(env, v, out),
+            (1, 1) => self.diffuse::<F, 1, 1>(env, v, out),
+            (2, 1) => self.diffuse::<F, 2, 1>(env, v, out),
+            (0, b) => specular::<F, 0>(b == 3, v, out),
+            (1, b) => specular::<F, 1>(b == 3, v, out),
+            (_, b) => specular::<F, 2>(b == 3, v, out),
         }
     }
 
-    /// [`Self::lane_vertices`] for shape kind `S` and light kind `L`.
+    /// [`Self::lane_vertices`] for a diffuse vertex on shape kind `S` lit
+    /// by light kind `L` (0: an area light, 1: the environment map).
     #[inline(always)]
-    fn kernel<F: Float, const S: u8, const L: u8>(
+    fn diffuse<F: Float, const S: u8, const L: u8>(
         &self,
         env: Option<&EnvMapLight>,
         v: &[LaneVertex],
         out: &mut [LaneOutcome],
     ) {
         let n_in = v.len();
-        // Short groups repeat their last vertex.
         let at = |l: usize| &v[l.min(n_in - 1)];
         let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
         let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
-
-        // The hit: point, normal and dp/du as Shape::interaction_with finds
-        // them without the uv parameterisation.
-        let wo = -gv(|v| v.d).normalize();
-        let (p, n, dpdu) = match S {
-            0 => {
-                let (p0, p1, p2) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
-                let (b1, b2) = (g(|v| v.b.x), g(|v| v.b.y));
-                let b0 = one - b1 - b2;
-                let p = p0 * b0 + p1 * b1 + p2 * b2;
-                let (dp0, dp1) = (p1 - p0, p2 - p0);
-                (p, dp0.cross(dp1).normalize(), dp0)
-            }
-            1 => {
-                // Sphere::interaction: the point re-projected onto the surface.
-                let (c, z_axis, o) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
-                let at_t = o + gv(|v| v.d) * g(|v| v.b.x);
-                let n = (at_t - c).normalize();
-                let p = c + n * g(|v| v.radius);
-                let dpdu = z_axis.cross(n);
-                let flip = g(|v| if v.flip { 1.0 } else { 0.0 }).cmp_eq(one);
-                (p, V3::select(flip, -n, n), dpdu)
-            }
-            _ => {
-                // Disk::interaction: the local (x, y) placed.
-                let c = [gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]), gv(|v| v.geo[3])];
-                let (x, y) = (g(|v| v.b.x), g(|v| v.b.y));
-                (transform_xy0(c, x, y, true), gv(|v| v.geo[4]), transform_xy0(c, x, y, false))
-            }
-        };
-        // The shading frame (frame_from_dpdu, the shading normal being n).
-        let s = dpdu - n * n.dot(dpdu);
-        let len2 = s.dot(s);
-        let s = s / len2.sqrt();
-        let (fs, ft) = frame_from_normal(n);
-        let dpdu_ok = len2.cmp_gt(zero) & finite(len2);
-        let (fs, ft) = (V3::select(dpdu_ok, s, fs), V3::select(dpdu_ok, n.cross(s), ft));
-        let to_local = |w: V3<F>| V3::new(w.dot(fs), w.dot(ft), w.dot(n));
-        let wo = to_local(wo);
+        let h = hit::<F, S>(v);
+        let (p, n) = (h.p, h.n);
 
         // The light sample, its selection included: (direction, distance,
         // density, radiance, whether there is one).
@@ -325,7 +395,7 @@ impl PathIntegrator {
             let dist = d.length();
             let wi = d / dist;
             let n_wi = ln.dot(wi);
-            let two_sided = g(|v| if v.two_sided { 1.0 } else { 0.0 }).cmp_eq(one);
+            let two_sided = gather_mask::<F>(|l| at(l).two_sided);
             let facing = !(n_wi.cmp_ge(zero) & !(two_sided & n_wi.cmp_gt(zero)));
             let sampled =
                 dist2.cmp_ne(zero) & cos.cmp_ne(zero) & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
@@ -337,9 +407,9 @@ impl PathIntegrator {
             (wi, F::splat(f32::INFINITY), pdf * g(|v| v.pmf), V3::gather(|l| li[l]), F::Mask::splat(true))
         };
         // The Lambertian value and density, MIS-weighted.
-        let wi_l = to_local(wi);
-        let front = wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
-        let refl = gv(|v| v.reflectance);
+        let wi_l = h.to_local(wi);
+        let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
+        let refl = gv(|v| v.mat[0]);
         let f = V3::select(front, refl * F::splat(INV_PI), V3::splat(Vec3::ZERO)) * wi_l.z.abs();
         let contributes = sampled & f.ne_zero();
         let w = if self.mis {
@@ -370,56 +440,157 @@ impl PathIntegrator {
         let (dx, dy) = (F::select(centre, zero, r * cos_t), F::select(centre, zero, r * sin));
         let dz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
         let bsdf_pdf = dz.max(zero) * F::splat(INV_PI);
-        let go = !wo.z.cmp_le(zero) & !bsdf_pdf.cmp_le(zero);
-        let wi_next = fs * dx + ft * dy + n * dz;
-        let o_next = offset_origin(p, n, wi_next);
+        let go = !h.wo.z.cmp_le(zero) & !bsdf_pdf.cmp_le(zero);
+        let wi_next = h.to_world(V3::new(dx, dy, dz));
 
-        let (pending, o, shadow_d, p, n, wi_next, o_next) = (
-            pending.to_lanes(),
-            o.to_lanes(),
-            shadow_d.to_lanes(),
-            p.to_lanes(),
-            n.to_lanes(),
-            wi_next.to_lanes(),
-            o_next.to_lanes(),
-        );
-        let (shadow_t, bsdf_pdf) = (shadow_t.to_array(), bsdf_pdf.to_array());
-        let (contributes, go) = (contributes.bitmask(), go.bitmask());
+        let (pending, o, shadow_d) = (pending.to_lanes(), o.to_lanes(), shadow_d.to_lanes());
+        let shadow_t = shadow_t.to_array();
+        let contributes = contributes.bitmask();
         for (l, out) in out.iter_mut().enumerate().take(n_in) {
-            *out = LaneOutcome::NONE;
-            if contributes >> l & 1 != 0 {
-                out.shadow = Some((pending[l], Ray::new(o[l], shadow_d[l], shadow_t.as_ref()[l])));
-            }
-            if go >> l & 1 != 0 {
-                let ray = Ray::new(o_next[l], wi_next[l], f32::INFINITY);
-                out.next = Some((ray, p[l], n[l], bsdf_pdf.as_ref()[l]));
-            }
+            out.shadow =
+                (contributes >> l & 1 != 0).then(|| (pending[l], Ray::new(o[l], shadow_d[l], shadow_t.as_ref()[l])));
         }
+        let weight = |l: usize| v[l].mat[0];
+        next_rays(&h, wi_next, bsdf_pdf, go, weight, |_| 1.0, false, n_in, out);
     }
 
     /// The rest of a lane vertex, one path at a time: its outcome applied
     /// to `st` and Russian roulette, as at the end of [`Self::vertex`].
-    pub fn lane_vertex_done(
-        &self,
-        st: &mut PathState,
-        v: &LaneVertex,
-        out: &LaneOutcome,
-        rng: &mut SampleStream,
-    ) -> Vertex {
+    pub fn lane_vertex_done(&self, st: &mut PathState, out: &LaneOutcome, rng: &mut SampleStream) -> Vertex {
         let shadow = out.shadow.map(|(c, ray)| {
             st.pending = c;
             ray
         });
-        let Some((ray, p, n, pdf)) = out.next else { return Vertex { shadow, go_on: false } };
-        // The sample's weight is the reflectance, its η 1 (η unchanged).
-        st.beta *= v.reflectance;
-        st.prev_p = p;
-        st.prev_n = n;
-        st.prev_bsdf_pdf = pdf;
-        st.prev_delta = false;
-        st.ray = ray;
+        let Some(s) = out.next else { return Vertex { shadow, go_on: false } };
+        st.beta *= s.weight;
+        st.eta *= s.eta;
+        st.prev_p = s.p;
+        st.prev_n = s.n;
+        st.prev_bsdf_pdf = s.pdf;
+        st.prev_delta = s.delta;
+        st.ray = s.ray;
         st.depth += 1;
         Vertex { shadow, go_on: self.roulette(st, rng) }
+    }
+}
+
+/// The hit of lane vertices on shape kind `S` (0: a mesh, 1: a sphere, 2: a
+/// disk): point, normal and dp/du as `Shape::interaction_with` finds them
+/// without the uv parameterisation, and the frame of `frame_from_dpdu`.
+#[inline(always)]
+fn hit<F: Float, const S: u8>(v: &[LaneVertex]) -> LaneHit<F> {
+    let n_in = v.len();
+    // Short groups repeat their last vertex.
+    let at = |l: usize| &v[l.min(n_in - 1)];
+    let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
+    let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
+    let wo = -gv(|v| v.d).normalize();
+    let (p, n, dpdu) = match S {
+        0 => {
+            let (p0, p1, p2) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
+            let (b1, b2) = (g(|v| v.b.x), g(|v| v.b.y));
+            let b0 = one - b1 - b2;
+            let p = p0 * b0 + p1 * b1 + p2 * b2;
+            let (dp0, dp1) = (p1 - p0, p2 - p0);
+            (p, dp0.cross(dp1).normalize(), dp0)
+        }
+        1 => {
+            // Sphere::interaction: the point re-projected onto the surface.
+            let (c, z_axis, o) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
+            let at_t = o + gv(|v| v.d) * g(|v| v.b.x);
+            let n = (at_t - c).normalize();
+            let p = c + n * g(|v| v.radius);
+            let dpdu = z_axis.cross(n);
+            (p, V3::select(gather_mask::<F>(|l| at(l).flip), -n, n), dpdu)
+        }
+        _ => {
+            // Disk::interaction: the local (x, y) placed.
+            let c = [gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]), gv(|v| v.geo[3])];
+            let (x, y) = (g(|v| v.b.x), g(|v| v.b.y));
+            (transform_xy0(c, x, y, true), gv(|v| v.geo[4]), transform_xy0(c, x, y, false))
+        }
+    };
+    // The shading frame (frame_from_dpdu, the shading normal being n).
+    let s = dpdu - n * n.dot(dpdu);
+    let len2 = s.dot(s);
+    let s = s / len2.sqrt();
+    let (fs, ft) = frame_from_normal(n);
+    let dpdu_ok = len2.cmp_gt(zero) & finite(len2);
+    let (fs, ft) = (V3::select(dpdu_ok, s, fs), V3::select(dpdu_ok, n.cross(s), ft));
+    let mut h = LaneHit { p, n, fs, ft, wo };
+    h.wo = h.to_local(wo);
+    h
+}
+
+/// Lane vertices with a smooth conductor (`dielectric` false) or
+/// dielectric on shape kind `S`: `Conductor::sample` or
+/// `Dielectric::sample` and the next ray; no light sample.
+#[inline(always)]
+fn specular<F: Float, const S: u8>(dielectric: bool, v: &[LaneVertex], out: &mut [LaneOutcome]) {
+    let n_in = v.len();
+    let at = |l: usize| &v[l.min(n_in - 1)];
+    let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
+    let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
+    let h = hit::<F, S>(v);
+    let wo = h.wo;
+    let reflected = V3::new(-wo.x, -wo.y, wo.z);
+    for out in out.iter_mut().take(n_in) {
+        out.shadow = None;
+    }
+    if !dielectric {
+        let (eta, k) = (gv(|v| v.mat[0]), gv(|v| v.mat[1]));
+        let f = V3::new(
+            fresnel_conductor(wo.z, eta.x, k.x),
+            fresnel_conductor(wo.z, eta.y, k.y),
+            fresnel_conductor(wo.z, eta.z, k.z),
+        );
+        let weight = gv(|v| v.mat[2]).mul_elem(f).to_lanes();
+        let go = !wo.z.cmp_le(zero);
+        next_rays(&h, h.to_world(reflected), one, go, |l| weight[l], |_| 1.0, true, n_in, out);
+        return;
+    }
+    let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, g(|v| v.eta));
+    let reflect = g(|v| v.u_bsdf1).cmp_le(r);
+    let refracted = V3::new(-eta_ti * wo.x, -eta_ti * wo.y, cos_t);
+    let wi = V3::select(reflect, reflected, refracted);
+    let pdf = F::select(reflect, r, one - r);
+    let t = gv(|v| v.mat[1]) * (eta_ti * eta_ti);
+    let weight = V3::select(reflect, gv(|v| v.mat[0]), t).to_lanes();
+    let eta = F::select(reflect, one, eta_it).to_array();
+    next_rays(&h, h.to_world(wi), pdf, F::Mask::splat(true), |l| weight[l], |l| eta.as_ref()[l], true, n_in, out);
+}
+
+/// The BSDF samples of lane vertices: where `go` holds, the ray leaving
+/// the hit along the world direction `wi` (`Scene::spawn_ray`) with its
+/// density, weight, relative IOR and specularity; elsewhere none.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn next_rays<F: Float>(
+    h: &LaneHit<F>,
+    wi: V3<F>,
+    pdf: F,
+    go: F::Mask,
+    weight: impl Fn(usize) -> Spectrum,
+    eta: impl Fn(usize) -> f32,
+    delta: bool,
+    n_in: usize,
+    out: &mut [LaneOutcome],
+) {
+    let o = offset_origin(h.p, h.n, wi);
+    let (o, wi, p, n, pdf) = (o.to_lanes(), wi.to_lanes(), h.p.to_lanes(), h.n.to_lanes(), pdf.to_array());
+    let go = go.bitmask();
+    for (l, out) in out.iter_mut().enumerate().take(n_in) {
+        out.next = (go >> l & 1 != 0).then(|| LaneSample {
+            ray: Ray::new(o[l], wi[l], f32::INFINITY),
+            p: p[l],
+            n: n[l],
+            pdf: pdf.as_ref()[l],
+            weight: weight(l),
+            eta: eta(l),
+            delta,
+        });
     }
 }
 
