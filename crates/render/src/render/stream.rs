@@ -103,8 +103,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`).
     let vertex_lanes = F::WIDTH > 1;
     let env = scene.single_envmap();
-    let mut lane_bins: [Vec<(usize, LaneVertex)>; LaneKind::COUNT] = Default::default();
-    let mut lane_vertices: Vec<LaneVertex> = Vec::with_capacity(F::WIDTH);
+    let mut lane_all: Vec<LaneVertex> = Vec::with_capacity(POOL);
+    let mut lane_slots: Vec<usize> = Vec::with_capacity(POOL);
+    let mut lane_bins: [Vec<u16>; LaneKind::COUNT] = Default::default();
     let mut next = 0;
     loop {
         // Refill: the next samples in canonical order take the free slots.
@@ -196,11 +197,15 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                 continue;
             }
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                if let Some(v) = path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng) {
-                    lane_bins[PathIntegrator::lane_kind(&v).index()].push((i, v));
+                lane_all.push(LaneVertex::EMPTY);
+                let v = lane_all.last_mut().expect("just pushed");
+                if path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng, v) {
+                    lane_bins[v.kind().index()].push(lane_slots.len() as u16);
+                    lane_slots.push(i);
                     ended.push(false);
                     continue;
                 }
+                lane_all.pop();
             }
             let ray = slot.state.ray;
             let si = hits[i].map(|h| scene.interaction(&ray, &h));
@@ -215,10 +220,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         for bin in &mut lane_bins {
             for chunk in bin.chunks(F::WIDTH) {
                 let mut out = [LaneOutcome::default(); 16];
-                lane_vertices.clear();
-                lane_vertices.extend(chunk.iter().map(|(_, v)| *v));
-                path.lane_vertices::<F>(env.map(|e| e.1), &lane_vertices, &mut out);
-                for (&(i, _), out) in chunk.iter().zip(&out) {
+                path.lane_vertices::<F>(env.map(|e| e.1), &lane_all, chunk, &mut out);
+                for (&j, out) in chunk.iter().zip(&out) {
+                    let i = lane_slots[j as usize];
                     let slot = &mut slots[i];
                     let done = path.lane_vertex_done(&mut slot.state, out, &mut slot.rng);
                     if let Some(r) = done.shadow {
@@ -228,9 +232,11 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                     ended[i] = !done.go_on;
                 }
             }
-            tile.stats.rays.lane_vertices += bin.len() as u64;
             bin.clear();
         }
+        tile.stats.rays.lane_vertices += lane_all.len() as u64;
+        lane_all.clear();
+        lane_slots.clear();
         // Shadow rays, then each verdict before the path's next vertex.
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
         let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;

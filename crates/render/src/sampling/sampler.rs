@@ -156,6 +156,16 @@ impl SampleStream {
     /// The next value in [0, 1), one dimension further.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
+        // The independent sampler, the default, inlined; the others call.
+        if let SamplerKind::Independent = self.sampler.kind {
+            return to_unit_f32(self.next_hash());
+        }
+        self.next_1d_general()
+    }
+
+    /// [`Self::next_1d`] for every sampler.
+    #[inline(never)]
+    fn next_1d_general(&mut self) -> f32 {
         let h = self.next_hash();
         match self.sampler.kind {
             SamplerKind::Independent => to_unit_f32(h),
@@ -242,12 +252,25 @@ impl SampleStream {
     /// (orthogonal takes two dimensions; Sobol' starts on an even one).
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
+        if let SamplerKind::Independent = self.sampler.kind {
+            return self.independent_2d();
+        }
+        self.next_2d_general()
+    }
+
+    /// The independent sampler's next 2D value: two 24-bit floats from one
+    /// 64-bit hash.
+    #[inline(always)]
+    fn independent_2d(&mut self) -> Vec2 {
+        let h = self.next_hash();
+        Vec2::new(to_unit_f32(h), to_unit_f32(h << 24))
+    }
+
+    /// [`Self::next_2d`] for every sampler.
+    #[inline(never)]
+    fn next_2d_general(&mut self) -> Vec2 {
         match self.sampler.kind {
-            SamplerKind::Independent => {
-                let h = self.next_hash();
-                // Two 24-bit floats from one 64-bit hash.
-                Vec2::new(to_unit_f32(h), to_unit_f32(h << 24))
-            }
+            SamplerKind::Independent => self.independent_2d(),
             SamplerKind::Stratified => {
                 let h = self.next_hash();
                 let res = (self.sampler.spp as f32).sqrt() as u32;

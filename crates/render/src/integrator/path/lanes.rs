@@ -97,6 +97,35 @@ pub struct LaneVertex {
     u_bsdf: Vec2,
 }
 
+impl LaneVertex {
+    /// A vertex to fill ([`PathIntegrator::lane_vertex`]).
+    pub const EMPTY: LaneVertex = LaneVertex {
+        kind: LaneKind { shape: 0, bsdf: 0 },
+        d: Vec3::ZERO,
+        geo: [Vec3::ZERO; 5],
+        b: Vec2::ZERO,
+        radius: 0.0,
+        flip: false,
+        mat: [Spectrum::ZERO; 3],
+        eta: 1.0,
+        beta: Spectrum::ZERO,
+        light_tri: [Vec3::ZERO; 3],
+        area_pdf: 0.0,
+        pmf: 0.0,
+        li: Spectrum::ZERO,
+        two_sided: false,
+        u_light: Vec2::ZERO,
+        u_bsdf1: 0.0,
+        u_bsdf: Vec2::ZERO,
+    };
+
+    /// Its kind: [`PathIntegrator::lane_vertices`] takes vertices of one kind.
+    #[inline]
+    pub fn kind(&self) -> LaneKind {
+        self.kind
+    }
+}
+
 /// What the lane kernel found at one vertex.
 #[derive(Debug, Clone, Copy)]
 pub struct LaneOutcome {
@@ -215,6 +244,21 @@ fn fresnel_dielectric<F: Float>(cos_i: F, eta: F) -> (F, F, F, F) {
     (r, F::select(outside, -ct, ct), eta_it, eta_ti)
 }
 
+/// The vertices of a lane group: lane l is `all[idx[l]]`; short groups
+/// repeat their last vertex.
+#[derive(Clone, Copy)]
+struct Lanes<'a> {
+    all: &'a [LaneVertex],
+    idx: &'a [u16],
+}
+
+impl Lanes<'_> {
+    #[inline(always)]
+    fn at(&self, l: usize) -> &LaneVertex {
+        &self.all[self.idx[l.min(self.idx.len() - 1)] as usize]
+    }
+}
+
 /// The hit of a lane vertex: point, geometric normal, shading frame (s, t;
 /// its normal is the geometric one) and the outgoing direction in it.
 struct LaneHit<F> {
@@ -246,8 +290,8 @@ impl PathIntegrator {
     /// diffuse one, with a light picked (uniformly or by power) that is a
     /// [`Scene::lane_area_light`] or `env`, the scene's one environment map
     /// ([`Scene::single_envmap`]). Its light and BSDF random numbers are
-    /// drawn here, as `vertex` draws them. `None`, with `rng` as it was,
-    /// otherwise: run [`Self::vertex`].
+    /// drawn here, as `vertex` draws them, and `v` is filled. False, with
+    /// `rng` as it was, otherwise: run [`Self::vertex`].
     pub fn lane_vertex(
         &self,
         scene: &Scene,
@@ -255,16 +299,17 @@ impl PathIntegrator {
         st: &PathState,
         hit: &Hit,
         rng: &mut SampleStream,
-    ) -> Option<LaneVertex> {
+        v: &mut LaneVertex,
+    ) -> bool {
         if hit.instance != Hit::NOT_INSTANCED || st.depth + 1 >= self.term.max_depth {
-            return None;
+            return false;
         }
-        let material = scene.lane_material(hit.shape)?;
+        let Some(material) = scene.lane_material(hit.shape) else { return false };
         let (bsdf, mat, eta) = match material {
             LaneMaterial::Diffuse(r) => {
                 // The light BVH's choice depends on the point, found in lanes.
                 if scene.light_sampler().kind() == LightSelection::Bvh {
-                    return None;
+                    return false;
                 }
                 (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0)
             }
@@ -273,25 +318,8 @@ impl PathIntegrator {
                 (3, [specular_reflectance, specular_transmittance, Spectrum::ZERO], eta)
             }
         };
-        let mut v = LaneVertex {
-            kind: LaneKind { shape: 0, bsdf },
-            d: st.ray.d,
-            geo: [Vec3::ZERO; 5],
-            b: hit.uv,
-            radius: 0.0,
-            flip: false,
-            mat,
-            eta,
-            beta: st.beta,
-            light_tri: [Vec3::ZERO; 3],
-            area_pdf: 0.0,
-            pmf: 0.0,
-            li: Spectrum::ZERO,
-            two_sided: false,
-            u_light: Vec2::ZERO,
-            u_bsdf1: 0.0,
-            u_bsdf: Vec2::ZERO,
-        };
+        v.kind = LaneKind { shape: 0, bsdf };
+        (v.d, v.b, v.mat, v.eta, v.beta) = (st.ray.d, hit.uv, mat, eta, st.beta);
         match &scene.shapes[hit.shape as usize] {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let [p0, p1, p2] = m.vertices(hit.index as usize);
@@ -307,7 +335,7 @@ impl PathIntegrator {
                 let m = &d.world_from_object;
                 v.geo = [m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate(), m.w_axis.truncate(), d.n];
             }
-            _ => return None,
+            _ => return false,
         }
         let saved = if bsdf == 0 { Some(rng.clone()) } else { None };
         let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
@@ -329,26 +357,30 @@ impl PathIntegrator {
             });
             if picked.is_none() {
                 *rng = saved;
-                return None;
+                return false;
             }
         }
         // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
         v.u_bsdf1 = rng.next_1d();
         v.u_bsdf = rng.next_2d();
-        Some(v)
+        true
     }
 
-    /// The kind of a prepared vertex: [`Self::lane_vertices`] takes vertices of one kind.
-    #[inline]
-    pub fn lane_kind(v: &LaneVertex) -> LaneKind {
-        v.kind
-    }
-
-    /// Runs up to `F::WIDTH` prepared vertices of one [`LaneKind`] at once;
-    /// `out[k]` is the outcome of `v[k]`. `env` as for [`Self::lane_vertex`].
-    pub fn lane_vertices<F: Float>(&self, env: Option<&EnvMapLight>, v: &[LaneVertex], out: &mut [LaneOutcome]) {
-        let Some(first) = v.first() else { return };
-        debug_assert!(v.len() <= F::WIDTH && out.len() >= v.len() && v.iter().all(|w| w.kind == first.kind));
+    /// Runs up to `F::WIDTH` prepared vertices of one [`LaneKind`] at once,
+    /// `all[idx[k]]` for each k; `out[k]` is its outcome. `env` as for
+    /// [`Self::lane_vertex`].
+    pub fn lane_vertices<F: Float>(
+        &self,
+        env: Option<&EnvMapLight>,
+        all: &[LaneVertex],
+        idx: &[u16],
+        out: &mut [LaneOutcome],
+    ) {
+        let Some(&first) = idx.first() else { return };
+        let first = &all[first as usize];
+        debug_assert!(idx.len() <= F::WIDTH && out.len() >= idx.len());
+        debug_assert!(idx.iter().all(|&i| all[i as usize].kind == first.kind));
+        let v = Lanes { all, idx };
         match (first.kind.shape, first.kind.bsdf) {
             (0, 0) => self.diffuse::<F, 0, 0>(None, v, out),
             (1, 0) => self.diffuse::<F, 1, 0>(None, v, out),
@@ -368,11 +400,11 @@ impl PathIntegrator {
     fn diffuse<F: Float, const S: u8, const L: u8>(
         &self,
         env: Option<&EnvMapLight>,
-        v: &[LaneVertex],
+        v: Lanes,
         out: &mut [LaneOutcome],
     ) {
-        let n_in = v.len();
-        let at = |l: usize| &v[l.min(n_in - 1)];
+        let n_in = v.idx.len();
+        let at = |l: usize| v.at(l);
         let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
         let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
@@ -450,7 +482,7 @@ impl PathIntegrator {
             out.shadow =
                 (contributes >> l & 1 != 0).then(|| (pending[l], Ray::new(o[l], shadow_d[l], shadow_t.as_ref()[l])));
         }
-        let weight = |l: usize| v[l].mat[0];
+        let weight = |l: usize| v.at(l).mat[0];
         next_rays(&h, wi_next, bsdf_pdf, go, weight, |_| 1.0, false, n_in, out);
     }
 
@@ -478,10 +510,8 @@ impl PathIntegrator {
 /// disk): point, normal and dp/du as `Shape::interaction_with` finds them
 /// without the uv parameterisation, and the frame of `frame_from_dpdu`.
 #[inline(always)]
-fn hit<F: Float, const S: u8>(v: &[LaneVertex]) -> LaneHit<F> {
-    let n_in = v.len();
-    // Short groups repeat their last vertex.
-    let at = |l: usize| &v[l.min(n_in - 1)];
+fn hit<F: Float, const S: u8>(v: Lanes) -> LaneHit<F> {
+    let at = |l: usize| v.at(l);
     let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
     let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
     let (zero, one) = (F::splat(0.0), F::splat(1.0));
@@ -527,9 +557,9 @@ fn hit<F: Float, const S: u8>(v: &[LaneVertex]) -> LaneHit<F> {
 /// dielectric on shape kind `S`: `Conductor::sample` or
 /// `Dielectric::sample` and the next ray; no light sample.
 #[inline(always)]
-fn specular<F: Float, const S: u8>(dielectric: bool, v: &[LaneVertex], out: &mut [LaneOutcome]) {
-    let n_in = v.len();
-    let at = |l: usize| &v[l.min(n_in - 1)];
+fn specular<F: Float, const S: u8>(dielectric: bool, v: Lanes, out: &mut [LaneOutcome]) {
+    let n_in = v.idx.len();
+    let at = |l: usize| v.at(l);
     let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
     let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
     let (zero, one) = (F::splat(0.0), F::splat(1.0));
