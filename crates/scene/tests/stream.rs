@@ -97,3 +97,60 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
     // Diffuse vertices (the Cornell boxes') run in lanes where packets are wider than 1.
     assert!(LANE_WIDTHS.len() == 1 || lane_scenes >= 3, "{lane_scenes} scenes had lane vertices");
 }
+
+/// Every kind of lane vertex at once: spheres, rectangles (meshes) and
+/// disks with diffuse, smooth conductor, smooth dielectric and GGX rough
+/// conductor materials, lit by a rectangle area light and an environment map
+/// (each picked half the time), so that every bin of the lane kernels runs
+/// and must match the scalar vertex bit for bit.
+#[test]
+fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
+    let env = root().join("tests/scenes/textures/sunsky.exr");
+    let materials = [
+        r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.5, 0.3"/></bsdf>"#,
+        r#"<bsdf type="conductor"><string name="material" value="Cu"/></bsdf>"#,
+        r#"<bsdf type="dielectric"><float name="int_ior" value="1.5"/></bsdf>"#,
+        r#"<bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/><float name="alpha" value="0.25"/></bsdf>"#,
+    ];
+    let mut shapes = String::new();
+    for (k, m) in materials.iter().enumerate() {
+        let x = k as f32 * 1.1 - 1.65;
+        shapes += &format!(
+            r#"<shape type="sphere"><point name="center" x="{x}" y="0.35" z="0"/><float name="radius" value="0.35"/>{m}</shape>
+            <shape type="rectangle"><transform name="to_world"><scale value="0.4"/><rotate y="1" angle="20"/><translate x="{x}" y="1.1" z="-0.6"/></transform>{m}</shape>
+            <shape type="disk"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="-90"/><translate x="{x}" y="0.001" z="0.9"/></transform>{m}</shape>
+"#
+        );
+    }
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="6"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="50"/>
+        <transform name="to_world"><lookat origin="0, 1.6, 4.5" target="0, 0.5, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/></film>
+    </sensor>
+    <emitter type="envmap"><string name="filename" value="{}"/><float name="scale" value="0.5"/></emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="2.5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="6, 6, 5"/></emitter>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="diffuse"/>
+    </shape>
+    {shapes}
+</scene>"#,
+        env.display()
+    );
+    let dir = std::env::temp_dir().join(format!("penumbra-lane-kinds-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("lane_kinds.xml");
+    std::fs::write(&scene, xml).unwrap();
+    let (is_path, lane_vertices) = check(&scene, &[], 8);
+    std::fs::remove_dir_all(&dir).ok();
+    eprintln!("{lane_vertices} lane vertices");
+    assert!(is_path);
+    assert!(LANE_WIDTHS.len() == 1 || lane_vertices > 10_000, "{lane_vertices} lane vertices");
+}

@@ -13,9 +13,9 @@ pub mod normalmap;
 
 use crate::bsdf::{
     Blend, Bsdf, BsdfKind, BsdfParams, CoatedConductorParams, CoatedDiffuseParams, ConductorParams, DielectricParams,
-    DiffuseParams, DiffuseTransmissionParams, GltfPbrParams, HairParams, MeasuredParams, Nested, PPlasticParams,
-    Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams, RoughDielectricParams,
-    RoughPlasticParams, ThinDielectricParams,
+    DiffuseParams, DiffuseTransmissionParams, GltfPbrParams, HairParams, MeasuredParams, MicrofacetType, Nested,
+    PPlasticParams, Perturbation, PlasticParams, PrincipledParams, PrincipledThinParams, RoughConductorParams,
+    RoughDielectricParams, RoughPlasticParams, ThinDielectricParams,
 };
 use crate::geometry::SurfaceInteraction;
 use crate::math::{Frame, Spectrum};
@@ -133,14 +133,25 @@ fn perturb(si: &mut SurfaceInteraction, rel: Frame) -> Option<Perturbation> {
 }
 
 /// A material of [`Material::lane_material`], with its constant parameters
-/// (those of [`crate::bsdf::Diffuse`], [`crate::bsdf::Conductor`] and
-/// [`crate::bsdf::Dielectric`]).
+/// (those of [`crate::bsdf::Diffuse`], [`crate::bsdf::Conductor`],
+/// [`crate::bsdf::RoughConductor`] and [`crate::bsdf::Dielectric`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LaneMaterial {
     /// Lambertian: the reflectance.
     Diffuse(Spectrum),
     /// A smooth conductor.
     Conductor {
+        /// Real part of the relative complex IOR.
+        eta: Spectrum,
+        /// Its imaginary part.
+        k: Spectrum,
+        /// Multiplier of the Fresnel reflectance.
+        specular_reflectance: Spectrum,
+    },
+    /// An isotropic GGX rough conductor.
+    RoughConductor {
+        /// Roughness α (before `Microfacet`'s floor of 1e-4).
+        alpha: f32,
         /// Real part of the relative complex IOR.
         eta: Spectrum,
         /// Its imaginary part.
@@ -235,8 +246,9 @@ impl Material {
     }
 
     /// The material as the `path` integrator's lane vertex shades it: a
-    /// plain `diffuse`, `conductor` or `dielectric` whose parameters are
-    /// constants (no texture, mask, bump, normal map or two-sided wrapper).
+    /// plain `diffuse`, `conductor`, isotropic GGX `roughconductor` or
+    /// `dielectric` whose parameters are constants (no texture, mask, bump,
+    /// normal map or two-sided wrapper).
     pub fn lane_material(&self) -> Option<LaneMaterial> {
         match self {
             Material::Diffuse(d) => Some(LaneMaterial::Diffuse(d.reflectance.constant()?)),
@@ -245,6 +257,18 @@ impl Material {
                 k: c.k.constant()?,
                 specular_reflectance: c.specular_reflectance.constant()?,
             }),
+            Material::RoughConductor(c) if matches!(c.roughness.kind, MicrofacetType::Ggx) => {
+                // As `Texture::eval_1` of a constant.
+                let one = |t: &Texture| t.constant().map(|c| (c.x + c.y + c.z) / 3.0);
+                let (au, av) = (one(&c.roughness.alpha_u)?, one(&c.roughness.alpha_v)?);
+                (au == av).then_some(())?;
+                Some(LaneMaterial::RoughConductor {
+                    alpha: au,
+                    eta: c.eta.constant()?,
+                    k: c.k.constant()?,
+                    specular_reflectance: c.specular_reflectance.constant()?,
+                })
+            }
             Material::Dielectric(d) => Some(LaneMaterial::Dielectric {
                 eta: d.eta,
                 specular_reflectance: d.specular_reflectance.constant()?,

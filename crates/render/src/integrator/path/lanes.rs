@@ -44,18 +44,18 @@ pub struct LaneKind {
     shape: u8,
     /// 0: diffuse lit by an area light on a mesh, 1: diffuse lit by the
     /// environment map, 2: a smooth conductor, 3: a smooth dielectric (no
-    /// light sample).
+    /// light sample), 4 and 5: a GGX rough conductor lit as 0 and 1.
     bsdf: u8,
 }
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 12;
+    pub const COUNT: usize = 18;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        (self.shape * 4 + self.bsdf) as usize
+        (self.shape * 6 + self.bsdf) as usize
     }
 }
 
@@ -74,11 +74,12 @@ pub struct LaneVertex {
     b: Vec2,
     radius: f32,
     flip: bool,
-    /// The material's constants: diffuse: the reflectance; conductor: η,
-    /// k and the specular reflectance; dielectric: the specular reflectance
-    /// and transmittance, and η in `eta`.
+    /// The material's constants: diffuse: the reflectance; conductors: η,
+    /// k and the specular reflectance (and α in `param` when rough);
+    /// dielectric: the specular reflectance and transmittance, and η in
+    /// `param`.
     mat: [Spectrum; 3],
-    eta: f32,
+    param: f32,
     /// The path's throughput.
     beta: Spectrum,
     /// An area light: its picked triangle's corners, (area density,
@@ -107,7 +108,7 @@ impl LaneVertex {
         radius: 0.0,
         flip: false,
         mat: [Spectrum::ZERO; 3],
-        eta: 1.0,
+        param: 1.0,
         beta: Spectrum::ZERO,
         light_tri: [Vec3::ZERO; 3],
         area_pdf: 0.0,
@@ -259,6 +260,130 @@ impl Lanes<'_> {
     }
 }
 
+/// `warp::sample_concentric_disk` in lanes.
+#[inline(always)]
+fn concentric_disk<F: Float>(u0: F, u1: F) -> (F, F) {
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
+    let (ox, oy) = (F::splat(2.0) * u0 - one, F::splat(2.0) * u1 - one);
+    let x_major = ox.abs().cmp_gt(oy.abs());
+    let r = F::select(x_major, ox, oy);
+    let quarter = F::splat(PI / 4.0);
+    let theta = F::select(x_major, quarter * (oy / ox), F::splat(PI / 2.0) - quarter * (ox / oy));
+    let (sin, cos) = sin_cos(theta);
+    let centre = ox.cmp_eq(zero) & oy.cmp_eq(zero);
+    (F::select(centre, zero, r * cos), F::select(centre, zero, r * sin))
+}
+
+/// `f32::clamp(x, -1, 1)` in lanes (NaN stays NaN).
+#[inline(always)]
+fn clamp_unit<F: Float>(x: F) -> F {
+    let one = F::splat(1.0);
+    F::select(x.cmp_lt(-one), -one, F::select(x.cmp_gt(one), one, x))
+}
+
+/// An isotropic GGX `Microfacet` (α floored at 1e-4 as `alphas`) and the
+/// rough conductor on it (`RoughConductor`), in lanes.
+struct Ggx<F> {
+    a: F,
+}
+
+impl<F: Float> Ggx<F> {
+    #[inline(always)]
+    fn new(alpha: F) -> Self {
+        Ggx { a: alpha.max(F::splat(1e-4)) }
+    }
+
+    /// `Microfacet::eval`: D(m).
+    #[inline(always)]
+    fn d(&self, m: V3<F>) -> F {
+        let a = self.a;
+        let cos2 = m.z * m.z;
+        let (x, y) = (m.x / a, m.y / a);
+        let s = x * x + y * y + cos2;
+        let r = F::splat(1.0) / (F::splat(PI) * a * a * (s * s));
+        F::select((r * m.z).cmp_gt(F::splat(1e-20)), r, F::splat(0.0))
+    }
+
+    /// `Microfacet::smith_g1`.
+    #[inline(always)]
+    fn g1(&self, v: V3<F>, m: V3<F>) -> F {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let (ax, ay) = (self.a * v.x, self.a * v.y);
+        let xy = ax * ax + ay * ay;
+        let t = xy / (v.z * v.z);
+        let g = F::splat(2.0) / (one + (one + t).sqrt());
+        let g = F::select(xy.cmp_eq(zero), one, g);
+        F::select((v.dot(m) * v.z).cmp_le(zero), zero, g)
+    }
+
+    /// `RoughConductor::eval` and `pdf`: (f, density).
+    #[inline(always)]
+    fn eval_pdf(&self, wo: V3<F>, wi: V3<F>, eta: V3<F>, k: V3<F>, spec: V3<F>) -> (V3<F>, F) {
+        let zero = F::splat(0.0);
+        let up = !wo.z.cmp_le(zero) & !wi.z.cmp_le(zero);
+        let h = (wo + wi).normalize();
+        let d = self.d(h);
+        let (g1o, g1i) = (self.g1(wo, h), self.g1(wi, h));
+        let cos = wo.dot(h);
+        let fr = V3::new(
+            fresnel_conductor(cos, eta.x, k.x),
+            fresnel_conductor(cos, eta.y, k.y),
+            fresnel_conductor(cos, eta.z, k.z),
+        );
+        let f = fr.mul_elem(spec) * (d * (g1o * g1i) / (F::splat(4.0) * wo.z * wi.z));
+        let f = V3::select(up & !d.cmp_eq(zero), f, V3::splat(Vec3::ZERO));
+        let pdf = d * g1o / (F::splat(4.0) * wo.z);
+        let pdf_ok = up & !cos.cmp_le(zero) & !wi.dot(h).cmp_le(zero);
+        (f, F::select(pdf_ok, pdf, zero))
+    }
+
+    /// `RoughConductor::sample` (visible normals, Heitz 2018): (direction,
+    /// density, weight, whether there is one).
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, u0: F, u1: F, eta: V3<F>, k: V3<F>, spec: V3<F>) -> (V3<F>, F, V3<F>, F::Mask) {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let a = self.a;
+        // Microfacet::stretch.
+        let wp = V3::new(a * wo.x, a * wo.y, wo.z).normalize();
+        let sin_t = (one - wp.z * wp.z).max(zero).sqrt();
+        let pole = sin_t.cmp_eq(zero);
+        let sin_p = F::select(pole, zero, clamp_unit(wp.y / sin_t));
+        let cos_p = F::select(pole, one, clamp_unit(wp.x / sin_t));
+        let ci = wp.z;
+        // sample_visible_11 (GGX).
+        let (px, py) = concentric_disk(u0, u1);
+        let s = F::splat(0.5) * (one + ci);
+        let hh = (one - px * px).max(zero).sqrt();
+        let y = hh + (py - hh) * s;
+        let x = px;
+        let z = (one - x * x - y * y).max(zero).sqrt();
+        let si = (one - ci * ci).max(zero).sqrt();
+        let norm = one / (si * y + ci * z);
+        let (slope_x, slope_y) = ((ci * y - si * z) * norm, x * norm);
+        // normal_from_slope.
+        let sx = (cos_p * slope_x - sin_p * slope_y) * a;
+        let sy = (sin_p * slope_x + cos_p * slope_y) * a;
+        let m = V3::new(-sx, -sy, one).normalize();
+        // Microfacet::pdf.
+        let d = self.d(m);
+        let g1o = self.g1(wo, m);
+        let cos_om = wo.dot(m);
+        let pdf_m = F::select(d.cmp_eq(zero), zero, d * g1o * cos_om.abs() / wo.z);
+        // reflect_m: 2 (wo·m) m − wo.
+        let wi = m * (F::splat(2.0) * cos_om) - wo;
+        let g1 = self.g1(wi, m);
+        let pdf = pdf_m / (F::splat(4.0) * wi.dot(m));
+        let fr = V3::new(
+            fresnel_conductor(cos_om, eta.x, k.x),
+            fresnel_conductor(cos_om, eta.y, k.y),
+            fresnel_conductor(cos_om, eta.z, k.z),
+        );
+        let weight = fr.mul_elem(spec) * g1;
+        let go = !wo.z.cmp_le(zero) & !pdf_m.cmp_eq(zero) & !wi.z.cmp_le(zero) & !g1.cmp_eq(zero);
+        (wi, pdf, weight, go)
+    }
+}
+
 /// The hit of a lane vertex: point, geometric normal, shading frame (s, t;
 /// its normal is the geometric one) and the outgoing direction in it.
 struct LaneHit<F> {
@@ -305,21 +430,23 @@ impl PathIntegrator {
             return false;
         }
         let Some(material) = scene.lane_material(hit.shape) else { return false };
-        let (bsdf, mat, eta) = match material {
-            LaneMaterial::Diffuse(r) => {
-                // The light BVH's choice depends on the point, found in lanes.
-                if scene.light_sampler().kind() == LightSelection::Bvh {
-                    return false;
-                }
-                (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0)
-            }
+        let (bsdf, mat, param) = match material {
+            LaneMaterial::Diffuse(r) => (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0),
             LaneMaterial::Conductor { eta, k, specular_reflectance } => (2, [eta, k, specular_reflectance], 1.0),
             LaneMaterial::Dielectric { eta, specular_reflectance, specular_transmittance } => {
                 (3, [specular_reflectance, specular_transmittance, Spectrum::ZERO], eta)
             }
+            LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
+                (4, [eta, k, specular_reflectance], alpha)
+            }
         };
+        let lit = bsdf == 0 || bsdf == 4;
+        // The light BVH's choice depends on the point, found in lanes.
+        if lit && scene.light_sampler().kind() == LightSelection::Bvh {
+            return false;
+        }
         v.kind = LaneKind { shape: 0, bsdf };
-        (v.d, v.b, v.mat, v.eta, v.beta) = (st.ray.d, hit.uv, mat, eta, st.beta);
+        (v.d, v.b, v.mat, v.param, v.beta) = (st.ray.d, hit.uv, mat, param, st.beta);
         match &scene.shapes[hit.shape as usize] {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let [p0, p1, p2] = m.vertices(hit.index as usize);
@@ -337,7 +464,7 @@ impl PathIntegrator {
             }
             _ => return false,
         }
-        let saved = if bsdf == 0 { Some(rng.clone()) } else { None };
+        let saved = if lit { Some(rng.clone()) } else { None };
         let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
         if let Some(saved) = saved {
             // Uniform and power selection ignore the receiver.
@@ -345,7 +472,7 @@ impl PathIntegrator {
                 v.pmf = pmf;
                 if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
                     let (x, cos_t, pdf_row) = e.sample_cell(u_light)?;
-                    v.kind.bsdf = 1;
+                    v.kind.bsdf += 1;
                     (v.u_light, v.area_pdf) = (Vec2::new(x, cos_t), pdf_row);
                     return Some(());
                 }
@@ -382,22 +509,29 @@ impl PathIntegrator {
         debug_assert!(idx.iter().all(|&i| all[i as usize].kind == first.kind));
         let v = Lanes { all, idx };
         match (first.kind.shape, first.kind.bsdf) {
-            (0, 0) => self.diffuse::<F, 0, 0>(None, v, out),
-            (1, 0) => self.diffuse::<F, 1, 0>(None, v, out),
-            (2, 0) => self.diffuse::<F, 2, 0>(None, v, out),
-            (0, 1) => self.diffuse::<F, 0, 1>(env, v, out),
-            (1, 1) => self.diffuse::<F, 1, 1>(env, v, out),
-            (2, 1) => self.diffuse::<F, 2, 1>(env, v, out),
+            (0, 0) => self.lit::<F, 0, 0, 0>(None, v, out),
+            (1, 0) => self.lit::<F, 1, 0, 0>(None, v, out),
+            (2, 0) => self.lit::<F, 2, 0, 0>(None, v, out),
+            (0, 1) => self.lit::<F, 0, 1, 0>(env, v, out),
+            (1, 1) => self.lit::<F, 1, 1, 0>(env, v, out),
+            (2, 1) => self.lit::<F, 2, 1, 0>(env, v, out),
+            (0, 4) => self.lit::<F, 0, 0, 1>(None, v, out),
+            (1, 4) => self.lit::<F, 1, 0, 1>(None, v, out),
+            (2, 4) => self.lit::<F, 2, 0, 1>(None, v, out),
+            (0, 5) => self.lit::<F, 0, 1, 1>(env, v, out),
+            (1, 5) => self.lit::<F, 1, 1, 1>(env, v, out),
+            (2, 5) => self.lit::<F, 2, 1, 1>(env, v, out),
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
             (_, b) => specular::<F, 2>(b == 3, v, out),
         }
     }
 
-    /// [`Self::lane_vertices`] for a diffuse vertex on shape kind `S` lit
-    /// by light kind `L` (0: an area light, 1: the environment map).
+    /// [`Self::lane_vertices`] for a vertex with light sampling on shape
+    /// kind `S`, lit by light kind `L` (0: an area light, 1: the
+    /// environment map), with BSDF `B` (0: diffuse, 1: GGX rough conductor).
     #[inline(always)]
-    fn diffuse<F: Float, const S: u8, const L: u8>(
+    fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
         env: Option<&EnvMapLight>,
         v: Lanes,
@@ -438,18 +572,20 @@ impl PathIntegrator {
             let li = env.eval_lanes(wi.x, wi.y, wi.z);
             (wi, F::splat(f32::INFINITY), pdf * g(|v| v.pmf), V3::gather(|l| li[l]), F::Mask::splat(true))
         };
-        // The Lambertian value and density, MIS-weighted.
+        // The BSDF's value and density (Bsdf::eval_pdf), MIS-weighted.
         let wi_l = h.to_local(wi);
-        let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
-        let refl = gv(|v| v.mat[0]);
-        let f = V3::select(front, refl * F::splat(INV_PI), V3::splat(Vec3::ZERO)) * wi_l.z.abs();
-        let contributes = sampled & f.ne_zero();
-        let w = if self.mis {
-            let bsdf_pdf = F::select(front, wi_l.z.max(zero) * F::splat(INV_PI), zero);
-            power_heuristic(light_pdf, bsdf_pdf)
+        let (f, bsdf_pdf) = if B == 0 {
+            let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
+            let f = V3::select(front, gv(|v| v.mat[0]) * F::splat(INV_PI), V3::splat(Vec3::ZERO));
+            (f, F::select(front, wi_l.z.max(zero) * F::splat(INV_PI), zero))
         } else {
-            one
+            let ggx = Ggx::new(g(|v| v.param));
+            let (eta, k, spec) = (gv(|v| v.mat[0]), gv(|v| v.mat[1]), gv(|v| v.mat[2]));
+            ggx.eval_pdf(h.wo, wi_l, eta, k, spec)
         };
+        let f = f * wi_l.z.abs();
+        let contributes = sampled & f.ne_zero();
+        let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
         let pending = gv(|v| v.beta).mul_elem(f).mul_elem(li) * (w / light_pdf);
         // Its shadow ray (Scene::shadow_ray).
         let o = offset_origin(p, n, wi);
@@ -461,20 +597,21 @@ impl PathIntegrator {
             (wi, dist)
         };
 
-        // The BSDF sample (Diffuse::sample: sample_cosine_hemisphere).
-        let (ox, oy) = (F::splat(2.0) * g(|v| v.u_bsdf.x) - one, F::splat(2.0) * g(|v| v.u_bsdf.y) - one);
-        let x_major = ox.abs().cmp_gt(oy.abs());
-        let r = F::select(x_major, ox, oy);
-        let quarter = F::splat(PI / 4.0);
-        let theta = F::select(x_major, quarter * (oy / ox), F::splat(PI / 2.0) - quarter * (ox / oy));
-        let (sin, cos_t) = sin_cos(theta);
-        let centre = ox.cmp_eq(zero) & oy.cmp_eq(zero);
-        let (dx, dy) = (F::select(centre, zero, r * cos_t), F::select(centre, zero, r * sin));
-        let dz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
-        let bsdf_pdf = dz.max(zero) * F::splat(INV_PI);
-        let go = !h.wo.z.cmp_le(zero) & !bsdf_pdf.cmp_le(zero);
-        let wi_next = h.to_world(V3::new(dx, dy, dz));
-
+        // The BSDF sample (Bsdf::sample).
+        let (u0, u1) = (g(|v| v.u_bsdf.x), g(|v| v.u_bsdf.y));
+        let (wi_next, bsdf_pdf, weight, go) = if B == 0 {
+            // Diffuse::sample: sample_cosine_hemisphere.
+            let (dx, dy) = concentric_disk(u0, u1);
+            let dz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
+            let bsdf_pdf = dz.max(zero) * F::splat(INV_PI);
+            let go = !h.wo.z.cmp_le(zero) & !bsdf_pdf.cmp_le(zero);
+            (V3::new(dx, dy, dz), bsdf_pdf, gv(|v| v.mat[0]), go)
+        } else {
+            let ggx = Ggx::new(g(|v| v.param));
+            let (eta, k, spec) = (gv(|v| v.mat[0]), gv(|v| v.mat[1]), gv(|v| v.mat[2]));
+            ggx.sample(h.wo, u0, u1, eta, k, spec)
+        };
+        let wi_next = h.to_world(wi_next);
         let (pending, o, shadow_d) = (pending.to_lanes(), o.to_lanes(), shadow_d.to_lanes());
         let shadow_t = shadow_t.to_array();
         let contributes = contributes.bitmask();
@@ -482,8 +619,8 @@ impl PathIntegrator {
             out.shadow =
                 (contributes >> l & 1 != 0).then(|| (pending[l], Ray::new(o[l], shadow_d[l], shadow_t.as_ref()[l])));
         }
-        let weight = |l: usize| v.at(l).mat[0];
-        next_rays(&h, wi_next, bsdf_pdf, go, weight, |_| 1.0, false, n_in, out);
+        let weight = weight.to_lanes();
+        next_rays(&h, wi_next, bsdf_pdf, go, |l| weight[l], |_| 1.0, false, n_in, out);
     }
 
     /// The rest of a lane vertex, one path at a time: its outcome applied
@@ -581,7 +718,7 @@ fn specular<F: Float, const S: u8>(dielectric: bool, v: Lanes, out: &mut [LaneOu
         next_rays(&h, h.to_world(reflected), one, go, |l| weight[l], |_| 1.0, true, n_in, out);
         return;
     }
-    let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, g(|v| v.eta));
+    let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, g(|v| v.param));
     let reflect = g(|v| v.u_bsdf1).cmp_le(r);
     let refracted = V3::new(-eta_ti * wo.x, -eta_ti * wo.y, cos_t);
     let wi = V3::select(reflect, reflected, refracted);
