@@ -257,13 +257,15 @@ impl Scene {
     }
 
     /// Light `i` when its samples can be drawn in lanes: an area light of
-    /// constant, non-zero radiance on a mesh; with the mesh, the radiance
-    /// and whether it emits from both sides.
+    /// constant, non-zero radiance on a mesh or a sphere; with the shape,
+    /// the radiance and whether it emits from both sides.
     #[inline]
-    pub fn lane_area_light(&self, i: usize) -> Option<(&crate::geometry::Mesh, Spectrum, bool)> {
+    pub fn lane_area_light(&self, i: usize) -> Option<(&Shape, Spectrum, bool)> {
         match &self.lights[i] {
             Light::Area(a) => match (&self.shapes[a.shape as usize], a.radiance.constant()) {
-                (Shape::Mesh(m) | Shape::CulledMesh(m), Some(li)) if li != Spectrum::ZERO => Some((m, li, a.two_sided)),
+                (s @ (Shape::Mesh(_) | Shape::CulledMesh(_) | Shape::Sphere(_)), Some(li)) if li != Spectrum::ZERO => {
+                    Some((s, li, a.two_sided))
+                }
                 _ => None,
             },
             _ => None,

@@ -100,9 +100,11 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
 
 /// Every kind of lane vertex at once: spheres, rectangles (meshes) and
 /// disks with diffuse, smooth conductor, smooth dielectric and GGX rough
-/// conductor materials, lit by a rectangle area light and an environment map
-/// (each picked half the time), so that every bin of the lane kernels runs
-/// and must match the scalar vertex bit for bit.
+/// conductor materials, lit by a rectangle area light, a small sphere area
+/// light (sampled by its cone), a large sphere area light around everything
+/// (sampled by area from inside) and an environment map, each picked a
+/// quarter of the time, so that every bin of the lane kernels runs and must
+/// match the scalar vertex bit for bit.
 #[test]
 fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
     let env = root().join("tests/scenes/textures/sunsky.exr");
@@ -135,6 +137,14 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
     <shape type="rectangle">
         <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="2.5"/></transform>
         <emitter type="area"><rgb name="radiance" value="6, 6, 5"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="1.5" y="2.2" z="1"/><float name="radius" value="0.2"/>
+        <emitter type="area"><rgb name="radiance" value="9, 7, 5"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <float name="radius" value="30"/><boolean name="flip_normals" value="true"/>
+        <emitter type="area"><rgb name="radiance" value="0.05, 0.06, 0.08"/></emitter>
     </shape>
     <shape type="rectangle">
         <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>

@@ -105,7 +105,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     let env = scene.single_envmap();
     let mut lane_all: Vec<LaneVertex> = Vec::with_capacity(POOL);
     let mut lane_slots: Vec<usize> = Vec::with_capacity(POOL);
-    let mut lane_bins: [Vec<u16>; LaneKind::COUNT] = Default::default();
+    let mut lane_bins: [Vec<u16>; LaneKind::COUNT] = std::array::from_fn(|_| Vec::new());
     let mut next = 0;
     loop {
         // Refill: the next samples in canonical order take the free slots.

@@ -42,20 +42,22 @@ use glam::{Vec2, Vec3};
 pub struct LaneKind {
     /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk.
     shape: u8,
-    /// 0: diffuse lit by an area light on a mesh, 1: diffuse lit by the
-    /// environment map, 2: a smooth conductor, 3: a smooth dielectric (no
-    /// light sample), 4 and 5: a GGX rough conductor lit as 0 and 1.
+    /// 0: diffuse, 1: GGX rough conductor (these two sample a light), 2:
+    /// smooth conductor, 3: smooth dielectric.
     bsdf: u8,
+    /// The light sampled: 0: an area light on a mesh, 1: the environment
+    /// map, 2: an area light on a sphere (0 where none is).
+    light: u8,
 }
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 18;
+    pub const COUNT: usize = 36;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        (self.shape * 6 + self.bsdf) as usize
+        ((self.shape * 4 + self.bsdf) * 3 + self.light) as usize
     }
 }
 
@@ -82,7 +84,8 @@ pub struct LaneVertex {
     param: f32,
     /// The path's throughput.
     beta: Spectrum,
-    /// An area light: its picked triangle's corners, (area density,
+    /// An area light: its picked triangle's corners (a sphere: its centre,
+    /// then (radius, 1 / area, 1 if its normals are flipped)), (area density,
     /// selection probability, radiance, two-sidedness), and the sample's
     /// numbers (the first rescaled by the triangle's pick). The environment:
     /// [`EnvMapLight::sample_cell`]'s (u, cos θ) in `u_light`, its density
@@ -101,7 +104,7 @@ pub struct LaneVertex {
 impl LaneVertex {
     /// A vertex to fill ([`PathIntegrator::lane_vertex`]).
     pub const EMPTY: LaneVertex = LaneVertex {
-        kind: LaneKind { shape: 0, bsdf: 0 },
+        kind: LaneKind { shape: 0, bsdf: 0, light: 0 },
         d: Vec3::ZERO,
         geo: [Vec3::ZERO; 5],
         b: Vec2::ZERO,
@@ -258,6 +261,63 @@ impl Lanes<'_> {
     fn at(&self, l: usize) -> &LaneVertex {
         &self.all[self.idx[l.min(self.idx.len() - 1)] as usize]
     }
+}
+
+/// `area_to_solid_angle` in lanes: the density and whether there is one.
+#[inline(always)]
+fn area_to_solid_angle<F: Float>(pdf_area: F, p_ref: V3<F>, p: V3<F>, n: V3<F>) -> (F, F::Mask) {
+    let zero = F::splat(0.0);
+    let d = p - p_ref;
+    let dist2 = d.dot(d);
+    let cos = (n.dot(d) / dist2.sqrt()).abs();
+    (pdf_area * dist2 / cos, dist2.cmp_ne(zero) & cos.cmp_ne(zero))
+}
+
+/// `Shape::sample_direction` on a sphere in lanes: `Sphere::sample_cone`
+/// from outside, uniform area sampling (`Sphere::sample_area`,
+/// `area_to_solid_angle`) from inside. `c` is the centre, `r` (radius, 1 /
+/// area, 1 where the normals are flipped). (point, normal, density, whether
+/// there is one).
+#[inline(always)]
+fn sphere_sample<F: Float>(c: V3<F>, r: V3<F>, p_ref: V3<F>, u0: F, u1: F) -> (V3<F>, V3<F>, F, F::Mask) {
+    let (zero, one, two) = (F::splat(0.0), F::splat(1.0), F::splat(2.0));
+    let (radius, inv_area, flip) = (r.x, r.y, r.z.cmp_eq(one));
+    let to_c = p_ref - c;
+    let dc2 = to_c.dot(to_c);
+    let r2 = radius * radius;
+    let outside = dc2.cmp_gt(r2 * F::splat(1.0001));
+    // The cone.
+    let sin2_max = r2 / dc2;
+    let sin_max = sin2_max.sqrt();
+    let cos_max = (one - sin2_max).max(zero).sqrt();
+    let small = sin2_max.cmp_lt(F::splat(0.000_685_23));
+    let cos_t = (cos_max - one) * u0 + one;
+    let sin2_t = one - cos_t * cos_t;
+    // Small cones: Taylor expansion.
+    let sin2_t_small = sin2_max * u0;
+    let (sin2_t, cos_t) =
+        (F::select(small, sin2_t_small, sin2_t), F::select(small, (one - sin2_t_small).sqrt(), cos_t));
+    let one_minus_cos_max = F::select(small, sin2_max / two, one - cos_max);
+    let cos_alpha = sin2_t / sin_max + cos_t * (one - sin2_t / sin2_max).max(zero).sqrt();
+    let sin_alpha = (one - cos_alpha * cos_alpha).max(zero).sqrt();
+    let (sin_phi, cos_phi) = sin_cos(u1 * two * F::splat(PI));
+    let w = V3::new(sin_alpha * cos_phi, sin_alpha * sin_phi, cos_alpha);
+    let nc = (c - p_ref).normalize();
+    let (fs, ft) = frame_from_normal(nc);
+    let nd = fs * -w.x + ft * -w.y + nc * -w.z;
+    let cone_p = c + nd * radius;
+    let cone_pdf = one / (F::splat(2.0 * PI) * one_minus_cos_max);
+    // The area (sample_uniform_sphere).
+    let z = one - two * u0;
+    let rr = (one - z * z).max(zero).sqrt();
+    let (s, co) = sin_cos(F::splat(2.0 * PI) * u1);
+    let dir = V3::new(rr * co, rr * s, z);
+    let area_p = c + dir * radius;
+    let area_n = V3::select(flip, -dir, dir);
+    let (area_pdf, area_ok) = area_to_solid_angle(inv_area, p_ref, area_p, area_n);
+    let p = V3::select(outside, cone_p, area_p);
+    let n = V3::select(outside, V3::select(flip, -nd, nd), area_n);
+    (p, n, F::select(outside, cone_pdf, area_pdf), outside | area_ok)
 }
 
 /// `warp::sample_concentric_disk` in lanes.
@@ -432,20 +492,20 @@ impl PathIntegrator {
         let Some(material) = scene.lane_material(hit.shape) else { return false };
         let (bsdf, mat, param) = match material {
             LaneMaterial::Diffuse(r) => (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0),
+            LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
+                (1, [eta, k, specular_reflectance], alpha)
+            }
             LaneMaterial::Conductor { eta, k, specular_reflectance } => (2, [eta, k, specular_reflectance], 1.0),
             LaneMaterial::Dielectric { eta, specular_reflectance, specular_transmittance } => {
                 (3, [specular_reflectance, specular_transmittance, Spectrum::ZERO], eta)
             }
-            LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
-                (4, [eta, k, specular_reflectance], alpha)
-            }
         };
-        let lit = bsdf == 0 || bsdf == 4;
+        let lit = bsdf < 2;
         // The light BVH's choice depends on the point, found in lanes.
         if lit && scene.light_sampler().kind() == LightSelection::Bvh {
             return false;
         }
-        v.kind = LaneKind { shape: 0, bsdf };
+        v.kind = LaneKind { shape: 0, bsdf, light: 0 };
         (v.d, v.b, v.mat, v.param, v.beta) = (st.ray.d, hit.uv, mat, param, st.beta);
         match &scene.shapes[hit.shape as usize] {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
@@ -472,14 +532,26 @@ impl PathIntegrator {
                 v.pmf = pmf;
                 if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
                     let (x, cos_t, pdf_row) = e.sample_cell(u_light)?;
-                    v.kind.bsdf += 1;
+                    v.kind.light = 1;
                     (v.u_light, v.area_pdf) = (Vec2::new(x, cos_t), pdf_row);
                     return Some(());
                 }
-                let (mesh, li, two_sided) = scene.lane_area_light(i)?;
-                let (t, ux) = mesh.pick_triangle(u_light.x)?;
-                v.light_tri = mesh.vertices(t);
-                (v.area_pdf, v.li, v.two_sided, v.u_light) = (mesh.area_pdf(), li, two_sided, Vec2::new(ux, u_light.y));
+                let (shape, li, two_sided) = scene.lane_area_light(i)?;
+                (v.li, v.two_sided) = (li, two_sided);
+                match shape {
+                    Shape::Sphere(s) => {
+                        v.kind.light = 2;
+                        let flip = if s.flip { 1.0 } else { 0.0 };
+                        v.light_tri[..2].copy_from_slice(&[s.center, Vec3::new(s.radius, 1.0 / s.area(), flip)]);
+                        v.u_light = u_light;
+                    }
+                    Shape::Mesh(mesh) | Shape::CulledMesh(mesh) => {
+                        let (t, ux) = mesh.pick_triangle(u_light.x)?;
+                        v.light_tri = mesh.vertices(t);
+                        (v.area_pdf, v.u_light) = (mesh.area_pdf(), Vec2::new(ux, u_light.y));
+                    }
+                    _ => return None,
+                }
                 Some(())
             });
             if picked.is_none() {
@@ -508,19 +580,23 @@ impl PathIntegrator {
         debug_assert!(idx.len() <= F::WIDTH && out.len() >= idx.len());
         debug_assert!(idx.iter().all(|&i| all[i as usize].kind == first.kind));
         let v = Lanes { all, idx };
-        match (first.kind.shape, first.kind.bsdf) {
-            (0, 0) => self.lit::<F, 0, 0, 0>(None, v, out),
-            (1, 0) => self.lit::<F, 1, 0, 0>(None, v, out),
-            (2, 0) => self.lit::<F, 2, 0, 0>(None, v, out),
-            (0, 1) => self.lit::<F, 0, 1, 0>(env, v, out),
-            (1, 1) => self.lit::<F, 1, 1, 0>(env, v, out),
-            (2, 1) => self.lit::<F, 2, 1, 0>(env, v, out),
-            (0, 4) => self.lit::<F, 0, 0, 1>(None, v, out),
-            (1, 4) => self.lit::<F, 1, 0, 1>(None, v, out),
-            (2, 4) => self.lit::<F, 2, 0, 1>(None, v, out),
-            (0, 5) => self.lit::<F, 0, 1, 1>(env, v, out),
-            (1, 5) => self.lit::<F, 1, 1, 1>(env, v, out),
-            (2, 5) => self.lit::<F, 2, 1, 1>(env, v, out),
+        let k = first.kind;
+        macro_rules! lit {
+            ($s:literal) => {
+                match (k.light, k.bsdf) {
+                    (0, 0) => self.lit::<F, $s, 0, 0>(None, v, out),
+                    (1, 0) => self.lit::<F, $s, 1, 0>(env, v, out),
+                    (_, 0) => self.lit::<F, $s, 2, 0>(None, v, out),
+                    (0, _) => self.lit::<F, $s, 0, 1>(None, v, out),
+                    (1, _) => self.lit::<F, $s, 1, 1>(env, v, out),
+                    (_, _) => self.lit::<F, $s, 2, 1>(None, v, out),
+                }
+            };
+        }
+        match (k.shape, k.bsdf) {
+            (0, 0 | 1) => lit!(0),
+            (1, 0 | 1) => lit!(1),
+            (_, 0 | 1) => lit!(2),
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
             (_, b) => specular::<F, 2>(b == 3, v, out),
@@ -528,8 +604,9 @@ impl PathIntegrator {
     }
 
     /// [`Self::lane_vertices`] for a vertex with light sampling on shape
-    /// kind `S`, lit by light kind `L` (0: an area light, 1: the
-    /// environment map), with BSDF `B` (0: diffuse, 1: GGX rough conductor).
+    /// kind `S`, lit by light kind `L` (0: an area light on a mesh, 1: the
+    /// environment map, 2: an area light on a sphere), with BSDF `B` (0:
+    /// diffuse, 1: GGX rough conductor).
     #[inline(always)]
     fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
@@ -547,30 +624,34 @@ impl PathIntegrator {
 
         // The light sample, its selection included: (direction, distance,
         // density, radiance, whether there is one).
-        let (wi, dist, light_pdf, li, sampled) = if L == 0 {
-            // Shape::sample_point on the picked triangle, area_to_solid_angle, AreaLight::sample_li.
-            let (q0, q1, q2) = (gv(|v| v.light_tri[0]), gv(|v| v.light_tri[1]), gv(|v| v.light_tri[2]));
-            let su = g(|v| v.u_light.x).sqrt();
-            let (lb1, lb2) = (one - su, g(|v| v.u_light.y) * su);
-            let lp = q0 * (one - lb1 - lb2) + q1 * lb1 + q2 * lb2;
-            let ln = (q1 - q0).cross(q2 - q0).normalize();
+        let (wi, dist, light_pdf, li, sampled) = if L == 1 {
+            let env = env.expect("an environment vertex without the environment");
+            let (wi, pdf) = env.sample_direction(g(|v| v.u_light.x), g(|v| v.u_light.y), g(|v| v.area_pdf));
+            let li = env.eval_lanes(wi.x, wi.y, wi.z);
+            (wi, F::splat(f32::INFINITY), pdf * g(|v| v.pmf), V3::gather(|l| li[l]), F::Mask::splat(true))
+        } else {
+            // The point, its normal and solid-angle density (Shape::sample_direction).
+            let (lp, ln, pdf, ok) = if L == 0 {
+                // Shape::sample_point on the picked triangle, area_to_solid_angle.
+                let (q0, q1, q2) = (gv(|v| v.light_tri[0]), gv(|v| v.light_tri[1]), gv(|v| v.light_tri[2]));
+                let su = g(|v| v.u_light.x).sqrt();
+                let (lb1, lb2) = (one - su, g(|v| v.u_light.y) * su);
+                let lp = q0 * (one - lb1 - lb2) + q1 * lb1 + q2 * lb2;
+                let ln = (q1 - q0).cross(q2 - q0).normalize();
+                let (pdf, ok) = area_to_solid_angle(g(|v| v.area_pdf), p, lp, ln);
+                (lp, ln, pdf, ok)
+            } else {
+                sphere_sample(gv(|v| v.light_tri[0]), gv(|v| v.light_tri[1]), p, g(|v| v.u_light.x), g(|v| v.u_light.y))
+            };
+            // AreaLight::sample_li.
             let d = lp - p;
-            let dist2 = d.dot(d);
-            let cos = (ln.dot(d) / dist2.sqrt()).abs();
-            let pdf = g(|v| v.area_pdf) * dist2 / cos;
             let dist = d.length();
             let wi = d / dist;
             let n_wi = ln.dot(wi);
             let two_sided = gather_mask::<F>(|l| at(l).two_sided);
             let facing = !(n_wi.cmp_ge(zero) & !(two_sided & n_wi.cmp_gt(zero)));
-            let sampled =
-                dist2.cmp_ne(zero) & cos.cmp_ne(zero) & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
+            let sampled = ok & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
             (wi, dist, pdf * g(|v| v.pmf), gv(|v| v.li), sampled)
-        } else {
-            let env = env.expect("an environment vertex without the environment");
-            let (wi, pdf) = env.sample_direction(g(|v| v.u_light.x), g(|v| v.u_light.y), g(|v| v.area_pdf));
-            let li = env.eval_lanes(wi.x, wi.y, wi.z);
-            (wi, F::splat(f32::INFINITY), pdf * g(|v| v.pmf), V3::gather(|l| li[l]), F::Mask::splat(true))
         };
         // The BSDF's value and density (Bsdf::eval_pdf), MIS-weighted.
         let wi_l = h.to_local(wi);
@@ -589,7 +670,7 @@ impl PathIntegrator {
         let pending = gv(|v| v.beta).mul_elem(f).mul_elem(li) * (w / light_pdf);
         // Its shadow ray (Scene::shadow_ray).
         let o = offset_origin(p, n, wi);
-        let (shadow_d, shadow_t) = if L == 0 {
+        let (shadow_d, shadow_t) = if L != 1 {
             let to_light = p + wi * dist - o;
             let len = to_light.length();
             (to_light / len, len * F::splat(1.0 - SHADOW_EPSILON))
