@@ -152,13 +152,17 @@ impl Scene {
             .zip(&shape_info)
             .zip(&reads_uv)
             .map(|((shape, info), &uv)| {
-                let flat = match shape {
-                    Shape::Mesh(m) | Shape::CulledMesh(m) => m.face_normals || m.mesh.normals.is_empty(),
-                    Shape::Sphere(_) | Shape::Disk(_) => true,
-                    _ => false,
+                let (flat, mesh) = match shape {
+                    Shape::Mesh(m) | Shape::CulledMesh(m) => (m.face_normals || m.mesh.normals.is_empty(), true),
+                    Shape::Sphere(_) | Shape::Disk(_) => (true, false),
+                    _ => (false, false),
                 };
-                let m = materials.get(info.material as usize).filter(|_| flat && !uv && info.light.is_none());
-                m.and_then(Material::lane_material)
+                let m = materials.get(info.material as usize).filter(|_| flat && info.light.is_none());
+                // Textures read the uv parameterisation, which lanes find on meshes only.
+                m.and_then(Material::lane_material).filter(|m| match m {
+                    LaneMaterial::TexturedDiffuse => mesh,
+                    _ => !uv,
+                })
             })
             .collect();
         Scene {
@@ -250,7 +254,7 @@ impl Scene {
     /// The material of shape `shape` when its hits can be shaded in lanes
     /// (the `path` integrator's lane vertex): a mesh shaded with its face
     /// normals, a sphere or a disk, not an emitter, whose material is a
-    /// [`Material::lane_material`].
+    /// [`Material::lane_material`] (a textured one on meshes only).
     #[inline]
     pub fn lane_material(&self, shape: u32) -> Option<LaneMaterial> {
         self.lane_material[shape as usize]

@@ -99,7 +99,7 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
 }
 
 /// Every kind of lane vertex at once: spheres, rectangles (meshes) and
-/// disks with diffuse, smooth conductor, smooth dielectric and GGX rough
+/// disks with diffuse (on a checkerboard-textured floor too), smooth conductor, smooth dielectric and GGX rough
 /// conductor materials, lit by a rectangle area light, a small sphere area
 /// light (sampled by its cone), a large sphere area light around everything
 /// (sampled by area from inside) and an environment map, each picked a
@@ -147,8 +147,13 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
         <emitter type="area"><rgb name="radiance" value="0.05, 0.06, 0.08"/></emitter>
     </shape>
     <shape type="rectangle">
-        <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
-        <bsdf type="diffuse"/>
+        <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/><rotate y="1" angle="30"/></transform>
+        <bsdf type="diffuse">
+            <texture type="checkerboard" name="reflectance">
+                <rgb name="color0" value="0.8, 0.7, 0.6"/><rgb name="color1" value="0.2, 0.3, 0.4"/>
+                <transform name="to_uv"><scale x="6" y="6"/></transform>
+            </texture>
+        </bsdf>
     </shape>
     {shapes}
 </scene>"#,

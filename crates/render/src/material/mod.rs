@@ -139,6 +139,9 @@ fn perturb(si: &mut SurfaceInteraction, rel: Frame) -> Option<Perturbation> {
 pub enum LaneMaterial {
     /// Lambertian: the reflectance.
     Diffuse(Spectrum),
+    /// Lambertian with a reflectance texture that reads only the hit's uv
+    /// ([`Texture::reads_only_uv`]).
+    TexturedDiffuse,
     /// A smooth conductor.
     Conductor {
         /// Real part of the relative complex IOR.
@@ -246,12 +249,15 @@ impl Material {
     }
 
     /// The material as the `path` integrator's lane vertex shades it: a
-    /// plain `diffuse`, `conductor`, isotropic GGX `roughconductor` or
+    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, isotropic GGX `roughconductor` or
     /// `dielectric` whose parameters are constants (no texture, mask, bump,
     /// normal map or two-sided wrapper).
     pub fn lane_material(&self) -> Option<LaneMaterial> {
         match self {
-            Material::Diffuse(d) => Some(LaneMaterial::Diffuse(d.reflectance.constant()?)),
+            Material::Diffuse(d) => match d.reflectance.constant() {
+                Some(c) => Some(LaneMaterial::Diffuse(c)),
+                None => d.reflectance.reads_only_uv().then_some(LaneMaterial::TexturedDiffuse),
+            },
             Material::Conductor(c) => Some(LaneMaterial::Conductor {
                 eta: c.eta.constant()?,
                 k: c.k.constant()?,

@@ -50,6 +50,17 @@ impl Texture {
         }
     }
 
+    /// Whether the value depends on the hit's `uv` alone (constants,
+    /// bitmaps, checkerboards of those): then a hit with only `uv` set
+    /// evaluates it.
+    pub fn reads_only_uv(&self) -> bool {
+        match self {
+            Texture::Constant(_) | Texture::Bitmap(_) => true,
+            Texture::Checkerboard(c) => c.color0.reads_only_uv() && c.color1.reads_only_uv(),
+            Texture::MeshAttribute(_) | Texture::Volume(_) => false,
+        }
+    }
+
     /// A scalar at a surface point (Mitsuba's `eval_1`): the mean of the
     /// channels for a constant colour, the luminance of a colour bitmap, and
     /// for the checkerboard Mitsuba 3.9.1's `eval_1`, whose squares are

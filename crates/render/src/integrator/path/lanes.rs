@@ -27,9 +27,11 @@
 
 use super::{PathIntegrator, PathState, Vertex};
 use crate::accel::Hit;
+use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::light::{EnvMapLight, LightSelection};
-use crate::material::LaneMaterial;
+use crate::material::{LaneMaterial, Material};
+use crate::math::Frame;
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
@@ -40,7 +42,8 @@ use glam::{Vec2, Vec3};
 /// run together.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LaneKind {
-    /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk.
+    /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk, 3: a flat-shaded
+    /// mesh whose frame follows its texture coordinates (a textured material).
     shape: u8,
     /// 0: diffuse, 1: GGX rough conductor (these two sample a light), 2:
     /// smooth conductor, 3: smooth dielectric.
@@ -52,7 +55,7 @@ pub struct LaneKind {
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 36;
+    pub const COUNT: usize = 48;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
@@ -74,6 +77,8 @@ pub struct LaneVertex {
     /// x, y, z, w and normal, and the hit's local (x, y).
     geo: [Vec3; 5],
     b: Vec2,
+    /// A textured mesh's texture coordinates at the triangle's corners.
+    uvs: [Vec2; 3],
     radius: f32,
     flip: bool,
     /// The material's constants: diffuse: the reflectance; conductors: η,
@@ -108,6 +113,7 @@ impl LaneVertex {
         d: Vec3::ZERO,
         geo: [Vec3::ZERO; 5],
         b: Vec2::ZERO,
+        uvs: [Vec2::ZERO; 3],
         radius: 0.0,
         flip: false,
         mat: [Spectrum::ZERO; 3],
@@ -260,6 +266,24 @@ impl Lanes<'_> {
     #[inline(always)]
     fn at(&self, l: usize) -> &LaneVertex {
         &self.all[self.idx[l.min(self.idx.len() - 1)] as usize]
+    }
+}
+
+/// A hit with only its `uv` set, for textures that read nothing else
+/// ([`crate::texture::Texture::reads_only_uv`]).
+fn uv_only(uv: Vec2) -> SurfaceInteraction {
+    SurfaceInteraction {
+        p: Vec3::ZERO,
+        t: 0.0,
+        n: Vec3::Z,
+        sh_frame: Frame::from_normal(Vec3::Z),
+        uv,
+        dpdu: Vec3::ZERO,
+        dpdv: Vec3::ZERO,
+        shape: 0,
+        prim: 0,
+        bary: Vec2::ZERO,
+        wo: Vec3::Z,
     }
 }
 
@@ -492,6 +516,8 @@ impl PathIntegrator {
         let Some(material) = scene.lane_material(hit.shape) else { return false };
         let (bsdf, mat, param) = match material {
             LaneMaterial::Diffuse(r) => (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0),
+            // The reflectance is looked up below, once the uv is known.
+            LaneMaterial::TexturedDiffuse => (0, [Spectrum::ZERO; 3], 1.0),
             LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
                 (1, [eta, k, specular_reflectance], alpha)
             }
@@ -511,6 +537,23 @@ impl PathIntegrator {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let [p0, p1, p2] = m.vertices(hit.index as usize);
                 v.geo[..3].copy_from_slice(&[p0, p1, p2]);
+                if let LaneMaterial::TexturedDiffuse = material {
+                    // The hit's uv as Shape::interaction_with finds it (barycentric without texture coordinates).
+                    let (b1, b2) = (hit.uv.x, hit.uv.y);
+                    let mut tex = Vec2::new(b1, b2);
+                    if !m.mesh.uvs.is_empty() {
+                        let (u, t) = (&m.mesh.uvs, m.mesh.indices[hit.index as usize]);
+                        v.uvs = [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]];
+                        let b0 = 1.0 - b1 - b2;
+                        tex = b0 * v.uvs[0] + b1 * v.uvs[1] + b2 * v.uvs[2];
+                        v.kind.shape = 3;
+                    }
+                    let Material::Diffuse(d) = &scene.materials[scene.shape_info[hit.shape as usize].material as usize]
+                    else {
+                        return false;
+                    };
+                    v.mat[0] = d.reflectance.eval(&uv_only(tex));
+                }
             }
             Shape::Sphere(s) => {
                 v.kind.shape = 1;
@@ -596,10 +639,12 @@ impl PathIntegrator {
         match (k.shape, k.bsdf) {
             (0, 0 | 1) => lit!(0),
             (1, 0 | 1) => lit!(1),
-            (_, 0 | 1) => lit!(2),
+            (2, 0 | 1) => lit!(2),
+            (_, 0 | 1) => lit!(3),
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
-            (_, b) => specular::<F, 2>(b == 3, v, out),
+            (2, b) => specular::<F, 2>(b == 3, v, out),
+            (_, b) => specular::<F, 3>(b == 3, v, out),
         }
     }
 
@@ -735,13 +780,27 @@ fn hit<F: Float, const S: u8>(v: Lanes) -> LaneHit<F> {
     let (zero, one) = (F::splat(0.0), F::splat(1.0));
     let wo = -gv(|v| v.d).normalize();
     let (p, n, dpdu) = match S {
-        0 => {
+        0 | 3 => {
             let (p0, p1, p2) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
             let (b1, b2) = (g(|v| v.b.x), g(|v| v.b.y));
             let b0 = one - b1 - b2;
             let p = p0 * b0 + p1 * b1 + p2 * b2;
             let (dp0, dp1) = (p1 - p0, p2 - p0);
-            (p, dp0.cross(dp1).normalize(), dp0)
+            let n = dp0.cross(dp1).normalize();
+            if S == 0 {
+                (p, n, dp0)
+            } else {
+                // dp/du from the texture coordinates; Mitsuba's arbitrary
+                // basis where they are degenerate.
+                let uv = |k: usize| (gather::<F>(|l| at(l).uvs[k].x), gather::<F>(|l| at(l).uvs[k].y));
+                let (uv0, uv1, uv2) = (uv(0), uv(1), uv(2));
+                let (duv0, duv1) = ((uv1.0 - uv0.0, uv1.1 - uv0.1), (uv2.0 - uv0.0, uv2.1 - uv0.1));
+                let det = duv0.0 * duv1.1 - duv0.1 * duv1.0;
+                let inv = one / det;
+                let dpdu = (dp0 * duv1.1 - dp1 * duv0.1) * inv;
+                let (fs, _) = frame_from_normal(n);
+                (p, n, V3::select(det.cmp_ne(zero), dpdu, fs))
+            }
         }
         1 => {
             // Sphere::interaction: the point re-projected onto the surface.
