@@ -280,13 +280,20 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
 mod tests {
     use super::*;
 
-    /// The pool (POOL slots) and a pass's finished samples stay small
-    /// enough for the L2 cache: print and bound their sizes.
+    /// The pool (POOL slots, and their vertices prepared for lanes) and a
+    /// pass's finished samples stay small enough for the L2 cache: print
+    /// and bound their sizes.
     #[test]
     fn pool_sizes() {
         let (slot, sample) = (std::mem::size_of::<Slot>(), std::mem::size_of::<Sample>());
-        eprintln!("slot {slot} B, pool {} KiB; finished sample {sample} B", slot * POOL / 1024);
+        let lane = std::mem::size_of::<LaneVertex>();
+        eprintln!(
+            "slot {slot} B, pool {} KiB; lane vertex {lane} B, {} KiB for a pool's; finished sample {sample} B",
+            slot * POOL / 1024,
+            lane * POOL / 1024
+        );
         assert!(slot * POOL <= 64 * 1024, "slot {slot} B");
+        assert!(lane * POOL <= 80 * 1024, "lane vertex {lane} B");
         assert!(sample <= 64, "sample {sample} B");
     }
 }
