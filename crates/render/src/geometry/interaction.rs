@@ -56,6 +56,25 @@ impl SurfaceInteraction {
         }
     }
 
+    /// A hit that carries only `uv`: what a texture that reads nothing else
+    /// needs (bitmaps, checkerboards: [`crate::texture::Texture::reads_only_uv`];
+    /// Mitsuba queries a projector's texture the same way).
+    pub fn at_uv(uv: Vec2) -> SurfaceInteraction {
+        SurfaceInteraction {
+            p: Vec3::ZERO,
+            t: 0.0,
+            n: Vec3::Z,
+            sh_frame: Frame::from_normal(Vec3::Z),
+            uv,
+            dpdu: Vec3::X,
+            dpdv: Vec3::Y,
+            shape: 0,
+            prim: 0,
+            bary: Vec2::ZERO,
+            wo: Vec3::Z,
+        }
+    }
+
     /// World direction → the shading frame (normal = +z), where BSDFs work.
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {

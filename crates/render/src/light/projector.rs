@@ -27,7 +27,7 @@
 use super::bvh::{DirectionCone, LightBounds};
 use super::LightSample;
 use crate::geometry::{Aabb, SurfaceInteraction};
-use crate::math::{luminance, Frame, Mat4, Spectrum, PI};
+use crate::math::{luminance, Mat4, Spectrum, PI};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
@@ -86,7 +86,7 @@ impl ProjectorLight {
         let (wi, dist) = super::point::towards(p_ref, self.position)?;
         let e = match self.irradiance.constant() {
             Some(c) => c,
-            None => self.irradiance.eval(&at_uv(uv)),
+            None => self.irradiance.eval(&SurfaceInteraction::at_uv(uv)),
         };
         let cos = self.axis.dot(-wi);
         if !(cos > 0.0) || e == Spectrum::ZERO {
@@ -126,24 +126,6 @@ impl ProjectorLight {
             (DirectionCone::ENTIRE_SPHERE, 0.0)
         };
         LightBounds::new(at, cone, cos_e, luminance(self.power()))
-    }
-}
-
-/// A surface interaction that carries only `uv`: what a bitmap or
-/// checkerboard reads (Mitsuba queries the texture the same way).
-fn at_uv(uv: Vec2) -> SurfaceInteraction {
-    SurfaceInteraction {
-        p: Vec3::ZERO,
-        t: 0.0,
-        n: Vec3::Z,
-        sh_frame: Frame::from_normal(Vec3::Z),
-        uv,
-        dpdu: Vec3::X,
-        dpdv: Vec3::Y,
-        shape: 0,
-        prim: 0,
-        bary: Vec2::ZERO,
-        wo: Vec3::Z,
     }
 }
 

@@ -31,7 +31,6 @@ use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
-use crate::math::Frame;
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
@@ -266,24 +265,6 @@ impl Lanes<'_> {
     #[inline(always)]
     fn at(&self, l: usize) -> &LaneVertex {
         &self.all[self.idx[l.min(self.idx.len() - 1)] as usize]
-    }
-}
-
-/// A hit with only its `uv` set, for textures that read nothing else
-/// ([`crate::texture::Texture::reads_only_uv`]).
-fn uv_only(uv: Vec2) -> SurfaceInteraction {
-    SurfaceInteraction {
-        p: Vec3::ZERO,
-        t: 0.0,
-        n: Vec3::Z,
-        sh_frame: Frame::from_normal(Vec3::Z),
-        uv,
-        dpdu: Vec3::ZERO,
-        dpdv: Vec3::ZERO,
-        shape: 0,
-        prim: 0,
-        bary: Vec2::ZERO,
-        wo: Vec3::Z,
     }
 }
 
@@ -552,7 +533,7 @@ impl PathIntegrator {
                     else {
                         return false;
                     };
-                    v.mat[0] = d.reflectance.eval(&uv_only(tex));
+                    v.mat[0] = d.reflectance.eval(&SurfaceInteraction::at_uv(tex));
                 }
             }
             Shape::Sphere(s) => {
