@@ -4,7 +4,6 @@
 use glam::{Vec2, Vec3};
 use penumbra_render::geometry::SurfaceInteraction;
 use penumbra_render::material::Material;
-use penumbra_render::math::Frame;
 use penumbra_render::texture::Texture;
 use penumbra_scene::builder::{build, Overrides};
 use penumbra_scene::mitsuba::parse_str;
@@ -52,19 +51,7 @@ fn reflectance(j: &penumbra_render::render::RenderJob) -> Texture {
 }
 
 fn si(u: f32, v: f32) -> SurfaceInteraction {
-    SurfaceInteraction {
-        p: Vec3::ZERO,
-        t: 1.0,
-        n: Vec3::Z,
-        sh_frame: Frame::from_normal(Vec3::Z),
-        uv: Vec2::new(u, v),
-        dpdu: Vec3::X,
-        dpdv: Vec3::Y,
-        shape: 0,
-        prim: 0,
-        bary: Vec2::ZERO,
-        wo: Vec3::Z,
-    }
+    SurfaceInteraction::at_uv(Vec2::new(u, v))
 }
 
 fn srgb(b: u8) -> f32 {

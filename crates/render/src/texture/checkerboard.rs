@@ -53,23 +53,10 @@ impl Checkerboard {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Frame;
     use glam::{Mat2, Vec3};
 
     fn si(u: f32, v: f32) -> SurfaceInteraction {
-        SurfaceInteraction {
-            p: Vec3::ZERO,
-            t: 1.0,
-            n: Vec3::Z,
-            sh_frame: Frame::from_normal(Vec3::Z),
-            uv: Vec2::new(u, v),
-            dpdu: Vec3::X,
-            dpdv: Vec3::Y,
-            shape: 0,
-            prim: 0,
-            bary: Vec2::ZERO,
-            wo: Vec3::Z,
-        }
+        SurfaceInteraction::at_uv(Vec2::new(u, v))
     }
 
     // Mitsuba 3.9.1 (scalar_rgb):
