@@ -263,7 +263,7 @@ impl Scene {
     /// Light `i` when its samples can be drawn in lanes: an area light of
     /// constant, non-zero radiance on a mesh or a sphere; with the shape,
     /// the radiance and whether it emits from both sides.
-    #[inline]
+    #[inline(always)]
     pub fn lane_area_light(&self, i: usize) -> Option<(&Shape, Spectrum, bool)> {
         match &self.lights[i] {
             Light::Area(a) => match (&self.shapes[a.shape as usize], a.radiance.constant()) {

@@ -69,20 +69,20 @@ impl Mesh {
     /// A triangle chosen with probability proportional to its area with
     /// `u`, and `u` rescaled for reuse, as [`Shape::sample_point`] picks it;
     /// `None` for a mesh without area.
-    #[inline]
+    #[inline(always)]
     pub fn pick_triangle(&self, u: f32) -> Option<(usize, f32)> {
         let (i, _, ux) = self.area_distrib.as_ref()?.sample_discrete(u);
         Some((i, ux))
     }
 
     /// The density per unit area of [`Shape::sample_point`] on this mesh.
-    #[inline]
+    #[inline(always)]
     pub fn area_pdf(&self) -> f32 {
         self.area_distrib.as_ref().map_or(0.0, |d| 1.0 / d.total as f32)
     }
 
     /// Corner positions of triangle `i`.
-    #[inline]
+    #[inline(always)]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
         let t = self.mesh.indices[i];
         [self.mesh.positions[t[0] as usize], self.mesh.positions[t[1] as usize], self.mesh.positions[t[2] as usize]]

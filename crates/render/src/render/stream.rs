@@ -27,7 +27,7 @@
 use super::{RenderJob, Tile, TilePixel};
 use crate::accel::Hit;
 use crate::geometry::Ray;
-use crate::integrator::path::{LaneKind, LaneOutcome, LaneVertex, PathIntegrator, PathState};
+use crate::integrator::path::{LaneBins, LaneOutcomes, PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::simd::{gather, Float};
@@ -103,9 +103,8 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`).
     let vertex_lanes = F::WIDTH > 1;
     let env = scene.single_envmap();
-    let mut lane_all: Vec<LaneVertex> = Vec::with_capacity(POOL);
-    let mut lane_slots: Vec<usize> = Vec::with_capacity(POOL);
-    let mut lane_bins: [Vec<u16>; LaneKind::COUNT] = std::array::from_fn(|_| Vec::new());
+    let mut bins = LaneBins::default();
+    let mut lane_out = LaneOutcomes::default();
     let mut next = 0;
     loop {
         // Refill: the next samples in canonical order take the free slots.
@@ -191,21 +190,39 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         shadow_rays.clear();
         ended.clear();
         let mut sky_done = sky_slots.iter().peekable();
-        for (i, slot) in slots.iter_mut().enumerate() {
+        // Runs batch `$at` of `bins`, applies its outcomes and empties it.
+        macro_rules! run_batch {
+            ($at:expr) => {{
+                let b = bins.batch($at);
+                path.lane_vertices::<F>(env.map(|e| e.1), b, &mut lane_out);
+                tile.stats.rays.lane_vertices += b.len() as u64;
+                for l in 0..b.len() {
+                    let i = b.slot(l);
+                    let slot = &mut slots[i];
+                    let (shadow, go_on) = path.lane_vertex_done(&mut slot.state, &lane_out, l, &mut slot.rng);
+                    if shadow {
+                        shadow_slots.push(i);
+                        shadow_rays.push(lane_out.shadow_ray(l));
+                    }
+                    ended[i] = !go_on;
+                }
+                b.clear();
+            }};
+        }
+        for i in 0..slots.len() {
             if sky_done.next_if_eq(&&i).is_some() {
                 ended.push(true);
                 continue;
             }
+            let slot = &mut slots[i];
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                lane_all.push(LaneVertex::EMPTY);
-                let v = lane_all.last_mut().expect("just pushed");
-                if path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng, v) {
-                    lane_bins[v.kind().index()].push(lane_slots.len() as u16);
-                    lane_slots.push(i);
+                if let Some(at) = path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng, i, &mut bins) {
                     ended.push(false);
+                    if bins.batch(at).len() == F::WIDTH {
+                        run_batch!(at);
+                    }
                     continue;
                 }
-                lane_all.pop();
             }
             let ray = slot.state.ray;
             let si = hits[i].map(|h| scene.interaction(&ray, &h));
@@ -217,26 +234,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             }
             ended.push(!v.go_on);
         }
-        for bin in &mut lane_bins {
-            for chunk in bin.chunks(F::WIDTH) {
-                let mut out = [LaneOutcome::default(); 16];
-                path.lane_vertices::<F>(env.map(|e| e.1), &lane_all, chunk, &mut out);
-                for (&j, out) in chunk.iter().zip(&out) {
-                    let i = lane_slots[j as usize];
-                    let slot = &mut slots[i];
-                    let done = path.lane_vertex_done(&mut slot.state, out, &mut slot.rng);
-                    if let Some(r) = done.shadow {
-                        shadow_slots.push(i);
-                        shadow_rays.push(r);
-                    }
-                    ended[i] = !done.go_on;
-                }
-            }
-            bin.clear();
+        for at in 0..bins.count() {
+            run_batch!(at);
         }
-        tile.stats.rays.lane_vertices += lane_all.len() as u64;
-        lane_all.clear();
-        lane_slots.clear();
         // Shadow rays, then each verdict before the path's next vertex.
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
         let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;
@@ -279,21 +279,18 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrator::path::LaneBatch;
 
-    /// The pool (POOL slots, and their vertices prepared for lanes) and a
-    /// pass's finished samples stay small enough for the L2 cache: print
-    /// and bound their sizes.
+    /// The pool (POOL slots), a batch of lane vertices (one per kind met)
+    /// and a pass's finished samples stay small enough for the L1 and L2
+    /// caches: print and bound their sizes.
     #[test]
     fn pool_sizes() {
         let (slot, sample) = (std::mem::size_of::<Slot>(), std::mem::size_of::<Sample>());
-        let lane = std::mem::size_of::<LaneVertex>();
-        eprintln!(
-            "slot {slot} B, pool {} KiB; lane vertex {lane} B, {} KiB for a pool's; finished sample {sample} B",
-            slot * POOL / 1024,
-            lane * POOL / 1024
-        );
+        let batch = std::mem::size_of::<LaneBatch>();
+        eprintln!("slot {slot} B, pool {} KiB; lane batch {batch} B; finished sample {sample} B", slot * POOL / 1024);
         assert!(slot * POOL <= 64 * 1024, "slot {slot} B");
-        assert!(lane * POOL <= 80 * 1024, "lane vertex {lane} B");
+        assert!(batch <= 4 * 1024, "lane batch {batch} B");
         assert!(sample <= 64, "sample {sample} B");
     }
 }

@@ -79,7 +79,7 @@ impl Distribution1D {
     /// Picks an item with probability proportional to its weight. Returns
     /// the item, its probability and `u` remapped to [0, 1) within the
     /// choice made, so the same number can be reused for a further choice.
-    #[inline]
+    #[inline(always)]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32, f32) {
         let x = u * self.alias.len() as f32;
         let bucket = fast::index(x).min(self.alias.len() - 1);

@@ -153,6 +153,19 @@ impl SampleStream {
         mix64(self.key ^ (self.dim as u64).wrapping_mul(0x9e3779b97f4a7c15))
     }
 
+    /// The dimensions drawn so far, for [`Self::rewind`].
+    #[inline]
+    pub fn dim(&self) -> u32 {
+        self.dim
+    }
+
+    /// Back to where [`Self::dim`] was `dim`: the next draws are those that
+    /// followed it (the rest of the stream's state is a cache).
+    #[inline]
+    pub fn rewind(&mut self, dim: u32) {
+        self.dim = dim;
+    }
+
     /// The next value in [0, 1), one dimension further.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {

@@ -25,7 +25,7 @@
 //! refracted directions (`fresnel_conductor`, `fresnel_dielectric`); the
 //! next ray (`Scene::spawn_ray`).
 
-use super::{PathIntegrator, PathState, Vertex};
+use super::{PathIntegrator, PathState};
 use crate::accel::Hit;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
@@ -34,7 +34,7 @@ use crate::material::{LaneMaterial, Material};
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
-use crate::simd::{gather, sin_cos, Float, Mask, V3};
+use crate::simd::{sin_cos, Float, Mask, V3};
 use glam::{Vec2, Vec3};
 
 /// The shape, material and light of a lane vertex: vertices of one kind
@@ -63,103 +63,252 @@ impl LaneKind {
     }
 }
 
-/// One path's vertex as the lane kernel needs it, prepared by
-/// [`PathIntegrator::lane_vertex`].
-#[derive(Debug, Clone, Copy)]
-pub struct LaneVertex {
-    kind: LaneKind,
-    /// The direction of the ray that hit.
-    d: Vec3,
-    /// The hit: a mesh's triangle corners and barycentrics (b1, b2); a
-    /// sphere's centre, rotation z axis and the ray's origin, its radius,
-    /// distance t (in `b.x`) and flip; a disk's world-from-object columns
-    /// x, y, z, w and normal, and the hit's local (x, y).
-    geo: [Vec3; 5],
-    b: Vec2,
-    /// A textured mesh's texture coordinates at the triangle's corners.
-    uvs: [Vec2; 3],
-    radius: f32,
-    flip: bool,
-    /// The material's constants: diffuse: the reflectance; conductors: η,
-    /// k and the specular reflectance (and α in `param` when rough);
-    /// dielectric: the specular reflectance and transmittance, and η in
-    /// `param`.
-    mat: [Spectrum; 3],
-    param: f32,
-    /// The path's throughput.
-    beta: Spectrum,
-    /// An area light: its picked triangle's corners (a sphere: its centre,
-    /// then (radius, 1 / area, 1 if its normals are flipped)), (area density,
-    /// selection probability, radiance, two-sidedness), and the sample's
-    /// numbers (the first rescaled by the triangle's pick). The environment:
-    /// [`EnvMapLight::sample_cell`]'s (u, cos θ) in `u_light`, its density
-    /// in `area_pdf`.
-    light_tri: [Vec3; 3],
-    area_pdf: f32,
-    pmf: f32,
-    li: Spectrum,
-    two_sided: bool,
-    u_light: Vec2,
-    /// The BSDF sample's numbers.
-    u_bsdf1: f32,
-    u_bsdf: Vec2,
+/// The rows of a [`LaneBatch`]: a field's lanes side by side, a vector's
+/// components in consecutive rows.
+mod row {
+    /// The direction of the ray that hit (3 rows).
+    pub const D: usize = 0;
+    /// The hit (5 × 3 rows): a mesh's triangle corners; a sphere's centre,
+    /// rotation z axis and the ray's origin; a disk's world-from-object
+    /// columns x, y, z, w and its normal.
+    pub const GEO: usize = 3;
+    /// A mesh's barycentrics (b1, b2); a sphere's distance t (first row); a
+    /// disk's local (x, y).
+    pub const B: usize = 18;
+    /// A textured mesh's texture coordinates at the corners (3 × 2 rows).
+    pub const UVS: usize = 20;
+    /// A sphere's radius.
+    pub const RADIUS: usize = 26;
+    /// 1 where a sphere's normals are flipped.
+    pub const FLIP: usize = 27;
+    /// The material's constants (3 × 3 rows): diffuse: the reflectance;
+    /// conductors: η, k and the specular reflectance; dielectric: the
+    /// specular reflectance and transmittance.
+    pub const MAT: usize = 28;
+    /// A rough conductor's α; a dielectric's η.
+    pub const PARAM: usize = 37;
+    /// The path's throughput (3 rows).
+    pub const BETA: usize = 38;
+    /// An area light's picked triangle's corners (3 × 3 rows); a sphere
+    /// light's centre, then (radius, 1 / area, 1 if its normals are flipped).
+    pub const LIGHT_TRI: usize = 41;
+    /// The light's area density; the environment's row density.
+    pub const AREA_PDF: usize = 50;
+    /// The light's selection probability.
+    pub const PMF: usize = 51;
+    /// An area light's radiance (3 rows).
+    pub const LI: usize = 52;
+    /// 1 where the area light emits from both sides.
+    pub const TWO_SIDED: usize = 55;
+    /// The light sample's numbers (the first rescaled by the triangle's
+    /// pick); the environment: [`EnvMapLight::sample_cell`]'s (u, cos θ).
+    pub const U_LIGHT: usize = 56;
+    /// The BSDF sample's numbers: the 1D one, then the 2D one.
+    pub const U_BSDF1: usize = 58;
+    pub const U_BSDF: usize = 59;
+    /// How many rows there are.
+    pub const COUNT: usize = 61;
 }
 
-impl LaneVertex {
-    /// A vertex to fill ([`PathIntegrator::lane_vertex`]).
-    pub const EMPTY: LaneVertex = LaneVertex {
-        kind: LaneKind { shape: 0, bsdf: 0, light: 0 },
-        d: Vec3::ZERO,
-        geo: [Vec3::ZERO; 5],
-        b: Vec2::ZERO,
-        uvs: [Vec2::ZERO; 3],
-        radius: 0.0,
-        flip: false,
-        mat: [Spectrum::ZERO; 3],
-        param: 1.0,
-        beta: Spectrum::ZERO,
-        light_tri: [Vec3::ZERO; 3],
-        area_pdf: 0.0,
-        pmf: 0.0,
-        li: Spectrum::ZERO,
-        two_sided: false,
-        u_light: Vec2::ZERO,
-        u_bsdf1: 0.0,
-        u_bsdf: Vec2::ZERO,
-    };
+/// Up to [`LaneBatch::LANES`] prepared vertices of one [`LaneKind`], as
+/// the lane kernel loads them: structure of arrays, a row per field
+/// (`row`), filled by [`PathIntegrator::lane_vertex`] one lane at a time
+/// and run by [`PathIntegrator::lane_vertices`]. Rows a kind does not read
+/// are left as they are.
+#[derive(Clone)]
+pub struct LaneBatch {
+    kind: LaneKind,
+    len: usize,
+    /// The caller's number for each lane's path.
+    slots: [u32; LaneBatch::LANES],
+    rows: [[f32; LaneBatch::LANES]; row::COUNT],
+}
 
-    /// Its kind: [`PathIntegrator::lane_vertices`] takes vertices of one kind.
+impl LaneBatch {
+    /// Lanes in a batch (the widest [`Float`]).
+    pub const LANES: usize = 16;
+
+    fn new(kind: LaneKind) -> LaneBatch {
+        LaneBatch { kind, len: 0, slots: [0; Self::LANES], rows: [[0.0; Self::LANES]; row::COUNT] }
+    }
+
+    /// Vertices in the batch.
     #[inline]
-    pub fn kind(&self) -> LaneKind {
-        self.kind
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether it holds none.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The number the caller gave lane `l`'s path.
+    #[inline]
+    pub fn slot(&self, l: usize) -> usize {
+        self.slots[l] as usize
+    }
+
+    /// Empties the batch (its rows are overwritten as lanes are added).
+    #[inline]
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// Row `r` of the lane being added.
+    #[inline(always)]
+    fn set(&mut self, r: usize, x: f32) {
+        self.rows[r][self.len] = x;
+    }
+
+    /// Rows `r..r + 3` of the lane being added.
+    #[inline(always)]
+    fn set3(&mut self, r: usize, v: Vec3) {
+        let l = self.len;
+        (self.rows[r][l], self.rows[r + 1][l], self.rows[r + 2][l]) = (v.x, v.y, v.z);
+    }
+
+    /// Row `r` in lanes.
+    #[inline(always)]
+    fn get<F: Float>(&self, r: usize) -> F {
+        F::load(&self.rows[r])
+    }
+
+    /// Rows `r..r + 3` in lanes.
+    #[inline(always)]
+    fn get3<F: Float>(&self, r: usize) -> V3<F> {
+        V3::new(self.get(r), self.get(r + 1), self.get(r + 2))
+    }
+
+    /// Row `r` (0 or 1) as a mask.
+    #[inline(always)]
+    fn mask<F: Float>(&self, r: usize) -> F::Mask {
+        self.get::<F>(r).cmp_eq(F::splat(1.0))
+    }
+
+    /// Repeats the last lane in lanes `len..width`, so a short batch runs
+    /// on valid inputs.
+    fn pad(&mut self, width: usize) {
+        let last = self.len - 1;
+        for r in &mut self.rows {
+            let x = r[last];
+            r[self.len..width].fill(x);
+        }
     }
 }
 
-/// What the lane kernel found at one vertex.
-#[derive(Debug, Clone, Copy)]
-pub struct LaneOutcome {
-    /// The light sample's contribution if unblocked, and its shadow ray.
-    shadow: Option<(Spectrum, Ray)>,
-    /// The BSDF sample: the next ray, the vertex's point and normal, the
-    /// sample's density, weight and relative IOR, and whether it is
-    /// specular; `None` when sampling failed (the path ends).
-    next: Option<LaneSample>,
+/// The open [`LaneBatch`]es of a stream, one per kind met so far.
+#[derive(Clone)]
+pub struct LaneBins {
+    /// Per [`LaneKind::index`]: its batch's position in `batches`, or `u8::MAX`.
+    of_kind: [u8; LaneKind::COUNT],
+    batches: Vec<LaneBatch>,
 }
 
-/// A BSDF sample of [`LaneOutcome`].
-#[derive(Debug, Clone, Copy)]
-struct LaneSample {
-    ray: Ray,
-    p: Vec3,
-    n: Vec3,
-    pdf: f32,
-    weight: Spectrum,
-    eta: f32,
+impl Default for LaneBins {
+    fn default() -> Self {
+        LaneBins { of_kind: [u8::MAX; LaneKind::COUNT], batches: Vec::new() }
+    }
+}
+
+impl LaneBins {
+    /// The batch at `i` (as [`PathIntegrator::lane_vertex`] returns it).
+    #[inline]
+    pub fn batch(&mut self, i: usize) -> &mut LaneBatch {
+        &mut self.batches[i]
+    }
+
+    /// How many batches there are (positions `0..count`).
+    #[inline]
+    pub fn count(&self) -> usize {
+        self.batches.len()
+    }
+
+    /// The position of `kind`'s batch, made on first use.
+    #[inline]
+    fn of(&mut self, kind: LaneKind) -> usize {
+        let k = kind.index();
+        if self.of_kind[k] == u8::MAX {
+            self.of_kind[k] = self.batches.len() as u8;
+            self.batches.push(LaneBatch::new(kind));
+        }
+        self.of_kind[k] as usize
+    }
+}
+
+/// The rows of [`LaneOutcomes`], as [`row`] for a batch.
+mod out_row {
+    /// The light sample's contribution if unblocked (3 rows).
+    pub const PENDING: usize = 0;
+    /// Its shadow ray: origin, direction (3 rows each), length.
+    pub const SHADOW_O: usize = 3;
+    pub const SHADOW_D: usize = 6;
+    pub const SHADOW_T: usize = 9;
+    /// The BSDF sample's next ray: origin and direction (3 rows each).
+    pub const O: usize = 10;
+    pub const WI: usize = 13;
+    /// The vertex's point and normal (3 rows each).
+    pub const P: usize = 16;
+    pub const N: usize = 19;
+    /// The sample's density, weight (3 rows) and relative IOR.
+    pub const PDF: usize = 22;
+    pub const WEIGHT: usize = 23;
+    pub const ETA: usize = 26;
+    /// How many rows there are.
+    pub const COUNT: usize = 27;
+}
+
+/// What the lane kernel found at the vertices of a [`LaneBatch`], stored
+/// a row per field as the lanes hold it (`out_row`) and read a lane at
+/// a time by [`PathIntegrator::lane_vertex_done`].
+#[derive(Clone)]
+pub struct LaneOutcomes {
+    /// Lanes with a light sample whose shadow ray is to be traced.
+    shadow: u32,
+    /// Lanes whose BSDF sample goes on (elsewhere sampling failed: the path ends).
+    go: u32,
+    /// Whether the BSDF samples are specular (the same for a whole batch).
     delta: bool,
+    rows: [[f32; LaneBatch::LANES]; out_row::COUNT],
 }
 
-impl LaneOutcome {
-    const NONE: LaneOutcome = LaneOutcome { shadow: None, next: None };
+impl Default for LaneOutcomes {
+    fn default() -> Self {
+        LaneOutcomes { shadow: 0, go: 0, delta: false, rows: [[0.0; LaneBatch::LANES]; out_row::COUNT] }
+    }
+}
+
+impl LaneOutcomes {
+    #[inline(always)]
+    fn put<F: Float>(&mut self, r: usize, x: F) {
+        x.store(&mut self.rows[r]);
+    }
+
+    #[inline(always)]
+    fn put3<F: Float>(&mut self, r: usize, v: V3<F>) {
+        self.put(r, v.x);
+        self.put(r + 1, v.y);
+        self.put(r + 2, v.z);
+    }
+
+    #[inline(always)]
+    fn at(&self, r: usize, l: usize) -> f32 {
+        self.rows[r][l]
+    }
+
+    #[inline(always)]
+    fn at3(&self, r: usize, l: usize) -> Vec3 {
+        Vec3::new(self.rows[r][l], self.rows[r + 1][l], self.rows[r + 2][l])
+    }
+
+    /// Lane `l`'s shadow ray, where [`PathIntegrator::lane_vertex_done`]
+    /// says there is one.
+    #[inline]
+    pub fn shadow_ray(&self, l: usize) -> Ray {
+        use out_row::*;
+        Ray::new(self.at3(SHADOW_O, l), self.at3(SHADOW_D, l), self.at(SHADOW_T, l))
+    }
 }
 
 /// `x.is_finite()` per lane (false for NaN).
@@ -211,12 +360,6 @@ fn transform_xy0<F: Float>(c: [V3<F>; 4], x: F, y: F, point: bool) -> V3<F> {
     }
 }
 
-/// Lane `l` set where `f(l)` holds.
-#[inline(always)]
-fn gather_mask<F: Float>(f: impl Fn(usize) -> bool) -> F::Mask {
-    gather::<F>(|l| if f(l) { 1.0 } else { 0.0 }).cmp_eq(F::splat(1.0))
-}
-
 /// `fresnel_conductor_1` in lanes, for one channel.
 #[inline(always)]
 fn fresnel_conductor<F: Float>(cos_i: F, eta_r: F, eta_i: F) -> F {
@@ -251,21 +394,6 @@ fn fresnel_dielectric<F: Float>(cos_i: F, eta: F) -> (F, F, F, F) {
     let r = F::splat(0.5) * (a_s * a_s + a_p * a_p);
     let r = F::select(eta.cmp_eq(one), zero, F::select(ci.cmp_eq(zero), one, r));
     (r, F::select(outside, -ct, ct), eta_it, eta_ti)
-}
-
-/// The vertices of a lane group: lane l is `all[idx[l]]`; short groups
-/// repeat their last vertex.
-#[derive(Clone, Copy)]
-struct Lanes<'a> {
-    all: &'a [LaneVertex],
-    idx: &'a [u16],
-}
-
-impl Lanes<'_> {
-    #[inline(always)]
-    fn at(&self, l: usize) -> &LaneVertex {
-        &self.all[self.idx[l.min(self.idx.len() - 1)] as usize]
-    }
 }
 
 /// `area_to_solid_angle` in lanes: the density and whether there is one.
@@ -474,14 +602,17 @@ impl<F: Float> LaneHit<F> {
 }
 
 impl PathIntegrator {
-    /// The vertex of `st` at `hit` (the closest hit of `st.ray`) prepared
-    /// for [`Self::lane_vertices`] when it qualifies: a non-instanced hit on
+    /// The vertex of `st` at `hit` (the closest hit of `st.ray`) added to
+    /// its kind's batch in `bins` when it qualifies: a non-instanced hit on
     /// a [`Scene::lane_material`] shape, before the last segment; for a
     /// diffuse one, with a light picked (uniformly or by power) that is a
     /// [`Scene::lane_area_light`] or `env`, the scene's one environment map
     /// ([`Scene::single_envmap`]). Its light and BSDF random numbers are
-    /// drawn here, as `vertex` draws them, and `v` is filled. False, with
-    /// `rng` as it was, otherwise: run [`Self::vertex`].
+    /// drawn here, as `vertex` draws them; `slot` is the caller's number for
+    /// the path ([`LaneBatch::slot`]). Returns the batch's position
+    /// ([`LaneBins::batch`]); `None`, with `rng` as it was, otherwise: run
+    /// [`Self::vertex`].
+    #[allow(clippy::too_many_arguments)]
     pub fn lane_vertex(
         &self,
         scene: &Scene,
@@ -489,122 +620,205 @@ impl PathIntegrator {
         st: &PathState,
         hit: &Hit,
         rng: &mut SampleStream,
-        v: &mut LaneVertex,
-    ) -> bool {
+        slot: usize,
+        bins: &mut LaneBins,
+    ) -> Option<usize> {
         if hit.instance != Hit::NOT_INSTANCED || st.depth + 1 >= self.term.max_depth {
-            return false;
+            return None;
         }
-        let Some(material) = scene.lane_material(hit.shape) else { return false };
-        let (bsdf, mat, param) = match material {
-            LaneMaterial::Diffuse(r) => (0, [r, Spectrum::ZERO, Spectrum::ZERO], 1.0),
-            // The reflectance is looked up below, once the uv is known.
-            LaneMaterial::TexturedDiffuse => (0, [Spectrum::ZERO; 3], 1.0),
-            LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
-                (1, [eta, k, specular_reflectance], alpha)
-            }
-            LaneMaterial::Conductor { eta, k, specular_reflectance } => (2, [eta, k, specular_reflectance], 1.0),
-            LaneMaterial::Dielectric { eta, specular_reflectance, specular_transmittance } => {
-                (3, [specular_reflectance, specular_transmittance, Spectrum::ZERO], eta)
-            }
+        // The kind first, then the rows of its batch.
+        let material = scene.lane_material(hit.shape)?;
+        let bsdf = match material {
+            LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse => 0,
+            LaneMaterial::RoughConductor { .. } => 1,
+            LaneMaterial::Conductor { .. } => 2,
+            LaneMaterial::Dielectric { .. } => 3,
         };
         let lit = bsdf < 2;
         // The light BVH's choice depends on the point, found in lanes.
         if lit && scene.light_sampler().kind() == LightSelection::Bvh {
-            return false;
+            return None;
         }
-        v.kind = LaneKind { shape: 0, bsdf, light: 0 };
-        (v.d, v.b, v.mat, v.param, v.beta) = (st.ray.d, hit.uv, mat, param, st.beta);
-        match &scene.shapes[hit.shape as usize] {
+        let shape = &scene.shapes[hit.shape as usize];
+        let shape_kind = match shape {
+            Shape::Mesh(m) | Shape::CulledMesh(m) => {
+                let textured = matches!(material, LaneMaterial::TexturedDiffuse);
+                if textured && !m.mesh.uvs.is_empty() {
+                    3
+                } else {
+                    0
+                }
+            }
+            Shape::Sphere(_) => 1,
+            Shape::Disk(_) => 2,
+            _ => return None,
+        };
+        let reflectance = match material {
+            LaneMaterial::TexturedDiffuse => {
+                let m = &scene.materials[scene.shape_info[hit.shape as usize].material as usize];
+                let Material::Diffuse(d) = m else { return None };
+                Some(&d.reflectance)
+            }
+            _ => None,
+        };
+        // The light: its kind and what its rows need.
+        enum Picked<'a> {
+            None,
+            Env { x: f32, cos_t: f32, pdf_row: f32 },
+            Sphere(&'a crate::geometry::Sphere),
+            Tri(&'a crate::geometry::Mesh, usize, f32),
+        }
+        // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
+        let dim = rng.dim();
+        let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
+        // A block, not a closure: LLVM kept the closure out of line and
+        // returned its tuple through memory.
+        let light = 'pick: {
+            if !lit {
+                break 'pick Some((Picked::None, 0.0, Spectrum::ZERO, false));
+            }
+            // Uniform and power selection ignore the receiver.
+            let Some((i, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel) else { break 'pick None };
+            if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
+                let Some((x, cos_t, pdf_row)) = e.sample_cell(u_light) else { break 'pick None };
+                break 'pick Some((Picked::Env { x, cos_t, pdf_row }, pmf, Spectrum::ZERO, false));
+            }
+            let Some((shape, li, two_sided)) = scene.lane_area_light(i) else { break 'pick None };
+            let p = match shape {
+                Shape::Sphere(s) => Picked::Sphere(s),
+                Shape::Mesh(mesh) | Shape::CulledMesh(mesh) => {
+                    let Some((t, ux)) = mesh.pick_triangle(u_light.x) else { break 'pick None };
+                    Picked::Tri(mesh, t, ux)
+                }
+                _ => break 'pick None,
+            };
+            Some((p, pmf, li, two_sided))
+        };
+        let Some(light) = light else {
+            rng.rewind(dim);
+            return None;
+        };
+        let light_kind = match light.0 {
+            Picked::Env { .. } => 1,
+            Picked::Sphere(_) => 2,
+            _ => 0,
+        };
+        let at = bins.of(LaneKind { shape: shape_kind, bsdf, light: light_kind });
+        let b = &mut bins.batches[at];
+        b.set3(row::D, st.ray.d);
+        b.set(row::B, hit.uv.x);
+        b.set(row::B + 1, hit.uv.y);
+        b.set3(row::BETA, st.beta);
+        match material {
+            LaneMaterial::Diffuse(r) => b.set3(row::MAT, r),
+            LaneMaterial::TexturedDiffuse => {}
+            LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
+                b.set3(row::MAT, eta);
+                b.set3(row::MAT + 3, k);
+                b.set3(row::MAT + 6, specular_reflectance);
+                b.set(row::PARAM, alpha);
+            }
+            LaneMaterial::Conductor { eta, k, specular_reflectance } => {
+                b.set3(row::MAT, eta);
+                b.set3(row::MAT + 3, k);
+                b.set3(row::MAT + 6, specular_reflectance);
+            }
+            LaneMaterial::Dielectric { eta, specular_reflectance, specular_transmittance } => {
+                b.set3(row::MAT, specular_reflectance);
+                b.set3(row::MAT + 3, specular_transmittance);
+                b.set(row::PARAM, eta);
+            }
+        }
+        match shape {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let [p0, p1, p2] = m.vertices(hit.index as usize);
-                v.geo[..3].copy_from_slice(&[p0, p1, p2]);
-                if let LaneMaterial::TexturedDiffuse = material {
+                b.set3(row::GEO, p0);
+                b.set3(row::GEO + 3, p1);
+                b.set3(row::GEO + 6, p2);
+                if let Some(reflectance) = reflectance {
                     // The hit's uv as Shape::interaction_with finds it (barycentric without texture coordinates).
                     let (b1, b2) = (hit.uv.x, hit.uv.y);
                     let mut tex = Vec2::new(b1, b2);
-                    if !m.mesh.uvs.is_empty() {
+                    if shape_kind == 3 {
                         let (u, t) = (&m.mesh.uvs, m.mesh.indices[hit.index as usize]);
-                        v.uvs = [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]];
+                        let uvs = [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]];
+                        for (k, uv) in uvs.iter().enumerate() {
+                            b.set(row::UVS + 2 * k, uv.x);
+                            b.set(row::UVS + 2 * k + 1, uv.y);
+                        }
                         let b0 = 1.0 - b1 - b2;
-                        tex = b0 * v.uvs[0] + b1 * v.uvs[1] + b2 * v.uvs[2];
-                        v.kind.shape = 3;
+                        tex = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
                     }
-                    let Material::Diffuse(d) = &scene.materials[scene.shape_info[hit.shape as usize].material as usize]
-                    else {
-                        return false;
-                    };
-                    v.mat[0] = d.reflectance.eval(&SurfaceInteraction::at_uv(tex));
+                    b.set3(row::MAT, reflectance.eval(&SurfaceInteraction::at_uv(tex)));
                 }
             }
             Shape::Sphere(s) => {
-                v.kind.shape = 1;
-                v.geo[..3].copy_from_slice(&[s.center, s.rot.z_axis, st.ray.o]);
-                (v.radius, v.b.x, v.flip) = (s.radius, hit.t, s.flip);
+                b.set3(row::GEO, s.center);
+                b.set3(row::GEO + 3, s.rot.z_axis);
+                b.set3(row::GEO + 6, st.ray.o);
+                b.set(row::RADIUS, s.radius);
+                b.set(row::B, hit.t);
+                b.set(row::FLIP, if s.flip { 1.0 } else { 0.0 });
             }
             Shape::Disk(d) => {
-                v.kind.shape = 2;
                 let m = &d.world_from_object;
-                v.geo = [m.x_axis.truncate(), m.y_axis.truncate(), m.z_axis.truncate(), m.w_axis.truncate(), d.n];
+                b.set3(row::GEO, m.x_axis.truncate());
+                b.set3(row::GEO + 3, m.y_axis.truncate());
+                b.set3(row::GEO + 6, m.z_axis.truncate());
+                b.set3(row::GEO + 9, m.w_axis.truncate());
+                b.set3(row::GEO + 12, d.n);
             }
-            _ => return false,
+            _ => unreachable!("the shape kind was found above"),
         }
-        let saved = if lit { Some(rng.clone()) } else { None };
-        let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
-        if let Some(saved) = saved {
-            // Uniform and power selection ignore the receiver.
-            let picked = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel).and_then(|(i, pmf)| {
-                v.pmf = pmf;
-                if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
-                    let (x, cos_t, pdf_row) = e.sample_cell(u_light)?;
-                    v.kind.light = 1;
-                    (v.u_light, v.area_pdf) = (Vec2::new(x, cos_t), pdf_row);
-                    return Some(());
+        if lit {
+            let (picked, pmf, li, two_sided) = light;
+            b.set(row::PMF, pmf);
+            b.set3(row::LI, li);
+            b.set(row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+            match picked {
+                Picked::Env { x, cos_t, pdf_row } => {
+                    b.set(row::U_LIGHT, x);
+                    b.set(row::U_LIGHT + 1, cos_t);
+                    b.set(row::AREA_PDF, pdf_row);
                 }
-                let (shape, li, two_sided) = scene.lane_area_light(i)?;
-                (v.li, v.two_sided) = (li, two_sided);
-                match shape {
-                    Shape::Sphere(s) => {
-                        v.kind.light = 2;
-                        let flip = if s.flip { 1.0 } else { 0.0 };
-                        v.light_tri[..2].copy_from_slice(&[s.center, Vec3::new(s.radius, 1.0 / s.area(), flip)]);
-                        v.u_light = u_light;
-                    }
-                    Shape::Mesh(mesh) | Shape::CulledMesh(mesh) => {
-                        let (t, ux) = mesh.pick_triangle(u_light.x)?;
-                        v.light_tri = mesh.vertices(t);
-                        (v.area_pdf, v.u_light) = (mesh.area_pdf(), Vec2::new(ux, u_light.y));
-                    }
-                    _ => return None,
+                Picked::Sphere(s) => {
+                    let flip = if s.flip { 1.0 } else { 0.0 };
+                    b.set3(row::LIGHT_TRI, s.center);
+                    b.set3(row::LIGHT_TRI + 3, Vec3::new(s.radius, 1.0 / s.area(), flip));
+                    b.set(row::U_LIGHT, u_light.x);
+                    b.set(row::U_LIGHT + 1, u_light.y);
                 }
-                Some(())
-            });
-            if picked.is_none() {
-                *rng = saved;
-                return false;
+                Picked::Tri(mesh, t, ux) => {
+                    let [q0, q1, q2] = mesh.vertices(t);
+                    b.set3(row::LIGHT_TRI, q0);
+                    b.set3(row::LIGHT_TRI + 3, q1);
+                    b.set3(row::LIGHT_TRI + 6, q2);
+                    b.set(row::AREA_PDF, mesh.area_pdf());
+                    b.set(row::U_LIGHT, ux);
+                    b.set(row::U_LIGHT + 1, u_light.y);
+                }
+                Picked::None => unreachable!("a lit vertex has its light"),
             }
         }
-        // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
-        v.u_bsdf1 = rng.next_1d();
-        v.u_bsdf = rng.next_2d();
-        true
+        b.set(row::U_BSDF1, rng.next_1d());
+        let u = rng.next_2d();
+        b.set(row::U_BSDF, u.x);
+        b.set(row::U_BSDF + 1, u.y);
+        b.slots[b.len] = slot as u32;
+        b.len += 1;
+        Some(at)
     }
 
-    /// Runs up to `F::WIDTH` prepared vertices of one [`LaneKind`] at once,
-    /// `all[idx[k]]` for each k; `out[k]` is its outcome. `env` as for
+    /// Runs the vertices of `b` (at most `F::WIDTH`, all of one [`LaneKind`])
+    /// at once; `out[l]` is lane `l`'s outcome. `env` as for
     /// [`Self::lane_vertex`].
-    pub fn lane_vertices<F: Float>(
-        &self,
-        env: Option<&EnvMapLight>,
-        all: &[LaneVertex],
-        idx: &[u16],
-        out: &mut [LaneOutcome],
-    ) {
-        let Some(&first) = idx.first() else { return };
-        let first = &all[first as usize];
-        debug_assert!(idx.len() <= F::WIDTH && out.len() >= idx.len());
-        debug_assert!(idx.iter().all(|&i| all[i as usize].kind == first.kind));
-        let v = Lanes { all, idx };
-        let k = first.kind;
+    pub fn lane_vertices<F: Float>(&self, env: Option<&EnvMapLight>, b: &mut LaneBatch, out: &mut LaneOutcomes) {
+        if b.is_empty() {
+            return;
+        }
+        debug_assert!(b.len() <= F::WIDTH);
+        b.pad(F::WIDTH);
+        let (v, k) = (&*b, b.kind);
         macro_rules! lit {
             ($s:literal) => {
                 match (k.light, k.bsdf) {
@@ -637,13 +851,11 @@ impl PathIntegrator {
     fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
         env: Option<&EnvMapLight>,
-        v: Lanes,
-        out: &mut [LaneOutcome],
+        v: &LaneBatch,
+        out: &mut LaneOutcomes,
     ) {
-        let n_in = v.idx.len();
-        let at = |l: usize| v.at(l);
-        let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
-        let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
+        let g = |r: usize| v.get::<F>(r);
+        let gv = |r: usize| v.get3::<F>(r);
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
         let h = hit::<F, S>(v);
         let (p, n) = (h.p, h.n);
@@ -652,48 +864,48 @@ impl PathIntegrator {
         // density, radiance, whether there is one).
         let (wi, dist, light_pdf, li, sampled) = if L == 1 {
             let env = env.expect("an environment vertex without the environment");
-            let (wi, pdf) = env.sample_direction(g(|v| v.u_light.x), g(|v| v.u_light.y), g(|v| v.area_pdf));
+            let (wi, pdf) = env.sample_direction(g(row::U_LIGHT), g(row::U_LIGHT + 1), g(row::AREA_PDF));
             let li = env.eval_lanes(wi.x, wi.y, wi.z);
-            (wi, F::splat(f32::INFINITY), pdf * g(|v| v.pmf), V3::gather(|l| li[l]), F::Mask::splat(true))
+            (wi, F::splat(f32::INFINITY), pdf * g(row::PMF), V3::gather(|l| li[l]), F::Mask::splat(true))
         } else {
             // The point, its normal and solid-angle density (Shape::sample_direction).
             let (lp, ln, pdf, ok) = if L == 0 {
                 // Shape::sample_point on the picked triangle, area_to_solid_angle.
-                let (q0, q1, q2) = (gv(|v| v.light_tri[0]), gv(|v| v.light_tri[1]), gv(|v| v.light_tri[2]));
-                let su = g(|v| v.u_light.x).sqrt();
-                let (lb1, lb2) = (one - su, g(|v| v.u_light.y) * su);
+                let (q0, q1, q2) = (gv(row::LIGHT_TRI), gv(row::LIGHT_TRI + 3), gv(row::LIGHT_TRI + 6));
+                let su = g(row::U_LIGHT).sqrt();
+                let (lb1, lb2) = (one - su, g(row::U_LIGHT + 1) * su);
                 let lp = q0 * (one - lb1 - lb2) + q1 * lb1 + q2 * lb2;
                 let ln = (q1 - q0).cross(q2 - q0).normalize();
-                let (pdf, ok) = area_to_solid_angle(g(|v| v.area_pdf), p, lp, ln);
+                let (pdf, ok) = area_to_solid_angle(g(row::AREA_PDF), p, lp, ln);
                 (lp, ln, pdf, ok)
             } else {
-                sphere_sample(gv(|v| v.light_tri[0]), gv(|v| v.light_tri[1]), p, g(|v| v.u_light.x), g(|v| v.u_light.y))
+                sphere_sample(gv(row::LIGHT_TRI), gv(row::LIGHT_TRI + 3), p, g(row::U_LIGHT), g(row::U_LIGHT + 1))
             };
             // AreaLight::sample_li.
             let d = lp - p;
             let dist = d.length();
             let wi = d / dist;
             let n_wi = ln.dot(wi);
-            let two_sided = gather_mask::<F>(|l| at(l).two_sided);
+            let two_sided = v.mask::<F>(row::TWO_SIDED);
             let facing = !(n_wi.cmp_ge(zero) & !(two_sided & n_wi.cmp_gt(zero)));
             let sampled = ok & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
-            (wi, dist, pdf * g(|v| v.pmf), gv(|v| v.li), sampled)
+            (wi, dist, pdf * g(row::PMF), gv(row::LI), sampled)
         };
         // The BSDF's value and density (Bsdf::eval_pdf), MIS-weighted.
         let wi_l = h.to_local(wi);
         let (f, bsdf_pdf) = if B == 0 {
             let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
-            let f = V3::select(front, gv(|v| v.mat[0]) * F::splat(INV_PI), V3::splat(Vec3::ZERO));
+            let f = V3::select(front, gv(row::MAT) * F::splat(INV_PI), V3::splat(Vec3::ZERO));
             (f, F::select(front, wi_l.z.max(zero) * F::splat(INV_PI), zero))
         } else {
-            let ggx = Ggx::new(g(|v| v.param));
-            let (eta, k, spec) = (gv(|v| v.mat[0]), gv(|v| v.mat[1]), gv(|v| v.mat[2]));
+            let ggx = Ggx::new(g(row::PARAM));
+            let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
             ggx.eval_pdf(h.wo, wi_l, eta, k, spec)
         };
         let f = f * wi_l.z.abs();
         let contributes = sampled & f.ne_zero();
         let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
-        let pending = gv(|v| v.beta).mul_elem(f).mul_elem(li) * (w / light_pdf);
+        let pending = gv(row::BETA).mul_elem(f).mul_elem(li) * (w / light_pdf);
         // Its shadow ray (Scene::shadow_ray).
         let o = offset_origin(p, n, wi);
         let (shadow_d, shadow_t) = if L != 1 {
@@ -705,48 +917,60 @@ impl PathIntegrator {
         };
 
         // The BSDF sample (Bsdf::sample).
-        let (u0, u1) = (g(|v| v.u_bsdf.x), g(|v| v.u_bsdf.y));
+        let (u0, u1) = (g(row::U_BSDF), g(row::U_BSDF + 1));
         let (wi_next, bsdf_pdf, weight, go) = if B == 0 {
             // Diffuse::sample: sample_cosine_hemisphere.
             let (dx, dy) = concentric_disk(u0, u1);
             let dz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
             let bsdf_pdf = dz.max(zero) * F::splat(INV_PI);
             let go = !h.wo.z.cmp_le(zero) & !bsdf_pdf.cmp_le(zero);
-            (V3::new(dx, dy, dz), bsdf_pdf, gv(|v| v.mat[0]), go)
+            (V3::new(dx, dy, dz), bsdf_pdf, gv(row::MAT), go)
         } else {
-            let ggx = Ggx::new(g(|v| v.param));
-            let (eta, k, spec) = (gv(|v| v.mat[0]), gv(|v| v.mat[1]), gv(|v| v.mat[2]));
+            let ggx = Ggx::new(g(row::PARAM));
+            let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
             ggx.sample(h.wo, u0, u1, eta, k, spec)
         };
         let wi_next = h.to_world(wi_next);
-        let (pending, o, shadow_d) = (pending.to_lanes(), o.to_lanes(), shadow_d.to_lanes());
-        let shadow_t = shadow_t.to_array();
-        let contributes = contributes.bitmask();
-        for (l, out) in out.iter_mut().enumerate().take(n_in) {
-            out.shadow =
-                (contributes >> l & 1 != 0).then(|| (pending[l], Ray::new(o[l], shadow_d[l], shadow_t.as_ref()[l])));
-        }
-        let weight = weight.to_lanes();
-        next_rays(&h, wi_next, bsdf_pdf, go, |l| weight[l], |_| 1.0, false, n_in, out);
+        out.shadow = contributes.bitmask();
+        out.put3(out_row::PENDING, pending);
+        out.put3(out_row::SHADOW_O, o);
+        out.put3(out_row::SHADOW_D, shadow_d);
+        out.put(out_row::SHADOW_T, shadow_t);
+        next_rays(&h, wi_next, bsdf_pdf, go, weight, one, false, out);
     }
 
-    /// The rest of a lane vertex, one path at a time: its outcome applied
-    /// to `st` and Russian roulette, as at the end of [`Self::vertex`].
-    pub fn lane_vertex_done(&self, st: &mut PathState, out: &LaneOutcome, rng: &mut SampleStream) -> Vertex {
-        let shadow = out.shadow.map(|(c, ray)| {
-            st.pending = c;
-            ray
-        });
-        let Some(s) = out.next else { return Vertex { shadow, go_on: false } };
-        st.beta *= s.weight;
-        st.eta *= s.eta;
-        st.prev_p = s.p;
-        st.prev_n = s.n;
-        st.prev_bsdf_pdf = s.pdf;
-        st.prev_delta = s.delta;
-        st.ray = s.ray;
+    /// The rest of lane `l`'s vertex of a batch, one path at a time: its
+    /// outcome applied to `st` and Russian roulette, as at the end of
+    /// [`Self::vertex`]: whether there is a shadow ray
+    /// ([`LaneOutcomes::shadow_ray`], [`Vertex::shadow`]) and whether the
+    /// path goes on.
+    ///
+    /// [`Vertex::shadow`]: super::Vertex::shadow
+    #[inline]
+    pub fn lane_vertex_done(
+        &self,
+        st: &mut PathState,
+        out: &LaneOutcomes,
+        l: usize,
+        rng: &mut SampleStream,
+    ) -> (bool, bool) {
+        use out_row::*;
+        let shadow = out.shadow >> l & 1 != 0;
+        if shadow {
+            st.pending = out.at3(PENDING, l);
+        }
+        if out.go >> l & 1 == 0 {
+            return (shadow, false);
+        }
+        st.beta *= out.at3(WEIGHT, l);
+        st.eta *= out.at(ETA, l);
+        st.prev_p = out.at3(P, l);
+        st.prev_n = out.at3(N, l);
+        st.prev_bsdf_pdf = out.at(PDF, l);
+        st.prev_delta = out.delta;
+        st.ray = Ray::new(out.at3(O, l), out.at3(WI, l), f32::INFINITY);
         st.depth += 1;
-        Vertex { shadow, go_on: self.roulette(st, rng) }
+        (shadow, self.roulette(st, rng))
     }
 }
 
@@ -754,16 +978,15 @@ impl PathIntegrator {
 /// disk): point, normal and dp/du as `Shape::interaction_with` finds them
 /// without the uv parameterisation, and the frame of `frame_from_dpdu`.
 #[inline(always)]
-fn hit<F: Float, const S: u8>(v: Lanes) -> LaneHit<F> {
-    let at = |l: usize| v.at(l);
-    let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
-    let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
+fn hit<F: Float, const S: u8>(v: &LaneBatch) -> LaneHit<F> {
+    let g = |r: usize| v.get::<F>(r);
+    let gv = |r: usize| v.get3::<F>(r);
     let (zero, one) = (F::splat(0.0), F::splat(1.0));
-    let wo = -gv(|v| v.d).normalize();
+    let wo = -gv(row::D).normalize();
     let (p, n, dpdu) = match S {
         0 | 3 => {
-            let (p0, p1, p2) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
-            let (b1, b2) = (g(|v| v.b.x), g(|v| v.b.y));
+            let (p0, p1, p2) = (gv(row::GEO), gv(row::GEO + 3), gv(row::GEO + 6));
+            let (b1, b2) = (g(row::B), g(row::B + 1));
             let b0 = one - b1 - b2;
             let p = p0 * b0 + p1 * b1 + p2 * b2;
             let (dp0, dp1) = (p1 - p0, p2 - p0);
@@ -773,7 +996,7 @@ fn hit<F: Float, const S: u8>(v: Lanes) -> LaneHit<F> {
             } else {
                 // dp/du from the texture coordinates; Mitsuba's arbitrary
                 // basis where they are degenerate.
-                let uv = |k: usize| (gather::<F>(|l| at(l).uvs[k].x), gather::<F>(|l| at(l).uvs[k].y));
+                let uv = |k: usize| (g(row::UVS + 2 * k), g(row::UVS + 2 * k + 1));
                 let (uv0, uv1, uv2) = (uv(0), uv(1), uv(2));
                 let (duv0, duv1) = ((uv1.0 - uv0.0, uv1.1 - uv0.1), (uv2.0 - uv0.0, uv2.1 - uv0.1));
                 let det = duv0.0 * duv1.1 - duv0.1 * duv1.0;
@@ -785,18 +1008,18 @@ fn hit<F: Float, const S: u8>(v: Lanes) -> LaneHit<F> {
         }
         1 => {
             // Sphere::interaction: the point re-projected onto the surface.
-            let (c, z_axis, o) = (gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]));
-            let at_t = o + gv(|v| v.d) * g(|v| v.b.x);
+            let (c, z_axis, o) = (gv(row::GEO), gv(row::GEO + 3), gv(row::GEO + 6));
+            let at_t = o + gv(row::D) * g(row::B);
             let n = (at_t - c).normalize();
-            let p = c + n * g(|v| v.radius);
+            let p = c + n * g(row::RADIUS);
             let dpdu = z_axis.cross(n);
-            (p, V3::select(gather_mask::<F>(|l| at(l).flip), -n, n), dpdu)
+            (p, V3::select(v.mask::<F>(row::FLIP), -n, n), dpdu)
         }
         _ => {
             // Disk::interaction: the local (x, y) placed.
-            let c = [gv(|v| v.geo[0]), gv(|v| v.geo[1]), gv(|v| v.geo[2]), gv(|v| v.geo[3])];
-            let (x, y) = (g(|v| v.b.x), g(|v| v.b.y));
-            (transform_xy0(c, x, y, true), gv(|v| v.geo[4]), transform_xy0(c, x, y, false))
+            let c = [gv(row::GEO), gv(row::GEO + 3), gv(row::GEO + 6), gv(row::GEO + 9)];
+            let (x, y) = (g(row::B), g(row::B + 1));
+            (transform_xy0(c, x, y, true), gv(row::GEO + 12), transform_xy0(c, x, y, false))
         }
     };
     // The shading frame (frame_from_dpdu, the shading normal being n).
@@ -815,39 +1038,35 @@ fn hit<F: Float, const S: u8>(v: Lanes) -> LaneHit<F> {
 /// dielectric on shape kind `S`: `Conductor::sample` or
 /// `Dielectric::sample` and the next ray; no light sample.
 #[inline(always)]
-fn specular<F: Float, const S: u8>(dielectric: bool, v: Lanes, out: &mut [LaneOutcome]) {
-    let n_in = v.idx.len();
-    let at = |l: usize| v.at(l);
-    let g = |f: fn(&LaneVertex) -> f32| gather::<F>(|l| f(at(l)));
-    let gv = |f: fn(&LaneVertex) -> Vec3| V3::<F>::gather(|l| f(at(l)));
+fn specular<F: Float, const S: u8>(dielectric: bool, v: &LaneBatch, out: &mut LaneOutcomes) {
+    let g = |r: usize| v.get::<F>(r);
+    let gv = |r: usize| v.get3::<F>(r);
     let (zero, one) = (F::splat(0.0), F::splat(1.0));
     let h = hit::<F, S>(v);
     let wo = h.wo;
     let reflected = V3::new(-wo.x, -wo.y, wo.z);
-    for out in out.iter_mut().take(n_in) {
-        out.shadow = None;
-    }
+    out.shadow = 0;
     if !dielectric {
-        let (eta, k) = (gv(|v| v.mat[0]), gv(|v| v.mat[1]));
+        let (eta, k) = (gv(row::MAT), gv(row::MAT + 3));
         let f = V3::new(
             fresnel_conductor(wo.z, eta.x, k.x),
             fresnel_conductor(wo.z, eta.y, k.y),
             fresnel_conductor(wo.z, eta.z, k.z),
         );
-        let weight = gv(|v| v.mat[2]).mul_elem(f).to_lanes();
+        let weight = gv(row::MAT + 6).mul_elem(f);
         let go = !wo.z.cmp_le(zero);
-        next_rays(&h, h.to_world(reflected), one, go, |l| weight[l], |_| 1.0, true, n_in, out);
+        next_rays(&h, h.to_world(reflected), one, go, weight, one, true, out);
         return;
     }
-    let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, g(|v| v.param));
-    let reflect = g(|v| v.u_bsdf1).cmp_le(r);
+    let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, g(row::PARAM));
+    let reflect = g(row::U_BSDF1).cmp_le(r);
     let refracted = V3::new(-eta_ti * wo.x, -eta_ti * wo.y, cos_t);
     let wi = V3::select(reflect, reflected, refracted);
     let pdf = F::select(reflect, r, one - r);
-    let t = gv(|v| v.mat[1]) * (eta_ti * eta_ti);
-    let weight = V3::select(reflect, gv(|v| v.mat[0]), t).to_lanes();
-    let eta = F::select(reflect, one, eta_it).to_array();
-    next_rays(&h, h.to_world(wi), pdf, F::Mask::splat(true), |l| weight[l], |l| eta.as_ref()[l], true, n_in, out);
+    let t = gv(row::MAT + 3) * (eta_ti * eta_ti);
+    let weight = V3::select(reflect, gv(row::MAT), t);
+    let eta = F::select(reflect, one, eta_it);
+    next_rays(&h, h.to_world(wi), pdf, F::Mask::splat(true), weight, eta, true, out);
 }
 
 /// The BSDF samples of lane vertices: where `go` holds, the ray leaving
@@ -860,31 +1079,18 @@ fn next_rays<F: Float>(
     wi: V3<F>,
     pdf: F,
     go: F::Mask,
-    weight: impl Fn(usize) -> Spectrum,
-    eta: impl Fn(usize) -> f32,
+    weight: V3<F>,
+    eta: F,
     delta: bool,
-    n_in: usize,
-    out: &mut [LaneOutcome],
+    out: &mut LaneOutcomes,
 ) {
     let o = offset_origin(h.p, h.n, wi);
-    let (o, wi, p, n, pdf) = (o.to_lanes(), wi.to_lanes(), h.p.to_lanes(), h.n.to_lanes(), pdf.to_array());
-    let go = go.bitmask();
-    for (l, out) in out.iter_mut().enumerate().take(n_in) {
-        out.next = (go >> l & 1 != 0).then(|| LaneSample {
-            ray: Ray::new(o[l], wi[l], f32::INFINITY),
-            p: p[l],
-            n: n[l],
-            pdf: pdf.as_ref()[l],
-            weight: weight(l),
-            eta: eta(l),
-            delta,
-        });
-    }
-}
-
-/// Where `Default` is needed for buffers of outcomes.
-impl Default for LaneOutcome {
-    fn default() -> Self {
-        LaneOutcome::NONE
-    }
+    (out.go, out.delta) = (go.bitmask(), delta);
+    out.put3(out_row::O, o);
+    out.put3(out_row::WI, wi);
+    out.put3(out_row::P, h.p);
+    out.put3(out_row::N, h.n);
+    out.put(out_row::PDF, pdf);
+    out.put3(out_row::WEIGHT, weight);
+    out.put(out_row::ETA, eta);
 }

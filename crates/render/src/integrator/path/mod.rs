@@ -13,7 +13,7 @@
 
 mod lanes;
 
-pub use lanes::{LaneKind, LaneOutcome, LaneVertex};
+pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes};
 
 use super::{RayStats, Termination};
 use crate::geometry::{Ray, SurfaceInteraction};
