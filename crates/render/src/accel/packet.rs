@@ -22,8 +22,10 @@
 //! watertight test, bitwise the scalar one per lane, each ray's dominant
 //! axis picked per lane); reached by one ray, with the single-ray
 //! [`intersect4`]. Either way a ray's hit in a block is the nearest, the
-//! lowest lane among equal distances, as for a single ray. Other leaves
-//! are tested one active ray at a time with the single-ray code:
+//! lowest lane among equal distances, as for a single ray. A sphere
+//! reached by several active rays is tested against all of them at once
+//! (`sphere_hit`, [`Sphere::intersect`] per lane). Other leaves are tested
+//! one active ray at a time with the single-ray code:
 //! [`Shape::intersect_analytic`] for analytic shapes, and
 //! [`Instance::intersect`] / [`Instance::occluded`] for instances, which so
 //! fall back to single rays per lane (their own BVHs are walked by the
@@ -49,12 +51,12 @@
 //! of t. No recorded ray of the tests shows it (see `agrees`, which treats
 //! only equal t bits as a tie).
 
-use super::bvh::{dequantize, prim_hit, Accel, Hit, OTHER, STACK};
+use super::bvh::{dequantize, prim_hit, Accel, Hit, Primitive, OTHER, STACK};
 use super::instance::Instance;
 use super::tri4::{intersect4, RayLanes};
 use crate::geometry::triangle::RayShear;
-use crate::geometry::{Ray, Shape};
-use crate::simd::{Float, Mask};
+use crate::geometry::{Ray, Shape, Sphere};
+use crate::simd::{Float, Mask, V3};
 use glam::{Vec2, Vec4};
 use std::mem::MaybeUninit;
 
@@ -81,6 +83,7 @@ struct Entry<F> {
 /// Per-ray state of a packet in lanes.
 struct Lanes<F: Float> {
     o: [F; 3],
+    d: [F; 3],
     inv_d: [F; 3],
     /// Lanes whose direction component is negative, per axis (the single-ray
     /// kernel's `neg`: near and far planes swap there).
@@ -90,20 +93,44 @@ struct Lanes<F: Float> {
 impl<F: Float> Lanes<F> {
     fn new(rays: &[Ray]) -> Lanes<F> {
         let mut o = [F::Array::default(); 3];
-        let mut id = [F::Array::default(); 3];
+        let mut d = [F::Array::default(); 3];
         for l in 0..F::WIDTH {
             // Padding lanes repeat the first ray; they are never active.
             let r = rays.get(l).unwrap_or(&rays[0]);
-            let inv = r.d.recip();
             for a in 0..3 {
                 o[a].as_mut()[l] = r.o[a];
-                id[a].as_mut()[l] = inv[a];
+                d[a].as_mut()[l] = r.d[a];
             }
         }
-        let inv_d = id.map(F::from_array);
+        let d = d.map(F::from_array);
+        // glam's `recip`: 1 / x per component, exact in lanes too.
+        let inv_d = d.map(|x| F::splat(1.0) / x);
         let zero = F::splat(0.0);
-        Lanes { o: o.map(F::from_array), inv_d, neg: inv_d.map(|v| v.cmp_lt(zero)) }
+        Lanes { o: o.map(F::from_array), d, inv_d, neg: inv_d.map(|v| v.cmp_lt(zero)) }
     }
+}
+
+/// [`Sphere::intersect`] of every ray of a packet, each lane performing the
+/// scalar test's operations in glam's order: the mask of lanes hit with
+/// 0 < t < `t_max`, and their distances.
+#[inline(always)]
+fn sphere_hit<F: Float>(lanes: &Lanes<F>, s: &Sphere, t_max: F) -> (u32, F) {
+    let zero = F::splat(0.0);
+    let (o, d) = (V3::new(lanes.o[0], lanes.o[1], lanes.o[2]), V3::new(lanes.d[0], lanes.d[1], lanes.d[2]));
+    let f = o - V3::splat(s.center);
+    let a = d.dot(d);
+    let b = -f.dot(d);
+    let l = f + d * (b / a);
+    let r2 = F::splat(s.radius * s.radius);
+    let disc = a * (r2 - l.dot(l));
+    let sq = disc.sqrt();
+    let q = F::select(b.cmp_gt(zero), b + sq, b - sq);
+    let (t0, t1) = (q / a, f.dot(f).mul_add(F::splat(1.0), -r2) / q);
+    let swap = t0.cmp_gt(t1);
+    let (t0, t1) = (F::select(swap, t1, t0), F::select(swap, t0, t1));
+    let t = F::select(t0.cmp_gt(zero), t0, t1);
+    let hit = !disc.cmp_lt(zero) & t.cmp_gt(zero) & t.cmp_lt(t_max);
+    (hit.bitmask(), t)
 }
 
 /// The single-ray triangle-test constants of one ray.
@@ -415,6 +442,39 @@ impl Accel {
             } else {
                 let first = cur.child as usize;
                 for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
+                    let sphere = match *prim {
+                        Primitive::Shape(shape) => match &shapes[shape as usize] {
+                            Shape::Sphere(s) => Some((shape, s)),
+                            _ => None,
+                        },
+                        _ => None,
+                    };
+                    if let Some((shape, s)) = sphere {
+                        if (cur.mask & alive).count_ones() >= LANE_TRIANGLES {
+                            // A sphere against all rays at once.
+                            let (mask, t) = sphere_hit(&lanes, s, F::from_array(t_max));
+                            let mut mask = mask & cur.mask & alive;
+                            hit |= mask;
+                            if ANY {
+                                alive &= !mask;
+                                continue;
+                            }
+                            let t = t.to_array();
+                            while mask != 0 {
+                                let r = mask.trailing_zeros() as usize;
+                                mask &= mask - 1;
+                                let h = Hit {
+                                    t: t.as_ref()[r],
+                                    uv: Vec2::ZERO,
+                                    shape,
+                                    index: 0,
+                                    instance: Hit::NOT_INSTANCED,
+                                };
+                                (t_max.as_mut()[r], best[r]) = (h.t, Some(h));
+                            }
+                            continue;
+                        }
+                    }
                     let mut m = cur.mask & alive;
                     while m != 0 {
                         let r = m.trailing_zeros() as usize;
