@@ -163,25 +163,30 @@ struct RayTri<F: Float> {
 }
 
 impl<F: Float> RayTri<F> {
-    fn new(rays: &[Ray]) -> RayTri<F> {
-        let (mut o, mut s) = ([F::Array::default(); 3], [F::Array::default(); 3]);
-        let mut ax = [F::Array::default(); 3];
-        for l in 0..F::WIDTH {
-            let r = rays.get(l).unwrap_or(&rays[0]);
-            let sh = RayShear::new(r.d);
-            let kx = if sh.kz == 2 { 0 } else { sh.kz + 1 };
-            let ky = if kx == 2 { 0 } else { kx + 1 };
-            for (a, k) in [kx, ky, sh.kz].into_iter().enumerate() {
-                o[a].as_mut()[l] = r.o[k];
-                ax[a].as_mut()[l] = k as f32;
-            }
-            (s[0].as_mut()[l], s[1].as_mut()[l], s[2].as_mut()[l]) = (sh.sx, sh.sy, sh.sz);
-        }
-        let axis = ax.map(|a| {
-            let a = F::from_array(a);
-            [a.cmp_eq(F::splat(0.0)), a.cmp_eq(F::splat(1.0))]
-        });
-        RayTri { o: o.map(F::from_array), s: s.map(F::from_array), axis }
+    /// The constants of the rays in `l`, in lanes: [`RayShear::new`]'s
+    /// comparisons, divisions and axis permutation per lane, selected.
+    #[inline(always)]
+    fn new(l: &Lanes<F>) -> RayTri<F> {
+        let [dx, dy, dz] = l.d;
+        let [ox, oy, oz] = l.o;
+        let (ax, ay, az) = (dx.abs(), dy.abs(), dz.abs());
+        // kz: x where |x| > |y| and |x| > |z|, else y where |y| > |z|, else z.
+        let x_gt_y = ax.cmp_gt(ay);
+        let kz0 = x_gt_y & ax.cmp_gt(az);
+        let kz1 = !x_gt_y & ay.cmp_gt(az);
+        let kz2 = !(kz0 | kz1);
+        // Component kz, kx = kz + 1 and ky = kz + 2 (mod 3) of (x, y, z).
+        let pick = |x: F, y: F, z: F, k: usize| match k {
+            0 => F::select(kz0, x, F::select(kz1, y, z)),
+            1 => F::select(kz0, y, F::select(kz1, z, x)),
+            _ => F::select(kz0, z, F::select(kz1, x, y)),
+        };
+        let d_z = pick(dx, dy, dz, 0);
+        let s = [-pick(dx, dy, dz, 1) / d_z, -pick(dx, dy, dz, 2) / d_z, F::splat(1.0) / d_z];
+        let o = [pick(ox, oy, oz, 1), pick(ox, oy, oz, 2), pick(ox, oy, oz, 0)];
+        // Lanes where permuted axis kx, ky, kz is x, and where it is y.
+        let axis = [[kz2, kz0], [kz1, kz2], [kz0, kz1]];
+        RayTri { o, s, axis }
     }
 
     /// Hits of triangle `v` (`v[vertex][coordinate]`) with 0 < t < `t_max`
@@ -278,7 +283,7 @@ impl Accel {
         }
         let all = (1u32 << rays.len()) - 1;
         let lanes = Lanes::<F>::new(rays);
-        let ray_tri = RayTri::<F>::new(rays);
+        let ray_tri = RayTri::<F>::new(&lanes);
         let mut t_max = F::Array::default();
         for (l, r) in rays.iter().enumerate() {
             t_max.as_mut()[l] = r.t_max;

@@ -156,16 +156,25 @@ impl LaneBatch {
         self.len = 0;
     }
 
+    /// The lane being added (a full batch is run before another is added;
+    /// the mask spares the bounds checks).
+    #[inline(always)]
+    fn lane(&self) -> usize {
+        debug_assert!(self.len < Self::LANES);
+        self.len & (Self::LANES - 1)
+    }
+
     /// Row `r` of the lane being added.
     #[inline(always)]
     fn set(&mut self, r: usize, x: f32) {
-        self.rows[r][self.len] = x;
+        let l = self.lane();
+        self.rows[r][l] = x;
     }
 
     /// Rows `r..r + 3` of the lane being added.
     #[inline(always)]
     fn set3(&mut self, r: usize, v: Vec3) {
-        let l = self.len;
+        let l = self.lane();
         (self.rows[r][l], self.rows[r + 1][l], self.rows[r + 2][l]) = (v.x, v.y, v.z);
     }
 
@@ -292,13 +301,16 @@ impl LaneOutcomes {
         self.put(r + 2, v.z);
     }
 
+    /// Row `r` of lane `l` (`l` < [`LaneBatch::LANES`]; the mask spares the bounds checks).
     #[inline(always)]
     fn at(&self, r: usize, l: usize) -> f32 {
-        self.rows[r][l]
+        self.rows[r][l & (LaneBatch::LANES - 1)]
     }
 
+    /// Rows `r..r + 3` of lane `l`.
     #[inline(always)]
     fn at3(&self, r: usize, l: usize) -> Vec3 {
+        let l = l & (LaneBatch::LANES - 1);
         Vec3::new(self.rows[r][l], self.rows[r + 1][l], self.rows[r + 2][l])
     }
 
@@ -804,7 +816,8 @@ impl PathIntegrator {
         let u = rng.next_2d();
         b.set(row::U_BSDF, u.x);
         b.set(row::U_BSDF + 1, u.y);
-        b.slots[b.len] = slot as u32;
+        let l = b.lane();
+        b.slots[l] = slot as u32;
         b.len += 1;
         Some(at)
     }
