@@ -65,7 +65,7 @@ use super::presets::named_conductor;
 use super::{BsdfModel, BsdfParams, BsdfSample};
 use crate::geometry::SurfaceInteraction;
 use crate::math::{safe_sqrt, Frame, Spectrum, INV_PI, PI};
-use crate::sampling::rng::mix64;
+use crate::sampling::rng::{mix64, to_unit_f32};
 use crate::sampling::warp;
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
@@ -582,7 +582,7 @@ impl WalkRng {
     fn next(&mut self) -> f32 {
         self.i += 1;
         let h = mix64(self.key.wrapping_add(self.i.wrapping_mul(0x9e37_79b9_7f4a_7c15)));
-        ((h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)).min(ONE_MINUS_EPSILON)
+        to_unit_f32(h).min(ONE_MINUS_EPSILON)
     }
 
     #[inline]

@@ -20,10 +20,12 @@ pub fn hash_words(words: &[u64]) -> u64 {
     h
 }
 
-/// Maps the top 24 bits of a hash to a float in [0, 1).
+/// Maps the top 24 bits of a hash to a float in [0, 1). Converted from
+/// `i32` (exact: the value is below 2²⁴): x86 has no one-instruction
+/// conversion from `u64` before AVX-512.
 #[inline]
 pub fn to_unit_f32(h: u64) -> f32 {
-    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    ((h >> 40) as i32) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
 /// Kensler's hashed permutation ("Correlated Multi-Jittered Sampling", 2013):
