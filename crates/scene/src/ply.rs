@@ -482,6 +482,9 @@ pub fn parse_ply_with_attributes(
                     }
                 }
             }
+            // A face element without properties holds no faces, however many
+            // it claims (looping over a claimed 10^19 of them would hang).
+            "face" if el.props.is_empty() => {}
             "face" => {
                 let index_prop = face_index_prop.unwrap_or_default();
                 let (specs, attr_slots) = other_fields("face_", el, &[]);
@@ -857,6 +860,17 @@ mod tests {
         m.validate().unwrap();
         let flipped = parse_ply(ASCII_QUAD.as_bytes(), Path::new(FILE), true).unwrap();
         assert_eq!(flipped.uvs[1], Vec2::new(1.0, 1.0));
+    }
+
+    /// Found by fuzzing: a second face element without properties that
+    /// claims 1.2·10^19 faces made the reader loop over them, reading nothing.
+    #[test]
+    fn face_element_without_properties_is_empty() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+            property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+            element face 12297829382473034404\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let m = parse(text.as_bytes()).unwrap();
+        assert_eq!(m.indices, [[0, 1, 2]]);
     }
 
     #[test]
