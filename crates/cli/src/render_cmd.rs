@@ -435,9 +435,10 @@ fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
         // The stream integrator's packets: the share of their lanes that held a ray.
         match stats.rays.packet_lanes.checked_div(stats.rays.packets) {
             Some(width) => format!(
-                " ({:.0} % of {width}-ray packet lanes used, {:.0} % of vertices shaded in lanes)",
+                " ({:.0} % of {width}-ray packet lanes used, {:.0} % of vertices shaded in lanes, {:.0} % of their lanes used)",
                 100.0 * rays as f64 / stats.rays.packet_lanes as f64,
-                100.0 * stats.rays.lane_vertices as f64 / stats.rays.rays.max(1) as f64
+                100.0 * stats.rays.lane_vertices as f64 / stats.rays.rays.max(1) as f64,
+                100.0 * stats.rays.lane_vertices as f64 / stats.rays.vertex_lanes.max(1) as f64
             ),
             None => String::new(),
         },

@@ -71,6 +71,9 @@ pub struct RayStats {
     /// Path vertices the stream integrator shaded in lanes
     /// (`PathIntegrator::lane_vertices`); over `rays`, their share.
     pub lane_vertices: u64,
+    /// The lanes their batches offered (batches run × lane width): the
+    /// vertices above over these lanes is the kernels' lane occupancy.
+    pub vertex_lanes: u64,
 }
 
 impl RayStats {
@@ -81,6 +84,7 @@ impl RayStats {
         self.packets += o.packets;
         self.packet_lanes += o.packet_lanes;
         self.lane_vertices += o.lane_vertices;
+        self.vertex_lanes += o.vertex_lanes;
     }
 }
 

@@ -196,6 +196,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                 let b = bins.batch($at);
                 path.lane_vertices::<F>(env.map(|e| e.1), b, &mut lane_out);
                 tile.stats.rays.lane_vertices += b.len() as u64;
+                tile.stats.rays.vertex_lanes += if b.is_empty() { 0 } else { F::WIDTH as u64 };
                 for l in 0..b.len() {
                     let i = b.slot(l);
                     let slot = &mut slots[i];
