@@ -3,9 +3,12 @@
 //! `conductor` or `dielectric` material of constant parameters
 //! ([`Scene::lane_material`]); a diffuse one lit by an area light on a mesh
 //! ([`Scene::lane_area_light`]) or by the scene's one environment map. A
-//! stream gathers such vertices of many paths, bins them by [`LaneKind`]
-//! (shape, material and light) and runs each bin [`Float::WIDTH`] at a
-//! time; every other vertex runs [`PathIntegrator::vertex`].
+//! stream prepares such vertices of many paths into a [`LaneBatch`] per
+//! [`LaneKind`] (shape, material and light; structure of arrays, so the
+//! kernel loads each field as one vector), runs a batch once it holds
+//! [`Float::WIDTH`] of them, and reads each path's lane back from the
+//! [`LaneOutcomes`] (stored the same way); every other vertex runs
+//! [`PathIntegrator::vertex`].
 //!
 //! **Bitwise [`PathIntegrator::vertex`].** The random numbers are drawn per
 //! path in the scalar order ([`PathIntegrator::lane_vertex`] draws the light
