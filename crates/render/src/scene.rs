@@ -35,6 +35,34 @@ pub struct ShapeInfo {
     pub light: Option<u32>,
 }
 
+/// An area light as lane vertices sample it ([`Scene::lane_light`]), its
+/// constants found once.
+#[derive(Debug, Clone, Copy)]
+pub enum LaneLight {
+    /// On a mesh.
+    Mesh {
+        /// Its shape: `shapes[shape]`.
+        shape: u32,
+        /// Its density per unit area (`Mesh::area_pdf`).
+        area_pdf: f32,
+        /// The radiance.
+        li: Spectrum,
+        /// Whether it emits from both sides.
+        two_sided: bool,
+    },
+    /// On a sphere.
+    Sphere {
+        /// Its centre.
+        center: Vec3,
+        /// (radius, 1 / area, 1 if its normals are flipped).
+        params: Vec3,
+        /// The radiance.
+        li: Spectrum,
+        /// Whether it emits from both sides.
+        two_sided: bool,
+    },
+}
+
 /// Shapes, materials, lights and the BVH, with the queries integrators use.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -64,6 +92,8 @@ pub struct Scene {
     reads_uv: Vec<bool>,
     /// Per shape: [`Scene::lane_material`].
     lane_material: Vec<Option<LaneMaterial>>,
+    /// Per light: [`Scene::lane_light`].
+    lane_lights: Vec<Option<LaneLight>>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
     pub ray_log: Option<RayLog>,
@@ -165,6 +195,25 @@ impl Scene {
                 })
             })
             .collect();
+        let lane_lights = lights
+            .iter()
+            .map(|l| {
+                let Light::Area(a) = l else { return None };
+                let li = a.radiance.constant().filter(|&li| li != Spectrum::ZERO)?;
+                let two_sided = a.two_sided;
+                match &shapes[a.shape as usize] {
+                    Shape::Mesh(m) | Shape::CulledMesh(m) => {
+                        Some(LaneLight::Mesh { shape: a.shape, area_pdf: m.area_pdf(), li, two_sided })
+                    }
+                    Shape::Sphere(s) => {
+                        let flip = if s.flip { 1.0 } else { 0.0 };
+                        let params = Vec3::new(s.radius, 1.0 / s.area(), flip);
+                        Some(LaneLight::Sphere { center: s.center, params, li, two_sided })
+                    }
+                    _ => None,
+                }
+            })
+            .collect();
         Scene {
             shapes,
             shape_info,
@@ -177,6 +226,7 @@ impl Scene {
             light_sampler,
             reads_uv,
             lane_material,
+            lane_lights,
             ray_log: None,
             media: Vec::new(),
             shape_media: Vec::new(),
@@ -261,19 +311,10 @@ impl Scene {
     }
 
     /// Light `i` when its samples can be drawn in lanes: an area light of
-    /// constant, non-zero radiance on a mesh or a sphere; with the shape,
-    /// the radiance and whether it emits from both sides.
+    /// constant, non-zero radiance on a mesh or a sphere.
     #[inline(always)]
-    pub fn lane_area_light(&self, i: usize) -> Option<(&Shape, Spectrum, bool)> {
-        match &self.lights[i] {
-            Light::Area(a) => match (&self.shapes[a.shape as usize], a.radiance.constant()) {
-                (s @ (Shape::Mesh(_) | Shape::CulledMesh(_) | Shape::Sphere(_)), Some(li)) if li != Spectrum::ZERO => {
-                    Some((s, li, a.two_sided))
-                }
-                _ => None,
-            },
-            _ => None,
-        }
+    pub fn lane_light(&self, i: usize) -> Option<&LaneLight> {
+        self.lane_lights[i].as_ref()
     }
 
     /// Whether the segment from `si` along `wi` is blocked before `dist`.

@@ -2,7 +2,7 @@
 //! hit on a flat-shaded mesh, a sphere or a disk with a plain `diffuse`,
 //! `conductor` or `dielectric` material of constant parameters
 //! ([`Scene::lane_material`]); a diffuse one lit by an area light on a mesh
-//! ([`Scene::lane_area_light`]) or by the scene's one environment map. A
+//! ([`Scene::lane_light`]) or by the scene's one environment map. A
 //! stream prepares such vertices of many paths into a [`LaneBatch`] per
 //! [`LaneKind`] (shape, material and light; structure of arrays, so the
 //! kernel loads each field as one vector), runs a batch once it holds
@@ -36,7 +36,7 @@ use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::SampleStream;
-use crate::scene::Scene;
+use crate::scene::{LaneLight, Scene};
 use crate::simd::{sin_cos, Float, Mask, V3};
 use glam::{Vec2, Vec3};
 
@@ -621,7 +621,7 @@ impl PathIntegrator {
     /// its kind's batch in `bins` when it qualifies: a non-instanced hit on
     /// a [`Scene::lane_material`] shape, before the last segment; for a
     /// diffuse one, with a light picked (uniformly or by power) that is a
-    /// [`Scene::lane_area_light`] or `env`, the scene's one environment map
+    /// [`Scene::lane_light`] or `env`, the scene's one environment map
     /// ([`Scene::single_envmap`]). Its light and BSDF random numbers are
     /// drawn here, as `vertex` draws them; `slot` is the caller's number for
     /// the path ([`LaneBatch::slot`]). Returns the batch's position
@@ -680,8 +680,8 @@ impl PathIntegrator {
         enum Picked<'a> {
             None,
             Env { x: f32, cos_t: f32, pdf_row: f32 },
-            Sphere(&'a crate::geometry::Sphere),
-            Tri(&'a crate::geometry::Mesh, usize, f32),
+            Sphere(Vec3, Vec3),
+            Tri(&'a crate::geometry::Mesh, usize, f32, f32),
         }
         // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
         let dim = rng.dim();
@@ -698,16 +698,19 @@ impl PathIntegrator {
                 let Some((x, cos_t, pdf_row)) = e.sample_cell(u_light) else { break 'pick None };
                 break 'pick Some((Picked::Env { x, cos_t, pdf_row }, pmf, Spectrum::ZERO, false));
             }
-            let Some((shape, li, two_sided)) = scene.lane_area_light(i) else { break 'pick None };
-            let p = match shape {
-                Shape::Sphere(s) => Picked::Sphere(s),
-                Shape::Mesh(mesh) | Shape::CulledMesh(mesh) => {
-                    let Some((t, ux)) = mesh.pick_triangle(u_light.x) else { break 'pick None };
-                    Picked::Tri(mesh, t, ux)
+            let Some(&light) = scene.lane_light(i) else { break 'pick None };
+            match light {
+                LaneLight::Sphere { center, params, li, two_sided } => {
+                    Some((Picked::Sphere(center, params), pmf, li, two_sided))
                 }
-                _ => break 'pick None,
-            };
-            Some((p, pmf, li, two_sided))
+                LaneLight::Mesh { shape, area_pdf, li, two_sided } => {
+                    let (Shape::Mesh(mesh) | Shape::CulledMesh(mesh)) = &scene.shapes[shape as usize] else {
+                        break 'pick None;
+                    };
+                    let Some((t, ux)) = mesh.pick_triangle(u_light.x) else { break 'pick None };
+                    Some((Picked::Tri(mesh, t, ux, area_pdf), pmf, li, two_sided))
+                }
+            }
         };
         let Some(light) = light else {
             rng.rewind(dim);
@@ -715,7 +718,7 @@ impl PathIntegrator {
         };
         let light_kind = match light.0 {
             Picked::Env { .. } => 1,
-            Picked::Sphere(_) => 2,
+            Picked::Sphere(..) => 2,
             _ => 0,
         };
         let at = bins.of(LaneKind { shape: shape_kind, bsdf, light: light_kind });
@@ -796,19 +799,18 @@ impl PathIntegrator {
                     b.set(row::U_LIGHT + 1, cos_t);
                     b.set(row::AREA_PDF, pdf_row);
                 }
-                Picked::Sphere(s) => {
-                    let flip = if s.flip { 1.0 } else { 0.0 };
-                    b.set3(row::LIGHT_TRI, s.center);
-                    b.set3(row::LIGHT_TRI + 3, Vec3::new(s.radius, 1.0 / s.area(), flip));
+                Picked::Sphere(center, params) => {
+                    b.set3(row::LIGHT_TRI, center);
+                    b.set3(row::LIGHT_TRI + 3, params);
                     b.set(row::U_LIGHT, u_light.x);
                     b.set(row::U_LIGHT + 1, u_light.y);
                 }
-                Picked::Tri(mesh, t, ux) => {
+                Picked::Tri(mesh, t, ux, area_pdf) => {
                     let [q0, q1, q2] = mesh.vertices(t);
                     b.set3(row::LIGHT_TRI, q0);
                     b.set3(row::LIGHT_TRI + 3, q1);
                     b.set3(row::LIGHT_TRI + 6, q2);
-                    b.set(row::AREA_PDF, mesh.area_pdf());
+                    b.set(row::AREA_PDF, area_pdf);
                     b.set(row::U_LIGHT, ux);
                     b.set(row::U_LIGHT + 1, u_light.y);
                 }
