@@ -76,7 +76,7 @@ impl Mesh {
     }
 
     /// The density per unit area of [`Shape::sample_point`] on this mesh.
-    #[inline(always)]
+    #[inline]
     pub fn area_pdf(&self) -> f32 {
         self.area_distrib.as_ref().map_or(0.0, |d| 1.0 / d.total as f32)
     }
