@@ -44,17 +44,9 @@ mod tests {
     /// A hit whose shading frame is the world frame (local = world).
     fn si() -> SurfaceInteraction {
         SurfaceInteraction {
-            p: Vec3::ZERO,
             t: 1.0,
-            n: Vec3::Z,
             sh_frame: Frame { s: Vec3::X, t: Vec3::Y, n: Vec3::Z },
-            uv: Vec2::ZERO,
-            dpdu: Vec3::X,
-            dpdv: Vec3::Y,
-            shape: 0,
-            prim: 0,
-            bary: Vec2::ZERO,
-            wo: Vec3::Z,
+            ..SurfaceInteraction::at_uv(Vec2::ZERO)
         }
     }
 
