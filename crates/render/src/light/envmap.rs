@@ -29,8 +29,9 @@
 
 use super::LightSample;
 use crate::math::{fast, luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
+use crate::sampling::distrib2d::index_lanes;
 use crate::sampling::Distribution2D;
-use crate::simd::{self, Float, V3};
+use crate::simd::{self, gather, Float, Int as _, V3};
 use glam::{Vec2, Vec3};
 
 /// Mitsuba's `envmap` emitter (mapping and sampling in the module docs).
@@ -176,12 +177,11 @@ impl EnvMapLight {
     pub fn eval_pdf_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [(Spectrum, f32); 16] {
         let (d, u, theta) = self.local_lanes(wx, wy, wz);
         let (x, y) = self.texel_lanes(u, theta);
-        let (d, u, theta) = (d.map(F::to_array), u.to_array(), theta.to_array());
+        let pdf = self.pdf_local_lanes(V3 { x: d[0], y: d[1], z: d[2] }, u, theta).to_array();
         let mut out = [(Spectrum::ZERO, 0.0); 16];
         for (l, o) in out.iter_mut().enumerate().take(F::WIDTH) {
-            let dl = Vec3::new(d[0].as_ref()[l], d[1].as_ref()[l], d[2].as_ref()[l]);
             let le = self.blend(x.as_ref()[l], y.as_ref()[l]) * self.scale;
-            *o = (le, self.pdf_local(dl, u.as_ref()[l], theta.as_ref()[l]));
+            *o = (le, pdf.as_ref()[l]);
         }
         out
     }
@@ -303,6 +303,22 @@ impl EnvMapLight {
         let pdf_uv = distribution.pdf(Vec2::new(u - u.floor(), (r as f32 + 0.5) / rows as f32));
         // |A d| = 1 / m for d = A⁻¹ wi / m.
         pdf_uv * self.inv_row_solid_angle[r] / (m * m * m * self.abs_det)
+    }
+
+    /// `pdf_local` in lanes, bitwise lane by lane (the table reads per lane).
+    #[inline(always)]
+    fn pdf_local_lanes<F: Float>(&self, d: V3<F>, u: F, theta: F) -> F {
+        let Some(distribution) = &self.distribution else { return F::splat(0.0) };
+        let m = d.length();
+        let theta = F::select(m.cmp_eq(F::splat(1.0)), theta, simd::acos(d.y / m));
+        let rows = self.height - 1;
+        let r = index_lanes(theta * F::splat(INV_PI) * F::splat(rows as f32), rows - 1);
+        let u = u - F::splat(0.5 / self.width as f32);
+        let v = (F::from_int(r) + F::splat(0.5)) / F::splat(rows as f32);
+        let pdf_uv = distribution.pdf_lanes(u - u.floor(), v);
+        let r = r.to_array();
+        let inv_row = gather::<F>(|l| self.inv_row_solid_angle[r.as_ref()[l] as usize]);
+        pdf_uv * inv_row / (m * m * m * F::splat(self.abs_det))
     }
 
     /// Radiance averaged over the sphere (of the bilinear map, times `scale`).

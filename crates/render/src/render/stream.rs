@@ -55,12 +55,9 @@ struct Slot {
     rng: SampleStream,
 }
 
-/// A sample's camera ray and, once its path has ended, its radiance.
-struct Sample {
-    u: Vec2,
-    ray: Ray,
-    l: Spectrum,
-}
+/// A sample's position in its pixel and, once its path has ended, its
+/// radiance: what the film's splat takes ([`RenderJob::add_pixel_samples`]).
+type Sample = (Vec2, Spectrum);
 
 /// Renders `samples` of each of `pixels` with `path` into `tile`, in
 /// packets of `job.packet_lanes` rays (0: the widest of [`LANE_WIDTHS`]).
@@ -87,6 +84,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     let total = pixels.len() * spp;
     let scene = &job.scene;
     let mut results: Vec<Sample> = Vec::with_capacity(total);
+    // The camera rays, kept only for the AOVs.
+    let aovs = tile.has_aovs();
+    let mut camera_rays: Vec<Ray> = Vec::with_capacity(if aovs { total } else { 0 });
     let mut slots: Vec<Slot> = Vec::with_capacity(POOL);
     let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
     let mut hits: Vec<Option<Hit>> = vec![None; POOL];
@@ -122,7 +122,10 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
                 }
                 let rays = job.camera.pinhole_rays::<F>(gather(|l| starts[l].2.x), gather(|l| starts[l].2.y));
                 for ((rng, u, _), ray) in starts.drain(..).zip(rays) {
-                    results.push(Sample { u, ray, l: Spectrum::ZERO });
+                    results.push((u, Spectrum::ZERO));
+                    if aovs {
+                        camera_rays.push(ray);
+                    }
                     if let Some(state) = path.start(&ray) {
                         slots.push(Slot { sample: next, state, rng });
                     }
@@ -133,7 +136,10 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             let (p, s) = (&pixels[next / spp], samples.start + (next % spp) as u32);
             let mut rng = job.sampler.stream(p.global, s);
             let (u, ray) = job.camera_sample(p.global, &mut rng);
-            results.push(Sample { u, ray, l: Spectrum::ZERO });
+            results.push((u, Spectrum::ZERO));
+            if aovs {
+                camera_rays.push(ray);
+            }
             if let Some(state) = path.start(&ray) {
                 slots.push(Slot { sample: next, state, rng });
             }
@@ -255,24 +261,21 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         slots.retain(|s| {
             let keep = !ended[i];
             if !keep {
-                results[s.sample].l = s.state.radiance();
+                results[s.sample].1 = s.state.radiance();
             }
             i += 1;
             keep
         });
     }
     // Splat in canonical order, a pixel's samples at a time where no AOVs need the rays.
-    if tile.has_aovs() {
-        for (k, r) in results.iter().enumerate() {
+    if aovs {
+        for (k, (&(u, l), ray)) in results.iter().zip(&camera_rays).enumerate() {
             let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
-            job.add_sample(tile, p, s, r.u, &r.ray, r.l, &[]);
+            job.add_sample(tile, p, s, u, ray, l, &[]);
         }
     } else {
-        let mut pixel: Vec<(Vec2, Spectrum)> = Vec::with_capacity(spp);
         for (p, rs) in pixels.iter().zip(results.chunks(spp.max(1))) {
-            pixel.clear();
-            pixel.extend(rs.iter().map(|r| (r.u, r.l)));
-            job.add_pixel_samples(tile, p, &pixel);
+            job.add_pixel_samples(tile, p, rs);
         }
     }
 }
@@ -292,6 +295,6 @@ mod tests {
         eprintln!("slot {slot} B, pool {} KiB; lane batch {batch} B; finished sample {sample} B", slot * POOL / 1024);
         assert!(slot * POOL <= 64 * 1024, "slot {slot} B");
         assert!(batch <= 4 * 1024, "lane batch {batch} B");
-        assert!(sample <= 64, "sample {sample} B");
+        assert!(sample <= 24, "sample {sample} B");
     }
 }

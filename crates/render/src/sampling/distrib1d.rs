@@ -81,13 +81,26 @@ impl Distribution1D {
     /// choice made, so the same number can be reused for a further choice.
     #[inline(always)]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32, f32) {
-        let x = u * self.alias.len() as f32;
-        let bucket = fast::index(x).min(self.alias.len() - 1);
-        let f = x - bucket as f32;
-        let (keep, other) = self.alias[bucket];
-        let (i, u_re) = if f < keep { (bucket, f / keep) } else { (other as usize, (f - keep) / (1.0 - keep)) };
-        (i, self.pmf[i], u_re.clamp(0.0, 1.0 - f32::EPSILON / 2.0))
+        let (i, u_re) = alias_pick(u, self.alias.len(), |b| self.alias[b]);
+        (i, self.pmf[i], u_re)
     }
+
+    /// The alias table: per bucket, the share kept and the item taking the rest.
+    pub(crate) fn alias(&self) -> &[(f32, u32)] {
+        &self.alias
+    }
+}
+
+/// The alias method's pick among `n` buckets with table `bucket`
+/// ([`Distribution1D::alias`]): the item and `u` remapped to [0, 1) within it.
+#[inline(always)]
+pub(crate) fn alias_pick(u: f32, n: usize, bucket: impl Fn(usize) -> (f32, u32)) -> (usize, f32) {
+    let x = u * n as f32;
+    let b = fast::index(x).min(n - 1);
+    let f = x - b as f32;
+    let (keep, other) = bucket(b);
+    let (i, u_re) = if f < keep { (b, f / keep) } else { (other as usize, (f - keep) / (1.0 - keep)) };
+    (i, u_re.clamp(0.0, 1.0 - f32::EPSILON / 2.0))
 }
 
 #[cfg(test)]

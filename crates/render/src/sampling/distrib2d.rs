@@ -2,22 +2,34 @@
 //! marginal distribution over rows (the row sums), then the conditional
 //! distribution over the columns of the chosen row.
 
+use super::distrib1d::alias_pick;
 use super::Distribution1D;
 use crate::math::fast;
+use crate::simd::{gather, Float, Int as _};
 use glam::Vec2;
 
 /// Density proportional to a `width` × `height` grid of non-negative cell
 /// weights; x runs along columns, y along rows (row 0 at y = 0).
+///
+/// The rows' alias tables and the cells' densities lie in one array in
+/// cell order, so a sample is a row pick and a column pick with no pointer
+/// to follow in between (the environment map samples one per light sample).
 #[derive(Debug, Clone)]
 pub struct Distribution2D {
-    /// One distribution over columns per row; `None` for rows of zero weight.
-    conditional: Vec<Option<Distribution1D>>,
+    /// Per cell: its row's alias bucket (share kept, column taking the
+    /// rest) and its density (weight / mean weight; 0 in a row of zero weight).
+    cells: Vec<Cell>,
     /// Distribution over rows, weighted by the row sums.
     marginal: Distribution1D,
     width: usize,
     height: usize,
-    /// Cell count over the total weight: density of a cell = weight · inv_mean.
-    inv_mean: f32,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Cell {
+    keep: f32,
+    other: u32,
+    pdf: f32,
 }
 
 impl Distribution2D {
@@ -34,7 +46,19 @@ impl Distribution2D {
         let row_sums: Vec<f32> = conditional.iter().map(|c| c.as_ref().map_or(0.0, |c| c.total as f32)).collect();
         let marginal = Distribution1D::new(&row_sums)?;
         let inv_mean = ((width * height) as f64 / marginal.total) as f32;
-        Some(Distribution2D { conditional, marginal, width, height, inv_mean })
+        let mut cells = Vec::with_capacity(width * height);
+        for c in &conditional {
+            match c {
+                Some(c) => cells.extend(c.alias().iter().zip(&c.func).map(|(&(keep, other), &f)| Cell {
+                    keep,
+                    other,
+                    pdf: f * inv_mean,
+                })),
+                // Never sampled (the marginal skips the row).
+                None => cells.extend((0..width).map(|j| Cell { keep: 1.0, other: j as u32, pdf: 0.0 })),
+            }
+        }
+        Some(Distribution2D { cells, marginal, width, height })
     }
 
     /// Samples a point p ∈ [0, 1)² (p.x along columns, p.y along rows) and
@@ -42,11 +66,10 @@ impl Distribution2D {
     /// weight / mean weight).
     pub fn sample(&self, u: Vec2) -> (Vec2, f32) {
         let (row, _, uy) = self.marginal.sample_discrete(u.y);
-        // The marginal never picks a row of zero weight, so its conditional exists.
-        let cond = self.conditional[row].as_ref().expect("row of zero weight sampled");
-        let (col, _, ux) = cond.sample_discrete(u.x);
+        let cells = &self.cells[row * self.width..][..self.width];
+        let (col, ux) = alias_pick(u.x, self.width, |b| (cells[b].keep, cells[b].other));
         let p = Vec2::new(point_in_cell(col, ux, self.width), point_in_cell(row, uy, self.height));
-        (p, cond.func[col] * self.inv_mean)
+        (p, cells[col].pdf)
     }
 
     /// Density at `p` w.r.t. area on the unit square (0 outside [0, 1]²).
@@ -56,8 +79,30 @@ impl Distribution2D {
         }
         let col = fast::index(p.x * self.width as f32).min(self.width - 1);
         let row = fast::index(p.y * self.height as f32).min(self.height - 1);
-        self.conditional[row].as_ref().map_or(0.0, |c| c.func[col] * self.inv_mean)
+        self.cells[row * self.width + col].pdf
     }
+
+    /// [`Self::pdf`] of `F::WIDTH` points, bitwise lane by lane.
+    #[inline(always)]
+    pub fn pdf_lanes<F: Float>(&self, x: F, y: F) -> F {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let inside = x.cmp_ge(zero) & x.cmp_le(one) & y.cmp_ge(zero) & y.cmp_le(one);
+        let col = index_lanes(x * F::splat(self.width as f32), self.width - 1).to_array();
+        let row = index_lanes(y * F::splat(self.height as f32), self.height - 1).to_array();
+        let pdf = gather::<F>(|l| self.cells[row.as_ref()[l] as usize * self.width + col.as_ref()[l] as usize].pdf);
+        F::select(inside, pdf, zero)
+    }
+}
+
+/// `fast::index(x).min(max)` in lanes, for x < 2³¹ or NaN (both give 0
+/// below, as `x as i32` does for NaN).
+#[inline(always)]
+pub(crate) fn index_lanes<F: Float>(x: F, max: usize) -> F::Int {
+    let zero = F::Int::splat(0);
+    let i = x.to_int_trunc();
+    let i = F::Int::select(i.cmp_lt(zero), zero, i);
+    let max = F::Int::splat(max as i32);
+    F::Int::select(i.cmp_gt(max), max, i)
 }
 
 /// (i + t) / n, nudged by rounding steps so that it maps back to cell i
