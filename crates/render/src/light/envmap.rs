@@ -258,6 +258,28 @@ impl EnvMapLight {
         Some((p.x, cos_t, pdf_uv * self.inv_row_solid_angle[r]))
     }
 
+    /// [`Self::sample_cell`] of `F::WIDTH` pairs of numbers, bitwise lane
+    /// by lane, for a map with a distribution ([`Self::samples`]).
+    #[inline(always)]
+    pub fn sample_cell_lanes<F: Float>(&self, ux: F, uy: F) -> (F, F, F) {
+        let distribution = self.distribution.as_ref().expect("a black map is never sampled");
+        let (px, py, pdf_uv) = distribution.sample_lanes(ux, uy);
+        let rows = self.height - 1;
+        let y = py * F::splat(rows as f32);
+        let r = index_lanes(y, rows - 1);
+        let ra = r.to_array();
+        let at = |t: &[f32], k: usize| gather::<F>(|l| t[ra.as_ref()[l] as usize + k]);
+        let (c0, c1) = (at(&self.cos_theta, 0), at(&self.cos_theta, 1));
+        let cos_t = c0 + (y - F::from_int(r)) * (c1 - c0);
+        let cos_t = F::splat(1.0).min(F::splat(-1.0).max(cos_t));
+        (px, cos_t, pdf_uv * at(&self.inv_row_solid_angle, 0))
+    }
+
+    /// Whether the map can be sampled (it is not black): [`Self::sample_cell`] never gives `None`.
+    pub fn samples(&self) -> bool {
+        self.distribution.is_some()
+    }
+
     /// The arithmetic of [`Self::sample_li`] after [`Self::sample_cell`],
     /// for any number of lanes: the unit direction and its solid-angle density.
     #[inline(always)]
@@ -405,6 +427,43 @@ mod tests {
             EnvMapLight::new(1, 2, vec![[1.0, 2.0, 3.0], [5.0, 6.0, 7.0]], Mat4::IDENTITY, 1.0).unwrap(),
         ];
         let mut v = V(lights, dirs);
+        v.visit::<f32>();
+        each_simd(&mut v);
+    }
+
+    /// `sample_cell_lanes` is `sample_cell` lane by lane, bit for bit, at
+    /// every lane width built (random numbers and the corners).
+    #[test]
+    fn cell_sampling_in_lanes_is_bitwise() {
+        use crate::simd::check::{each_simd, Visit};
+        struct V(Vec<EnvMapLight>, Vec<Vec2>);
+        impl Visit for V {
+            fn visit<F: Float>(&mut self) {
+                for light in &self.0 {
+                    for c in self.1.chunks(F::WIDTH).filter(|c| c.len() == F::WIDTH) {
+                        let (x, cos_t, pdf) = light.sample_cell_lanes(gather::<F>(|l| c[l].x), gather::<F>(|l| c[l].y));
+                        let (x, cos_t, pdf) = (x.to_array(), cos_t.to_array(), pdf.to_array());
+                        for (l, u) in c.iter().enumerate() {
+                            let want = light.sample_cell(*u).unwrap();
+                            let got = (x.as_ref()[l], cos_t.as_ref()[l], pdf.as_ref()[l]);
+                            let bits = |v: (f32, f32, f32)| (v.0.to_bits(), v.1.to_bits(), v.2.to_bits());
+                            assert_eq!(bits(got), bits(want), "{} at {u}", F::NAME);
+                        }
+                    }
+                }
+            }
+        }
+        let mut rng = crate::testing::TestRng::new(9);
+        let mut us: Vec<Vec2> = (0..4096).map(|_| rng.next_2d()).collect();
+        us.extend([Vec2::ZERO, Vec2::new(1.0 - f32::EPSILON / 2.0, 0.0), Vec2::new(0.0, 1.0 - f32::EPSILON / 2.0)]);
+        while us.len() % 16 != 0 {
+            us.push(Vec2::new(0.3, 0.7));
+        }
+        let lights = vec![
+            EnvMapLight::new(6, 4, ramp_map(), rotation(), 1.5).unwrap(),
+            EnvMapLight::new(SUN_W, SUN_H, sun_map(), Mat4::IDENTITY, 1.0).unwrap(),
+        ];
+        let mut v = V(lights, us);
         v.visit::<f32>();
         each_simd(&mut v);
     }

@@ -5,7 +5,7 @@
 use super::distrib1d::alias_pick;
 use super::Distribution1D;
 use crate::math::fast;
-use crate::simd::{gather, Float, Int as _};
+use crate::simd::{gather, Float, Int, Mask as _};
 use glam::Vec2;
 
 /// Density proportional to a `width` × `height` grid of non-negative cell
@@ -82,6 +82,23 @@ impl Distribution2D {
         self.cells[row * self.width + col].pdf
     }
 
+    /// [`Self::sample`] of `F::WIDTH` pairs of numbers, bitwise lane by
+    /// lane: (p.x, p.y, density), the table reads per lane.
+    #[inline(always)]
+    pub fn sample_lanes<F: Float>(&self, ux: F, uy: F) -> (F, F, F) {
+        let alias = self.marginal.alias();
+        let (row, uy) = alias_pick_lanes(uy, self.height, |_, b| alias[b]);
+        let rows = row.to_array();
+        let start = |l: usize| rows.as_ref()[l] as usize * self.width;
+        let (col, ux) = alias_pick_lanes(ux, self.width, |l, b| {
+            let c = self.cells[start(l) + b];
+            (c.keep, c.other)
+        });
+        let cols = col.to_array();
+        let pdf = gather::<F>(|l| self.cells[start(l) + cols.as_ref()[l] as usize].pdf);
+        (point_in_cell_lanes(col, ux, self.width), point_in_cell_lanes(row, uy, self.height), pdf)
+    }
+
     /// [`Self::pdf`] of `F::WIDTH` points, bitwise lane by lane.
     #[inline(always)]
     pub fn pdf_lanes<F: Float>(&self, x: F, y: F) -> F {
@@ -103,6 +120,49 @@ pub(crate) fn index_lanes<F: Float>(x: F, max: usize) -> F::Int {
     let i = F::Int::select(i.cmp_lt(zero), zero, i);
     let max = F::Int::splat(max as i32);
     F::Int::select(i.cmp_gt(max), max, i)
+}
+
+/// `alias_pick` in lanes: `bucket(l, b)` is lane `l`'s table at bucket `b`.
+#[inline(always)]
+fn alias_pick_lanes<F: Float>(u: F, n: usize, bucket: impl Fn(usize, usize) -> (f32, u32)) -> (F::Int, F) {
+    let x = u * F::splat(n as f32);
+    let b = index_lanes(x, n - 1);
+    let f = x - F::from_int(b);
+    let (bs, mut keep, mut other) = (b.to_array(), F::Array::default(), <F::Int as Int>::Array::default());
+    for l in 0..F::WIDTH {
+        let (k, o) = bucket(l, bs.as_ref()[l] as usize);
+        keep.as_mut()[l] = k;
+        other.as_mut()[l] = o as i32;
+    }
+    let (keep, other) = (F::from_array(keep), F::Int::from_array(other));
+    let own = f.cmp_lt(keep);
+    let one = F::splat(1.0);
+    let u_re = F::select(own, f / keep, (f - keep) / (one - keep));
+    // As f32::clamp (NaN passes through).
+    let u_re = F::splat(1.0 - f32::EPSILON / 2.0).min(F::splat(0.0).max(u_re));
+    (F::Int::select(own, b, other), u_re)
+}
+
+/// `point_in_cell` in lanes: each lane steps until it maps back to its cell.
+#[inline(always)]
+fn point_in_cell_lanes<F: Float>(i: F::Int, t: F, n: usize) -> F {
+    let cell = |x: F| index_lanes(x * F::splat(n as f32), i32::MAX as usize);
+    let mut x = (F::from_int(i) + t) / F::splat(n as f32);
+    loop {
+        let above = cell(x).cmp_gt(i);
+        if !above.any() {
+            break;
+        }
+        x = F::select(above, F::from_bits(x.to_bits().wrapping_sub(F::Int::splat(1))), x);
+    }
+    loop {
+        let below = cell(x).cmp_lt(i);
+        if !below.any() {
+            break;
+        }
+        x = F::select(below, F::from_bits(x.to_bits().wrapping_add(F::Int::splat(1))), x);
+    }
+    x
 }
 
 /// (i + t) / n, nudged by rounding steps so that it maps back to cell i
@@ -159,6 +219,82 @@ mod tests {
         assert!((integral - 1.0).abs() < 1e-5, "∫ pdf = {integral}");
         assert_eq!(d.pdf(Vec2::new(1.5, 0.5)), 0.0);
         assert_eq!(d.pdf(Vec2::new(0.5, -0.1)), 0.0);
+    }
+
+    /// `sample_lanes` and `pdf_lanes` are `sample` and `pdf` lane by lane,
+    /// bit for bit, at every lane width built: random numbers, the corners,
+    /// numbers on and beside the alias buckets' edges, points outside and NaN.
+    #[test]
+    fn lanes_are_scalar_bitwise() {
+        use crate::simd::check::{each_simd, Visit};
+        struct V(Vec<(Distribution2D, Vec<Vec2>)>);
+        impl Visit for V {
+            fn visit<F: Float>(&mut self) {
+                for (d, us) in &self.0 {
+                    for c in us.chunks(F::WIDTH).filter(|c| c.len() == F::WIDTH) {
+                        let (x, y) = (gather::<F>(|l| c[l].x), gather::<F>(|l| c[l].y));
+                        let (px, py, pdf) = d.sample_lanes(x, y);
+                        let (px, py, pdf) = (px.to_array(), py.to_array(), pdf.to_array());
+                        let lane_pdf = d.pdf_lanes(x, y).to_array();
+                        for (l, u) in c.iter().enumerate() {
+                            let (p, want) = d.sample(*u);
+                            let got = (px.as_ref()[l], py.as_ref()[l], pdf.as_ref()[l]);
+                            assert_eq!(
+                                (got.0.to_bits(), got.1.to_bits(), got.2.to_bits()),
+                                (p.x.to_bits(), p.y.to_bits(), want.to_bits()),
+                                "{} sample at {u}",
+                                F::NAME
+                            );
+                            let want = d.pdf(*u);
+                            assert_eq!(lane_pdf.as_ref()[l].to_bits(), want.to_bits(), "{} pdf at {u}", F::NAME);
+                        }
+                    }
+                }
+            }
+        }
+        let mut us: Vec<Vec2> = (0..4096).map(|i| random_u(5, i)).collect();
+        for n in [W, H, 7] {
+            for k in 0..=n {
+                let e = k as f32 / n as f32;
+                for x in [e, f32::from_bits(e.to_bits().saturating_sub(1)), f32::from_bits(e.to_bits() + 1)] {
+                    us.push(Vec2::new(x.min(1.0 - f32::EPSILON / 2.0), 0.37));
+                    us.push(Vec2::new(0.61, x.min(1.0 - f32::EPSILON / 2.0)));
+                }
+            }
+        }
+        us.extend([Vec2::ZERO, Vec2::new(1.0 - f32::EPSILON / 2.0, 1.0 - f32::EPSILON / 2.0), Vec2::new(1.0, 1.0)]);
+        us.extend([Vec2::new(-0.5, 0.5), Vec2::new(0.5, 1.5), Vec2::new(f32::NAN, 0.5)]);
+        while us.len() % 16 != 0 {
+            us.push(Vec2::new(0.3, 0.7));
+        }
+        // The sample side takes numbers in [0, 1): the points outside only go to pdf.
+        let inside: Vec<Vec2> = us
+            .iter()
+            .map(|u| if (0.0..1.0).contains(&u.x) && (0.0..1.0).contains(&u.y) { *u } else { Vec2::ZERO })
+            .collect();
+        let skewed: Vec<f32> =
+            (0..37 * 11).map(|k| ((k * 7919) % 101) as f32 * if k % 5 == 0 { 0.0 } else { 1.0 }).collect();
+        let mut v = V(vec![
+            (Distribution2D::new(&WEIGHTS, W, H).unwrap(), inside.clone()),
+            (Distribution2D::new(&skewed, 37, 11).unwrap(), inside),
+        ]);
+        v.visit::<f32>();
+        each_simd(&mut v);
+        // pdf alone over points outside and NaN.
+        struct P(Distribution2D, Vec<Vec2>);
+        impl Visit for P {
+            fn visit<F: Float>(&mut self) {
+                for c in self.1.chunks(F::WIDTH).filter(|c| c.len() == F::WIDTH) {
+                    let got = self.0.pdf_lanes(gather::<F>(|l| c[l].x), gather::<F>(|l| c[l].y)).to_array();
+                    for (l, u) in c.iter().enumerate() {
+                        assert_eq!(got.as_ref()[l].to_bits(), self.0.pdf(*u).to_bits(), "{} pdf at {u}", F::NAME);
+                    }
+                }
+            }
+        }
+        let mut p = P(Distribution2D::new(&WEIGHTS, W, H).unwrap(), us);
+        p.visit::<f32>();
+        each_simd(&mut p);
     }
 
     #[test]

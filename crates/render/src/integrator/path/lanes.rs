@@ -13,8 +13,9 @@
 //! **Bitwise [`PathIntegrator::vertex`].** The random numbers are drawn per
 //! path in the scalar order ([`PathIntegrator::lane_vertex`] draws the light
 //! and BSDF numbers, [`PathIntegrator::lane_vertex_done`] Russian
-//! roulette's). The table lookups stay scalar (the light's pick, the
-//! triangle's pick by area). The arithmetic in between is the scalar
+//! roulette's). The light's pick and the triangle's pick by area stay
+//! scalar; the environment map's cell is picked in lanes
+//! ([`EnvMapLight::sample_cell_lanes`], its tables read per lane). The arithmetic in between is the scalar
 //! code's, operation for operation in glam's order ([`V3`]), both branches
 //! computed and selected per lane: the hit's interaction
 //! (`Shape::interaction_with` without the uv parameterisation and
@@ -95,7 +96,7 @@ mod row {
     /// An area light's picked triangle's corners (3 × 3 rows); a sphere
     /// light's centre, then (radius, 1 / area, 1 if its normals are flipped).
     pub const LIGHT_TRI: usize = 41;
-    /// The light's area density; the environment's row density.
+    /// The light's area density.
     pub const AREA_PDF: usize = 50;
     /// The light's selection probability.
     pub const PMF: usize = 51;
@@ -104,7 +105,7 @@ mod row {
     /// 1 where the area light emits from both sides.
     pub const TWO_SIDED: usize = 55;
     /// The light sample's numbers (the first rescaled by the triangle's
-    /// pick); the environment: [`EnvMapLight::sample_cell`]'s (u, cos θ).
+    /// pick).
     pub const U_LIGHT: usize = 56;
     /// The BSDF sample's numbers: the 1D one, then the 2D one.
     pub const U_BSDF1: usize = 58;
@@ -679,7 +680,7 @@ impl PathIntegrator {
         // The light: its kind and what its rows need.
         enum Picked<'a> {
             None,
-            Env { x: f32, cos_t: f32, pdf_row: f32 },
+            Env,
             Sphere(Vec3, Vec3),
             Tri(&'a crate::geometry::Mesh, usize, f32, f32),
         }
@@ -695,8 +696,11 @@ impl PathIntegrator {
             // Uniform and power selection ignore the receiver.
             let Some((i, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel) else { break 'pick None };
             if let Some((_, e)) = env.filter(|&(e_index, _)| e_index == i) {
-                let Some((x, cos_t, pdf_row)) = e.sample_cell(u_light) else { break 'pick None };
-                break 'pick Some((Picked::Env { x, cos_t, pdf_row }, pmf, Spectrum::ZERO, false));
+                // Its cell is found in lanes (EnvMapLight::sample_cell_lanes).
+                if !e.samples() {
+                    break 'pick None;
+                }
+                break 'pick Some((Picked::Env, pmf, Spectrum::ZERO, false));
             }
             let Some(&light) = scene.lane_light(i) else { break 'pick None };
             match light {
@@ -717,7 +721,7 @@ impl PathIntegrator {
             return None;
         };
         let light_kind = match light.0 {
-            Picked::Env { .. } => 1,
+            Picked::Env => 1,
             Picked::Sphere(..) => 2,
             _ => 0,
         };
@@ -794,10 +798,9 @@ impl PathIntegrator {
             b.set3(row::LI, li);
             b.set(row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
             match picked {
-                Picked::Env { x, cos_t, pdf_row } => {
-                    b.set(row::U_LIGHT, x);
-                    b.set(row::U_LIGHT + 1, cos_t);
-                    b.set(row::AREA_PDF, pdf_row);
+                Picked::Env => {
+                    b.set(row::U_LIGHT, u_light.x);
+                    b.set(row::U_LIGHT + 1, u_light.y);
                 }
                 Picked::Sphere(center, params) => {
                     b.set3(row::LIGHT_TRI, center);
@@ -882,7 +885,8 @@ impl PathIntegrator {
         // density, radiance, whether there is one).
         let (wi, dist, light_pdf, li, sampled) = if L == 1 {
             let env = env.expect("an environment vertex without the environment");
-            let (wi, pdf) = env.sample_direction(g(row::U_LIGHT), g(row::U_LIGHT + 1), g(row::AREA_PDF));
+            let (x, cos_t, pdf_row) = env.sample_cell_lanes(g(row::U_LIGHT), g(row::U_LIGHT + 1));
+            let (wi, pdf) = env.sample_direction(x, cos_t, pdf_row);
             let li = env.eval_lanes(wi.x, wi.y, wi.z);
             (wi, F::splat(f32::INFINITY), pdf * g(row::PMF), V3::gather(|l| li[l]), F::Mask::splat(true))
         } else {
