@@ -22,11 +22,11 @@
 //! orthographic camera maps the film to [-1, 1] x [-1/aspect, 1/aspect] on
 //! the near plane (z = `near_clip`) in camera space, then through `to_world`.
 
-use crate::geometry::{offset_origin, Ray, Shape};
+use crate::geometry::{offset_origin, Ray, RayLanes, Shape};
 use crate::math::{Frame, Mat4, PI};
 use crate::sampling::warp::{sample_concentric_disk, sample_cosine_hemisphere};
 use crate::sampling::SampleStream;
-use crate::simd::Float;
+use crate::simd::{Float, V3};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
@@ -334,7 +334,7 @@ impl Camera {
     /// same operations in the same order, glam's included: a normalisation
     /// is v · (1 / √((x² + y²) + z²)), a matrix-vector product
     /// (x_axis x + y_axis y) + z_axis z). Only for [`Self::has_pinhole_lanes`].
-    pub fn pinhole_rays<F: Float>(&self, sx: F, sy: F) -> [Ray; 16] {
+    pub fn pinhole_rays<F: Float>(&self, sx: F, sy: F) -> RayLanes<F> {
         debug_assert!(self.has_pinhole_lanes());
         let one = F::splat(1.0);
         let lx = (one - F::splat(2.0) * sx) * F::splat(self.tan_half.x);
@@ -355,14 +355,7 @@ impl Camera {
         let o = self.world_from_camera.transform_point3(Vec3::ZERO);
         let (ox, oy, oz) = (F::splat(o.x) + dx * near, F::splat(o.y) + dy * near, F::splat(o.z) + dz * near);
         let t_max = F::splat(self.far_clip - self.near_clip) * inv_z;
-        let a = |v: F| v.to_array();
-        let (ox, oy, oz, dx, dy, dz, t_max) = (a(ox), a(oy), a(oz), a(dx), a(dy), a(dz), a(t_max));
-        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z, 0.0); 16];
-        for (l, ray) in rays.iter_mut().enumerate().take(F::WIDTH) {
-            let at = |v: &F::Array| v.as_ref()[l];
-            *ray = Ray::new(Vec3::new(at(&ox), at(&oy), at(&oz)), Vec3::new(at(&dx), at(&dy), at(&dz)), at(&t_max));
-        }
-        rays
+        RayLanes { o: V3::new(ox, oy, oz), d: V3::new(dx, dy, dz), t_max }
     }
 
     /// Ray through film position `s` in [0, 1)² and aperture sample `a` in [0, 1)².
@@ -459,7 +452,8 @@ mod tests {
                     assert!(c.has_pinhole_lanes());
                     for chunk in self.1.chunks_exact(F::WIDTH) {
                         let rays = c.pinhole_rays::<F>(gather(|l| chunk[l].x), gather(|l| chunk[l].y));
-                        for (r, s) in rays.iter().zip(chunk) {
+                        for (l, s) in chunk.iter().enumerate() {
+                            let r = &rays.ray(l);
                             let want = c.generate_ray_with_aperture(*s, Vec2::splat(0.5));
                             let bits = |r: &Ray| {
                                 (r.o.to_array().map(f32::to_bits), r.d.to_array().map(f32::to_bits), r.t_max.to_bits())

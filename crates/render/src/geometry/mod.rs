@@ -22,7 +22,7 @@ pub use disk::Disk;
 pub use ellipsoids::{Ellipsoid, Ellipsoids, Shell};
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
-pub use ray::{offset_origin, Ray};
+pub use ray::{offset_origin, Ray, RayLanes};
 pub use sdfgrid::SdfGrid;
 pub use shape::{AreaSample, Mesh, Shape, ShapeSample};
 pub use sphere::Sphere;

@@ -1,6 +1,7 @@
 //! Rays and the offsets that keep spawned rays from re-hitting their surface.
 
 use crate::math::RAY_EPSILON;
+use crate::simd::{Float, V3};
 use glam::Vec3;
 
 /// A ray `o + t d` for t in (0, t_max). `d` need not be normalised for
@@ -39,5 +40,29 @@ pub fn offset_origin(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
         p - off
     } else {
         p + off
+    }
+}
+
+/// `F::WIDTH` rays side by side, a component per vector.
+#[derive(Debug, Clone, Copy)]
+pub struct RayLanes<F> {
+    /// The origins.
+    pub o: V3<F>,
+    /// The directions.
+    pub d: V3<F>,
+    /// The upper bounds of t.
+    pub t_max: F,
+}
+
+impl<F: Float> RayLanes<F> {
+    /// Lane `l`'s ray.
+    #[inline(always)]
+    pub fn ray(&self, l: usize) -> Ray {
+        let at = |v: F| v.to_array().as_ref()[l];
+        Ray::new(
+            Vec3::new(at(self.o.x), at(self.o.y), at(self.o.z)),
+            Vec3::new(at(self.d.x), at(self.d.y), at(self.d.z)),
+            at(self.t_max),
+        )
     }
 }

@@ -68,6 +68,24 @@ pub struct PathState {
 }
 
 impl PathState {
+    /// A path leaving the camera along `camera_ray` (what
+    /// [`PathIntegrator::start`] returns when `max_depth` is not 0).
+    #[inline(always)]
+    pub fn camera(camera_ray: &Ray) -> PathState {
+        PathState {
+            ray: *camera_ray,
+            l: Spectrum::ZERO,
+            beta: Spectrum::ONE,
+            eta: 1.0,
+            depth: 0,
+            prev_p: camera_ray.o,
+            prev_n: Vec3::ZERO,
+            prev_bsdf_pdf: 1.0,
+            prev_delta: true,
+            pending: Spectrum::ZERO,
+        }
+    }
+
     /// The radiance gathered so far (all of it once the path has ended).
     #[inline]
     pub fn radiance(&self) -> Spectrum {
@@ -144,18 +162,7 @@ impl PathIntegrator {
     /// A path leaving the camera along `camera_ray`, or `None` when
     /// `max_depth` is 0 (the estimate is then 0).
     pub fn start(&self, camera_ray: &Ray) -> Option<PathState> {
-        (self.term.max_depth > 0).then_some(PathState {
-            ray: *camera_ray,
-            l: Spectrum::ZERO,
-            beta: Spectrum::ONE,
-            eta: 1.0,
-            depth: 0,
-            prev_p: camera_ray.o,
-            prev_n: Vec3::ZERO,
-            prev_bsdf_pdf: 1.0,
-            prev_delta: true,
-            pending: Spectrum::ZERO,
-        })
+        (self.term.max_depth > 0).then(|| PathState::camera(camera_ray))
     }
 
     /// One vertex at `hit`, the closest hit of `st.ray`: emission there
