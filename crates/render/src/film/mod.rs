@@ -421,17 +421,23 @@ impl Film {
                 (wx[i], wy[i]) = (filter.taps::<N>(u.x), filter.taps::<N>(u.y));
             }
             let n = group.len();
-            // A footprint row's N sums stay in registers while every
-            // sample is added to them, in sample order.
+            // A footprint row's 4 N sums stay in registers while every
+            // sample is added to them, in sample order; LLVM vectorises the
+            // channels and taps (the same products and sums, operation for
+            // operation, as `add_widened`).
             for ky in 0..N {
-                let row: &mut [[f64; 4]; N] = (&mut self.acc[first + ky * width..][..N]).try_into().unwrap();
-                let mut sums = *row;
+                let row = &mut self.acc[first + ky * width..][..N];
+                let mut sums: [[f64; 4]; N] = row.try_into().unwrap();
                 for ((lw, wx), wy) in lw[..n].iter().zip(&wx[..n]).zip(&wy[..n]) {
-                    for (sum, &wx) in sums.iter_mut().zip(wx) {
-                        add_widened(sum, *lw * (wx * wy[ky]));
+                    let w: [f32; N] = std::array::from_fn(|k| wx[k] * wy[ky]);
+                    let c = lw.to_array();
+                    for (sum, w) in sums.iter_mut().zip(w) {
+                        for (s, c) in sum.iter_mut().zip(c) {
+                            *s += (c * w) as f64;
+                        }
                     }
                 }
-                *row = sums;
+                row.copy_from_slice(&sums);
             }
         }
     }
