@@ -99,7 +99,7 @@ impl Plastic {
 
     /// The diffuse albedo after internal reflections in the coating.
     #[inline]
-    fn diffuse(&self) -> Spectrum {
+    pub fn diffuse(&self) -> Spectrum {
         let d = self.diffuse_reflectance;
         if self.nonlinear {
             d / (Spectrum::ONE - d * self.fdr_int)

@@ -171,6 +171,17 @@ pub enum LaneMaterial {
         /// Multiplier of the Fresnel transmittance.
         specular_transmittance: Spectrum,
     },
+    /// Smooth `plastic`.
+    Plastic {
+        /// Relative IOR.
+        eta: f32,
+        /// The diffuse albedo after internal reflections (`Plastic::diffuse`).
+        diffuse: Spectrum,
+        /// Tint of the specular reflection.
+        specular_reflectance: Spectrum,
+        /// The probability weight of the specular lobe.
+        specular_sampling_weight: f32,
+    },
 }
 
 impl Material {
@@ -249,8 +260,8 @@ impl Material {
     }
 
     /// The material as the `path` integrator's lane vertex shades it: a
-    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, isotropic GGX `roughconductor` or
-    /// `dielectric` whose parameters are constants (no texture, mask, bump,
+    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, isotropic GGX `roughconductor`,
+    /// `dielectric` or `plastic` whose parameters are constants (no texture, mask, bump,
     /// normal map or two-sided wrapper).
     pub fn lane_material(&self) -> Option<LaneMaterial> {
         match self {
@@ -273,6 +284,22 @@ impl Material {
                     eta: c.eta.constant()?,
                     k: c.k.constant()?,
                     specular_reflectance: c.specular_reflectance.constant()?,
+                })
+            }
+            Material::Plastic(p) => {
+                let model = crate::bsdf::plastic::Plastic {
+                    eta: p.eta,
+                    diffuse_reflectance: p.diffuse_reflectance.constant()?,
+                    specular_reflectance: p.specular_reflectance.constant()?,
+                    nonlinear: p.nonlinear,
+                    fdr_int: p.fdr_int,
+                    specular_sampling_weight: p.specular_sampling_weight,
+                };
+                Some(LaneMaterial::Plastic {
+                    eta: model.eta,
+                    diffuse: model.diffuse(),
+                    specular_reflectance: model.specular_reflectance,
+                    specular_sampling_weight: model.specular_sampling_weight,
                 })
             }
             Material::Dielectric(d) => Some(LaneMaterial::Dielectric {

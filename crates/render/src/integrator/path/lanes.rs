@@ -48,8 +48,8 @@ pub struct LaneKind {
     /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk, 3: a flat-shaded
     /// mesh whose frame follows its texture coordinates (a textured material).
     shape: u8,
-    /// 0: diffuse, 1: GGX rough conductor (these two sample a light), 2:
-    /// smooth conductor, 3: smooth dielectric.
+    /// 0: diffuse, 1: GGX rough conductor, 4: plastic (these three sample
+    /// a light), 2: smooth conductor, 3: smooth dielectric.
     bsdf: u8,
     /// The light sampled: 0: an area light on a mesh, 1: the environment
     /// map, 2: an area light on a sphere (0 where none is).
@@ -58,12 +58,12 @@ pub struct LaneKind {
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 48;
+    pub const COUNT: usize = 60;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        ((self.shape * 4 + self.bsdf) * 3 + self.light) as usize
+        ((self.shape * 5 + self.bsdf) * 3 + self.light) as usize
     }
 }
 
@@ -281,14 +281,14 @@ pub struct LaneOutcomes {
     shadow: u32,
     /// Lanes whose BSDF sample goes on (elsewhere sampling failed: the path ends).
     go: u32,
-    /// Whether the BSDF samples are specular (the same for a whole batch).
-    delta: bool,
+    /// Lanes whose BSDF sample is specular.
+    delta: u32,
     rows: [[f32; LaneBatch::LANES]; out_row::COUNT],
 }
 
 impl Default for LaneOutcomes {
     fn default() -> Self {
-        LaneOutcomes { shadow: 0, go: 0, delta: false, rows: [[0.0; LaneBatch::LANES]; out_row::COUNT] }
+        LaneOutcomes { shadow: 0, go: 0, delta: 0, rows: [[0.0; LaneBatch::LANES]; out_row::COUNT] }
     }
 }
 
@@ -410,6 +410,16 @@ fn fresnel_dielectric<F: Float>(cos_i: F, eta: F) -> (F, F, F, F) {
     let r = F::splat(0.5) * (a_s * a_s + a_p * a_p);
     let r = F::select(eta.cmp_eq(one), zero, F::select(ci.cmp_eq(zero), one, r));
     (r, F::select(outside, -ct, ct), eta_it, eta_ti)
+}
+
+/// `Plastic::prob_specular` in lanes: the specular lobe's probability
+/// given the Fresnel reflectance `f_i` and the sampling weight.
+#[inline(always)]
+fn plastic_specular_probability<F: Float>(f_i: F, weight: F) -> F {
+    let one = F::splat(1.0);
+    let s = f_i * weight;
+    let d = (one - f_i) * (one - weight);
+    s / (s + d)
 }
 
 /// `area_to_solid_angle` in lanes: the density and whether there is one.
@@ -649,8 +659,9 @@ impl PathIntegrator {
             LaneMaterial::RoughConductor { .. } => 1,
             LaneMaterial::Conductor { .. } => 2,
             LaneMaterial::Dielectric { .. } => 3,
+            LaneMaterial::Plastic { .. } => 4,
         };
-        let lit = bsdf < 2;
+        let lit = bsdf != 2 && bsdf != 3;
         // The light BVH's choice depends on the point, found in lanes.
         if lit && scene.light_sampler().kind() == LightSelection::Bvh {
             return None;
@@ -750,6 +761,12 @@ impl PathIntegrator {
                 b.set3(row::MAT + 3, specular_transmittance);
                 b.set(row::PARAM, eta);
             }
+            LaneMaterial::Plastic { eta, diffuse, specular_reflectance, specular_sampling_weight } => {
+                b.set3(row::MAT, diffuse);
+                b.set3(row::MAT + 3, specular_reflectance);
+                b.set(row::MAT + 6, specular_sampling_weight);
+                b.set(row::PARAM, eta);
+            }
         }
         match shape {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
@@ -840,23 +857,29 @@ impl PathIntegrator {
         debug_assert!(b.len() <= F::WIDTH);
         b.pad(F::WIDTH);
         let (v, k) = (&*b, b.kind);
+        macro_rules! lit_b {
+            ($s:literal, $b:literal) => {
+                match k.light {
+                    0 => self.lit::<F, $s, 0, $b>(None, v, out),
+                    1 => self.lit::<F, $s, 1, $b>(env, v, out),
+                    _ => self.lit::<F, $s, 2, $b>(None, v, out),
+                }
+            };
+        }
         macro_rules! lit {
             ($s:literal) => {
-                match (k.light, k.bsdf) {
-                    (0, 0) => self.lit::<F, $s, 0, 0>(None, v, out),
-                    (1, 0) => self.lit::<F, $s, 1, 0>(env, v, out),
-                    (_, 0) => self.lit::<F, $s, 2, 0>(None, v, out),
-                    (0, _) => self.lit::<F, $s, 0, 1>(None, v, out),
-                    (1, _) => self.lit::<F, $s, 1, 1>(env, v, out),
-                    (_, _) => self.lit::<F, $s, 2, 1>(None, v, out),
+                match k.bsdf {
+                    0 => lit_b!($s, 0),
+                    1 => lit_b!($s, 1),
+                    _ => lit_b!($s, 2),
                 }
             };
         }
         match (k.shape, k.bsdf) {
-            (0, 0 | 1) => lit!(0),
-            (1, 0 | 1) => lit!(1),
-            (2, 0 | 1) => lit!(2),
-            (_, 0 | 1) => lit!(3),
+            (0, 0 | 1 | 4) => lit!(0),
+            (1, 0 | 1 | 4) => lit!(1),
+            (2, 0 | 1 | 4) => lit!(2),
+            (_, 0 | 1 | 4) => lit!(3),
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
             (2, b) => specular::<F, 2>(b == 3, v, out),
@@ -867,7 +890,7 @@ impl PathIntegrator {
     /// [`Self::lane_vertices`] for a vertex with light sampling on shape
     /// kind `S`, lit by light kind `L` (0: an area light on a mesh, 1: the
     /// environment map, 2: an area light on a sphere), with BSDF `B` (0:
-    /// diffuse, 1: GGX rough conductor).
+    /// diffuse, 1: GGX rough conductor, 2: plastic).
     #[inline(always)]
     fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
@@ -919,6 +942,16 @@ impl PathIntegrator {
             let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
             let f = V3::select(front, gv(row::MAT) * F::splat(INV_PI), V3::splat(Vec3::ZERO));
             (f, F::select(front, wi_l.z.max(zero) * F::splat(INV_PI), zero))
+        } else if B == 2 {
+            // Plastic::eval and Plastic::pdf.
+            let eta = g(row::PARAM);
+            let front = !h.wo.z.cmp_le(zero) & !wi_l.z.cmp_le(zero);
+            let f_i = fresnel_dielectric(h.wo.z, eta).0;
+            let f_o = fresnel_dielectric(wi_l.z, eta).0;
+            let f = gv(row::MAT) * (F::splat(INV_PI) / (eta * eta) * (one - f_i) * (one - f_o));
+            let pdf =
+                (one - plastic_specular_probability(f_i, g(row::MAT + 6))) * (wi_l.z.max(zero) * F::splat(INV_PI));
+            (V3::select(front, f, V3::splat(Vec3::ZERO)), F::select(front, pdf, zero))
         } else {
             let ggx = Ggx::new(g(row::PARAM));
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
@@ -940,6 +973,7 @@ impl PathIntegrator {
 
         // The BSDF sample (Bsdf::sample).
         let (u0, u1) = (g(row::U_BSDF), g(row::U_BSDF + 1));
+        let mut delta = F::Mask::splat(false);
         let (wi_next, bsdf_pdf, weight, go) = if B == 0 {
             // Diffuse::sample: sample_cosine_hemisphere.
             let (dx, dy) = concentric_disk(u0, u1);
@@ -947,6 +981,21 @@ impl PathIntegrator {
             let bsdf_pdf = dz.max(zero) * F::splat(INV_PI);
             let go = !h.wo.z.cmp_le(zero) & !bsdf_pdf.cmp_le(zero);
             (V3::new(dx, dy, dz), bsdf_pdf, gv(row::MAT), go)
+        } else if B == 2 {
+            // Plastic::sample: the mirror with probability p_spec, else cosine-weighted.
+            let eta = g(row::PARAM);
+            let f_i = fresnel_dielectric(h.wo.z, eta).0;
+            let p_spec = plastic_specular_probability(f_i, g(row::MAT + 6));
+            delta = g(row::U_BSDF1).cmp_lt(p_spec);
+            let (dx, dy) = concentric_disk(u0, u1);
+            let dz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
+            let pdf_d = (one - p_spec) * (dz.max(zero) * F::splat(INV_PI));
+            let f_o = fresnel_dielectric(dz, eta).0;
+            let weight_d = gv(row::MAT) * ((one - f_i) * (one - f_o) / (eta * eta * (one - p_spec)));
+            let weight_s = gv(row::MAT + 3) * (f_i / p_spec);
+            let wi = V3::select(delta, V3::new(-h.wo.x, -h.wo.y, h.wo.z), V3::new(dx, dy, dz));
+            let go = !h.wo.z.cmp_le(zero) & (delta | !pdf_d.cmp_le(zero));
+            (wi, F::select(delta, p_spec, pdf_d), V3::select(delta, weight_s, weight_d), go)
         } else {
             let ggx = Ggx::new(g(row::PARAM));
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
@@ -958,7 +1007,7 @@ impl PathIntegrator {
         out.put3(out_row::SHADOW_O, o);
         out.put3(out_row::SHADOW_D, shadow_d);
         out.put(out_row::SHADOW_T, shadow_t);
-        next_rays(&h, wi_next, bsdf_pdf, go, weight, one, false, out);
+        next_rays(&h, wi_next, bsdf_pdf, go, weight, one, delta, out);
     }
 
     /// The rest of lane `l`'s vertex of a batch, one path at a time: its
@@ -989,7 +1038,7 @@ impl PathIntegrator {
         st.prev_p = out.at3(P, l);
         st.prev_n = out.at3(N, l);
         st.prev_bsdf_pdf = out.at(PDF, l);
-        st.prev_delta = out.delta;
+        st.prev_delta = out.delta >> l & 1 != 0;
         st.ray = Ray::new(out.at3(O, l), out.at3(WI, l), f32::INFINITY);
         st.depth += 1;
         (shadow, self.roulette(st, rng))
@@ -1077,7 +1126,7 @@ fn specular<F: Float, const S: u8>(dielectric: bool, v: &LaneBatch, out: &mut La
         );
         let weight = gv(row::MAT + 6).mul_elem(f);
         let go = !wo.z.cmp_le(zero);
-        next_rays(&h, h.to_world(reflected), one, go, weight, one, true, out);
+        next_rays(&h, h.to_world(reflected), one, go, weight, one, F::Mask::splat(true), out);
         return;
     }
     let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, g(row::PARAM));
@@ -1088,7 +1137,7 @@ fn specular<F: Float, const S: u8>(dielectric: bool, v: &LaneBatch, out: &mut La
     let t = gv(row::MAT + 3) * (eta_ti * eta_ti);
     let weight = V3::select(reflect, gv(row::MAT), t);
     let eta = F::select(reflect, one, eta_it);
-    next_rays(&h, h.to_world(wi), pdf, F::Mask::splat(true), weight, eta, true, out);
+    next_rays(&h, h.to_world(wi), pdf, F::Mask::splat(true), weight, eta, F::Mask::splat(true), out);
 }
 
 /// The BSDF samples of lane vertices: where `go` holds, the ray leaving
@@ -1103,11 +1152,11 @@ fn next_rays<F: Float>(
     go: F::Mask,
     weight: V3<F>,
     eta: F,
-    delta: bool,
+    delta: F::Mask,
     out: &mut LaneOutcomes,
 ) {
     let o = offset_origin(h.p, h.n, wi);
-    (out.go, out.delta) = (go.bitmask(), delta);
+    (out.go, out.delta) = (go.bitmask(), delta.bitmask());
     out.put3(out_row::O, o);
     out.put3(out_row::WI, wi);
     out.put3(out_row::P, h.p);
