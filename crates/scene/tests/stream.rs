@@ -100,7 +100,7 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
 
 /// Every kind of lane vertex at once: spheres, rectangles (meshes) and
 /// disks with diffuse (on a checkerboard-textured floor too), smooth conductor, smooth dielectric, GGX rough
-/// conductor and plastic (linear and nonlinear) materials, lit by a rectangle area light, a small sphere area
+/// conductor, GGX rough dielectric and plastic (linear and nonlinear) materials, lit by a rectangle area light, a small sphere area
 /// light (sampled by its cone), a large sphere area light around everything
 /// (sampled by area from inside) and an environment map, each picked a
 /// quarter of the time, so that every bin of the lane kernels runs and must
@@ -113,16 +113,18 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
         r#"<bsdf type="conductor"><string name="material" value="Cu"/></bsdf>"#,
         r#"<bsdf type="dielectric"><float name="int_ior" value="1.5"/></bsdf>"#,
         r#"<bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/><float name="alpha" value="0.25"/></bsdf>"#,
+        r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/></bsdf>"#,
+        r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.05"/><float name="int_ior" value="1.33"/><rgb name="specular_transmittance" value="0.9, 0.7, 0.5"/></bsdf>"#,
         r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.7"/></bsdf>"#,
         r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/><float name="int_ior" value="1.7"/><boolean name="nonlinear" value="true"/></bsdf>"#,
     ];
     let mut shapes = String::new();
     for (k, m) in materials.iter().enumerate() {
-        let x = k as f32 * 0.62 - 1.86;
+        let x = k as f32 * 0.5 - 2.0;
         shapes += &format!(
-            r#"<shape type="sphere"><point name="center" x="{x}" y="0.3" z="0"/><float name="radius" value="0.3"/>{m}</shape>
-            <shape type="rectangle"><transform name="to_world"><scale value="0.3"/><rotate y="1" angle="20"/><translate x="{x}" y="1.1" z="-0.6"/></transform>{m}</shape>
-            <shape type="disk"><transform name="to_world"><scale value="0.3"/><rotate x="1" angle="-90"/><translate x="{x}" y="0.001" z="0.9"/></transform>{m}</shape>
+            r#"<shape type="sphere"><point name="center" x="{x}" y="0.24" z="0"/><float name="radius" value="0.24"/>{m}</shape>
+            <shape type="rectangle"><transform name="to_world"><scale value="0.24"/><rotate y="1" angle="20"/><translate x="{x}" y="1.1" z="-0.6"/></transform>{m}</shape>
+            <shape type="disk"><transform name="to_world"><scale value="0.24"/><rotate x="1" angle="-90"/><translate x="{x}" y="0.001" z="0.9"/></transform>{m}</shape>
 "#
         );
     }

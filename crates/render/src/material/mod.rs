@@ -171,6 +171,17 @@ pub enum LaneMaterial {
         /// Multiplier of the Fresnel transmittance.
         specular_transmittance: Spectrum,
     },
+    /// An isotropic GGX rough dielectric.
+    RoughDielectric {
+        /// Roughness α (before `Microfacet`'s floor of 1e-4).
+        alpha: f32,
+        /// Relative IOR.
+        eta: f32,
+        /// Multiplier of the Fresnel reflectance.
+        specular_reflectance: Spectrum,
+        /// Multiplier of the Fresnel transmittance.
+        specular_transmittance: Spectrum,
+    },
     /// Smooth `plastic`.
     Plastic {
         /// Relative IOR.
@@ -260,8 +271,8 @@ impl Material {
     }
 
     /// The material as the `path` integrator's lane vertex shades it: a
-    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, isotropic GGX `roughconductor`,
-    /// `dielectric` or `plastic` whose parameters are constants (no texture, mask, bump,
+    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, isotropic GGX `roughconductor`
+    /// or `roughdielectric`, `dielectric` or `plastic` whose parameters are constants (no texture, mask, bump,
     /// normal map or two-sided wrapper).
     pub fn lane_material(&self) -> Option<LaneMaterial> {
         match self {
@@ -284,6 +295,17 @@ impl Material {
                     eta: c.eta.constant()?,
                     k: c.k.constant()?,
                     specular_reflectance: c.specular_reflectance.constant()?,
+                })
+            }
+            Material::RoughDielectric(d) if matches!(d.roughness.kind, MicrofacetType::Ggx) => {
+                let one = |t: &Texture| t.constant().map(|c| (c.x + c.y + c.z) / 3.0);
+                let (au, av) = (one(&d.roughness.alpha_u)?, one(&d.roughness.alpha_v)?);
+                (au == av).then_some(())?;
+                Some(LaneMaterial::RoughDielectric {
+                    alpha: au,
+                    eta: d.eta,
+                    specular_reflectance: d.specular_reflectance.constant()?,
+                    specular_transmittance: d.specular_transmittance.constant()?,
                 })
             }
             Material::Plastic(p) => {

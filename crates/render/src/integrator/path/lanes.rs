@@ -1,8 +1,10 @@
 //! The `path` integrator's vertex in lanes for the commonest vertices: a
 //! hit on a flat-shaded mesh, a sphere or a disk with a plain `diffuse`,
-//! `conductor` or `dielectric` material of constant parameters
-//! ([`Scene::lane_material`]); a diffuse one lit by an area light on a mesh
-//! ([`Scene::lane_light`]) or by the scene's one environment map. A
+//! `conductor`, `dielectric`, `plastic` or isotropic GGX `roughconductor`
+//! or `roughdielectric` material of constant parameters
+//! ([`Scene::lane_material`]); the non-specular ones lit by an area light
+//! on a mesh or a sphere ([`Scene::lane_light`]) or by the scene's one
+//! environment map. A
 //! stream prepares such vertices of many paths into a [`LaneBatch`] per
 //! [`LaneKind`] (shape, material and light; structure of arrays, so the
 //! kernel loads each field as one vector), runs a batch once it holds
@@ -27,7 +29,10 @@
 //! and the cosine-weighted sample (`warp::sample_cosine_hemisphere`); the
 //! smooth conductor's and dielectric's Fresnel terms and mirror or
 //! refracted directions (`fresnel_conductor`, `fresnel_dielectric`); the
-//! next ray (`Scene::spawn_ray`).
+//! GGX microfacet terms and visible-normal sampling (`Microfacet`), the
+//! rough conductor's and dielectric's values, densities and samples, and
+//! plastic's (`Plastic`, its lobe chosen per lane); the next ray
+//! (`Scene::spawn_ray`).
 
 use super::{PathIntegrator, PathState};
 use crate::accel::Hit;
@@ -48,8 +53,9 @@ pub struct LaneKind {
     /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk, 3: a flat-shaded
     /// mesh whose frame follows its texture coordinates (a textured material).
     shape: u8,
-    /// 0: diffuse, 1: GGX rough conductor, 4: plastic (these three sample
-    /// a light), 2: smooth conductor, 3: smooth dielectric.
+    /// 0: diffuse, 1: GGX rough conductor, 4: plastic, 5: GGX rough
+    /// dielectric (these sample a light), 2: smooth conductor, 3: smooth
+    /// dielectric.
     bsdf: u8,
     /// The light sampled: 0: an area light on a mesh, 1: the environment
     /// map, 2: an area light on a sphere (0 where none is).
@@ -58,12 +64,12 @@ pub struct LaneKind {
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 60;
+    pub const COUNT: usize = 72;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        ((self.shape * 5 + self.bsdf) * 3 + self.light) as usize
+        ((self.shape * 6 + self.bsdf) * 3 + self.light) as usize
     }
 }
 
@@ -412,6 +418,13 @@ fn fresnel_dielectric<F: Float>(cos_i: F, eta: F) -> (F, F, F, F) {
     (r, F::select(outside, -ct, ct), eta_it, eta_ti)
 }
 
+/// `mulsign`: `v` times the sign of `s` (−1 where s < 0, else 1).
+#[inline(always)]
+fn mulsign<F: Float>(v: V3<F>, s: F) -> V3<F> {
+    let k = F::select(s.cmp_lt(F::splat(0.0)), F::splat(-1.0), F::splat(1.0));
+    V3::new(v.x * k, v.y * k, v.z * k)
+}
+
 /// `Plastic::prob_specular` in lanes: the specular lobe's probability
 /// given the Fresnel reflectance `f_i` and the sampling weight.
 #[inline(always)]
@@ -556,10 +569,10 @@ impl<F: Float> Ggx<F> {
         (f, F::select(pdf_ok, pdf, zero))
     }
 
-    /// `RoughConductor::sample` (visible normals, Heitz 2018): (direction,
-    /// density, weight, whether there is one).
+    /// `Microfacet::sample`'s normal (visible normals, Heitz 2018) for `wo`
+    /// in the upper hemisphere.
     #[inline(always)]
-    fn sample(&self, wo: V3<F>, u0: F, u1: F, eta: V3<F>, k: V3<F>, spec: V3<F>) -> (V3<F>, F, V3<F>, F::Mask) {
+    fn visible_normal(&self, wo: V3<F>, u0: F, u1: F) -> V3<F> {
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
         let a = self.a;
         // Microfacet::stretch.
@@ -582,7 +595,86 @@ impl<F: Float> Ggx<F> {
         // normal_from_slope.
         let sx = (cos_p * slope_x - sin_p * slope_y) * a;
         let sy = (sin_p * slope_x + cos_p * slope_y) * a;
-        let m = V3::new(-sx, -sy, one).normalize();
+        V3::new(-sx, -sy, one).normalize()
+    }
+
+    /// `Microfacet::pdf`: the visible normal density of `m` for `w`.
+    #[inline(always)]
+    fn pdf_m(&self, w: V3<F>, m: V3<F>) -> F {
+        let d = self.d(m);
+        F::select(d.cmp_eq(F::splat(0.0)), F::splat(0.0), d * self.g1(w, m) * w.dot(m).abs() / w.z)
+    }
+
+    /// `RoughDielectric::eval` and `pdf`: (f, density), with relative IOR
+    /// `eta` and the reflectance and transmittance multipliers.
+    #[inline(always)]
+    fn dielectric_eval_pdf(&self, wo: V3<F>, wi: V3<F>, eta: F, spec_r: V3<F>, spec_t: V3<F>) -> (V3<F>, F) {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let (cos_o, cos_i) = (wo.z, wi.z);
+        // half_vector.
+        let reflect = (cos_o * cos_i).cmp_gt(zero);
+        let eta_side = F::select(cos_o.cmp_gt(zero), eta, one / eta);
+        let m = (wo + wi * F::select(reflect, one, eta_side)).normalize();
+        let m = mulsign(m, m.z);
+        let none = cos_o.cmp_eq(zero) | cos_i.cmp_eq(zero) | !(finite(m.x) & finite(m.y) & finite(m.z));
+        let d = self.d(m);
+        let g = self.g1(wo, m) * self.g1(wi, m);
+        let f = fresnel_dielectric(wo.dot(m), eta).0;
+        let (dom, dim) = (wo.dot(m), wi.dot(m));
+        let fr = spec_r * (f * d * g / (F::splat(4.0) * cos_o.abs() * cos_i.abs()));
+        let denom = dom + eta_side * dim;
+        let ft = spec_t * ((one - f) * d * g * dom * dim / (cos_o * cos_i * denom * denom)).abs();
+        let value = V3::select(none | d.cmp_eq(zero), V3::splat(Vec3::ZERO), V3::select(reflect, fr, ft));
+        let t = dom + eta_side * dim;
+        let dwh_dwi = F::select(reflect, one / (F::splat(4.0) * dim), eta_side * eta_side * dim / (t * t));
+        let prob = self.pdf_m(mulsign(wo, cos_o), m) * F::select(reflect, f, one - f);
+        let pdf_none = none | (dom * cos_o).cmp_le(zero) | (dim * cos_i).cmp_le(zero);
+        (value, F::select(pdf_none, zero, prob * dwh_dwi.abs()))
+    }
+
+    /// `RoughDielectric::sample`: (direction, density, weight, relative
+    /// IOR, whether there is one); `u` picks reflection or refraction.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn dielectric_sample(
+        &self,
+        wo: V3<F>,
+        u: F,
+        u0: F,
+        u1: F,
+        eta: F,
+        spec_r: V3<F>,
+        spec_t: V3<F>,
+    ) -> (V3<F>, F, V3<F>, F, F::Mask) {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let cos_o = wo.z;
+        let wo_up = mulsign(wo, cos_o);
+        let m = self.visible_normal(wo_up, u0, u1);
+        let pdf_m = self.pdf_m(wo_up, m);
+        let dom = wo.dot(m);
+        let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(dom, eta);
+        let refl = u.cmp_le(f);
+        // reflect_m and refract_m.
+        let wi_r = m * (F::splat(2.0) * dom) - wo;
+        let wi_t = m * (dom * eta_ti + cos_t) - wo * eta_ti;
+        let wi = V3::select(refl, wi_r, wi_t);
+        let weight = V3::select(refl, spec_r, spec_t * (eta_ti * eta_ti));
+        let pdf = pdf_m * F::select(refl, f, one - f);
+        let dim = wi.dot(m);
+        let t = dom + eta_it * dim;
+        let dwh_dwi = F::select(refl, one / (F::splat(4.0) * dim), eta_it * eta_it * dim / (t * t));
+        let g1 = self.g1(wi, m);
+        let pdf = pdf * dwh_dwi.abs();
+        let go = !cos_o.cmp_eq(zero) & !pdf_m.cmp_eq(zero) & !g1.cmp_eq(zero) & pdf.cmp_gt(zero);
+        (wi, pdf, weight * g1, F::select(refl, one, eta_it), go)
+    }
+
+    /// `RoughConductor::sample` (visible normals, Heitz 2018): (direction,
+    /// density, weight, whether there is one).
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, u0: F, u1: F, eta: V3<F>, k: V3<F>, spec: V3<F>) -> (V3<F>, F, V3<F>, F::Mask) {
+        let zero = F::splat(0.0);
+        let m = self.visible_normal(wo, u0, u1);
         // Microfacet::pdf.
         let d = self.d(m);
         let g1o = self.g1(wo, m);
@@ -660,6 +752,7 @@ impl PathIntegrator {
             LaneMaterial::Conductor { .. } => 2,
             LaneMaterial::Dielectric { .. } => 3,
             LaneMaterial::Plastic { .. } => 4,
+            LaneMaterial::RoughDielectric { .. } => 5,
         };
         let lit = bsdf != 2 && bsdf != 3;
         // The light BVH's choice depends on the point, found in lanes.
@@ -760,6 +853,12 @@ impl PathIntegrator {
                 b.set3(row::MAT, specular_reflectance);
                 b.set3(row::MAT + 3, specular_transmittance);
                 b.set(row::PARAM, eta);
+            }
+            LaneMaterial::RoughDielectric { alpha, eta, specular_reflectance, specular_transmittance } => {
+                b.set3(row::MAT, specular_reflectance);
+                b.set3(row::MAT + 3, specular_transmittance);
+                b.set(row::MAT + 6, eta);
+                b.set(row::PARAM, alpha);
             }
             LaneMaterial::Plastic { eta, diffuse, specular_reflectance, specular_sampling_weight } => {
                 b.set3(row::MAT, diffuse);
@@ -871,15 +970,16 @@ impl PathIntegrator {
                 match k.bsdf {
                     0 => lit_b!($s, 0),
                     1 => lit_b!($s, 1),
-                    _ => lit_b!($s, 2),
+                    4 => lit_b!($s, 2),
+                    _ => lit_b!($s, 3),
                 }
             };
         }
         match (k.shape, k.bsdf) {
-            (0, 0 | 1 | 4) => lit!(0),
-            (1, 0 | 1 | 4) => lit!(1),
-            (2, 0 | 1 | 4) => lit!(2),
-            (_, 0 | 1 | 4) => lit!(3),
+            (0, 0 | 1 | 4 | 5) => lit!(0),
+            (1, 0 | 1 | 4 | 5) => lit!(1),
+            (2, 0 | 1 | 4 | 5) => lit!(2),
+            (_, 0 | 1 | 4 | 5) => lit!(3),
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
             (2, b) => specular::<F, 2>(b == 3, v, out),
@@ -890,7 +990,7 @@ impl PathIntegrator {
     /// [`Self::lane_vertices`] for a vertex with light sampling on shape
     /// kind `S`, lit by light kind `L` (0: an area light on a mesh, 1: the
     /// environment map, 2: an area light on a sphere), with BSDF `B` (0:
-    /// diffuse, 1: GGX rough conductor, 2: plastic).
+    /// diffuse, 1: GGX rough conductor, 2: plastic, 3: GGX rough dielectric).
     #[inline(always)]
     fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
@@ -952,6 +1052,9 @@ impl PathIntegrator {
             let pdf =
                 (one - plastic_specular_probability(f_i, g(row::MAT + 6))) * (wi_l.z.max(zero) * F::splat(INV_PI));
             (V3::select(front, f, V3::splat(Vec3::ZERO)), F::select(front, pdf, zero))
+        } else if B == 3 {
+            let ggx = Ggx::new(g(row::PARAM));
+            ggx.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
         } else {
             let ggx = Ggx::new(g(row::PARAM));
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
@@ -974,6 +1077,7 @@ impl PathIntegrator {
         // The BSDF sample (Bsdf::sample).
         let (u0, u1) = (g(row::U_BSDF), g(row::U_BSDF + 1));
         let mut delta = F::Mask::splat(false);
+        let mut eta_next = one;
         let (wi_next, bsdf_pdf, weight, go) = if B == 0 {
             // Diffuse::sample: sample_cosine_hemisphere.
             let (dx, dy) = concentric_disk(u0, u1);
@@ -996,6 +1100,12 @@ impl PathIntegrator {
             let wi = V3::select(delta, V3::new(-h.wo.x, -h.wo.y, h.wo.z), V3::new(dx, dy, dz));
             let go = !h.wo.z.cmp_le(zero) & (delta | !pdf_d.cmp_le(zero));
             (wi, F::select(delta, p_spec, pdf_d), V3::select(delta, weight_s, weight_d), go)
+        } else if B == 3 {
+            let ggx = Ggx::new(g(row::PARAM));
+            let (wi, pdf, weight, eta, go) =
+                ggx.dielectric_sample(h.wo, g(row::U_BSDF1), u0, u1, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3));
+            eta_next = eta;
+            (wi, pdf, weight, go)
         } else {
             let ggx = Ggx::new(g(row::PARAM));
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
@@ -1007,7 +1117,7 @@ impl PathIntegrator {
         out.put3(out_row::SHADOW_O, o);
         out.put3(out_row::SHADOW_D, shadow_d);
         out.put(out_row::SHADOW_T, shadow_t);
-        next_rays(&h, wi_next, bsdf_pdf, go, weight, one, delta, out);
+        next_rays(&h, wi_next, bsdf_pdf, go, weight, eta_next, delta, out);
     }
 
     /// The rest of lane `l`'s vertex of a batch, one path at a time: its
