@@ -188,9 +188,12 @@ impl Scene {
                     _ => (false, false),
                 };
                 let m = materials.get(info.material as usize).filter(|_| flat && info.light.is_none());
-                // Textures read the uv parameterisation, which lanes find on meshes only.
+                // Textures read the uv parameterisation, which lanes find on
+                // meshes only; anisotropic roughness its dp/du, which lanes
+                // find on spheres only.
                 m.and_then(Material::lane_material).filter(|m| match m {
                     LaneMaterial::TexturedDiffuse => mesh,
+                    _ if m.anisotropic() => matches!(shape, Shape::Sphere(_)),
                     _ => !uv,
                 })
             })

@@ -99,8 +99,9 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
 }
 
 /// Every kind of lane vertex at once: spheres, rectangles (meshes) and
-/// disks with diffuse (on a checkerboard-textured floor too), smooth conductor, smooth dielectric, GGX rough
-/// conductor, GGX rough dielectric and plastic (linear and nonlinear) materials, lit by a rectangle area light, a small sphere area
+/// disks with diffuse (on a checkerboard-textured floor too), smooth conductor, smooth dielectric, rough
+/// conductor and dielectric (GGX and Beckmann, isotropic and anisotropic: the latter in lanes on spheres)
+/// and plastic (linear and nonlinear) materials, lit by a rectangle area light, a small sphere area
 /// light (sampled by its cone), a large sphere area light around everything
 /// (sampled by area from inside) and an environment map, each picked a
 /// quarter of the time, so that every bin of the lane kernels runs and must
@@ -115,16 +116,26 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
         r#"<bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/><float name="alpha" value="0.25"/></bsdf>"#,
         r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/></bsdf>"#,
         r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.05"/><float name="int_ior" value="1.33"/><rgb name="specular_transmittance" value="0.9, 0.7, 0.5"/></bsdf>"#,
+        r#"<bsdf type="roughconductor"><string name="material" value="Cu"/><string name="distribution" value="beckmann"/><float name="alpha" value="0.3"/></bsdf>"#,
+        r#"<bsdf type="roughconductor"><string name="material" value="Al"/><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.35"/></bsdf>"#,
+        r#"<bsdf type="roughconductor"><string name="material" value="Ag"/><string name="distribution" value="ggx"/><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.08"/></bsdf>"#,
+        r#"<bsdf type="roughdielectric"><string name="distribution" value="beckmann"/><float name="alpha" value="0.15"/><float name="int_ior" value="1.5"/></bsdf>"#,
+        r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/><float name="int_ior" value="1.4"/></bsdf>"#,
         r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.7"/></bsdf>"#,
         r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/><float name="int_ior" value="1.7"/><boolean name="nonlinear" value="true"/></bsdf>"#,
     ];
     let mut shapes = String::new();
     for (k, m) in materials.iter().enumerate() {
-        let x = k as f32 * 0.5 - 2.0;
+        // Two rows; the second's rectangles and disks shifted, and its disks
+        // a little higher: coplanar overlapping disks tie, and the stream and
+        // the one-path loop may then pick different ones.
+        let row = (k / 7) as f32;
+        let (x, z) = ((k % 7) as f32 * 0.58 - 1.74, 0.6 * row);
+        let (xr, yd) = (x + 0.29 * row, 0.001 + 0.002 * row);
         shapes += &format!(
-            r#"<shape type="sphere"><point name="center" x="{x}" y="0.24" z="0"/><float name="radius" value="0.24"/>{m}</shape>
-            <shape type="rectangle"><transform name="to_world"><scale value="0.24"/><rotate y="1" angle="20"/><translate x="{x}" y="1.1" z="-0.6"/></transform>{m}</shape>
-            <shape type="disk"><transform name="to_world"><scale value="0.24"/><rotate x="1" angle="-90"/><translate x="{x}" y="0.001" z="0.9"/></transform>{m}</shape>
+            r#"<shape type="sphere"><point name="center" x="{x}" y="0.24" z="{z}"/><float name="radius" value="0.24"/>{m}</shape>
+            <shape type="rectangle"><transform name="to_world"><scale value="0.24"/><rotate y="1" angle="20"/><translate x="{xr}" y="1.1" z="-0.6"/></transform>{m}</shape>
+            <shape type="disk"><transform name="to_world"><scale value="0.24"/><rotate x="1" angle="-90"/><translate x="{xr}" y="{yd}" z="0.9"/></transform>{m}</shape>
 "#
         );
     }

@@ -15,6 +15,7 @@
 
 use crate::geometry::SurfaceInteraction;
 use crate::math::{safe_sqrt, PI};
+use crate::simd::{Float, Mask as _};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
@@ -158,19 +159,27 @@ pub fn beckmann_lambda(a: f64) -> f64 {
 /// `beckmann_g1_in_f32_is_the_f64_one`).
 #[inline]
 pub fn beckmann_lambda_f32(a: f32) -> f32 {
-    let t = 1.0 / (1.0 + 0.5 * a);
-    let p = -1.265_512_2
-        + t * (1.000_023_7
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_204 + t * (1.488_515_9 + t * (-0.822_152_2 + t * 0.170_872_77))))))));
-    0.5 * crate::simd::exp(-a * a) * (INV_SQRT_PI as f32 / a - t * crate::simd::exp(p))
+    beckmann_lambda_lanes(a)
+}
+
+/// [`beckmann_lambda_f32`] for any lanes (the same operations per lane).
+#[inline(always)]
+pub(crate) fn beckmann_lambda_lanes<F: Float>(a: F) -> F {
+    let c = F::splat;
+    let t = c(1.0) / (c(1.0) + c(0.5) * a);
+    let p = c(-1.265_512_2)
+        + t * (c(1.000_023_7)
+            + t * (c(0.374_091_96)
+                + t * (c(0.096_784_18)
+                    + t * (c(-0.186_288_06)
+                        + t * (c(0.278_868_07)
+                            + t * (c(-1.135_204)
+                                + t * (c(1.488_515_9) + t * (c(-0.822_152_2) + t * c(0.170_872_77)))))))));
+    c(0.5) * crate::simd::exp(-a * a) * (c(INV_SQRT_PI as f32) / a - t * crate::simd::exp(p))
 }
 
 /// The a = 1/(α tan θ) from which the Beckmann G1 is 1.0 in f32.
-const BECKMANN_G1_ONE: f64 = 4.0;
+pub(crate) const BECKMANN_G1_ONE: f64 = 4.0;
 
 /// Mitsuba's rational fit of the Beckmann G1 (kept for comparison only).
 pub fn beckmann_g1_fit(a: f32) -> f32 {
@@ -319,38 +328,45 @@ pub(crate) struct Stretched {
 /// a bisection bracket, until it is within 1e-6 of `ux` (at most
 /// [`BECKMANN_NEWTON_STEPS`]). The x and y slopes are independent.
 pub(crate) fn beckmann_slope_x(cos_theta_i: f32, ux: f32) -> f32 {
+    beckmann_slope_x_lanes(cos_theta_i, ux)
+}
+
+/// [`beckmann_slope_x`] for any lanes: each lane steps until its own
+/// stopping test holds, as the scalar loop does.
+#[inline(always)]
+pub(crate) fn beckmann_slope_x_lanes<F: Float>(cos_theta_i: F, ux: F) -> F {
     use crate::simd::{erf, erfinv, exp, ln};
+    let c = F::splat;
     let ci = cos_theta_i;
-    let tan_i = (1.0 - ci * ci).max(0.0).sqrt() / ci;
-    let cot_i = 1.0 / tan_i;
-    let maxval = if tan_i == 0.0 { 1.0 } else { erf(cot_i) };
-    let ux = ux.clamp(1e-6, 1.0 - 1e-6);
-    let k = INV_SQRT_PI as f32 * tan_i;
-    let tail = if tan_i == 0.0 { 0.0 } else { k * exp(-cot_i * cot_i) };
-    let norm = 1.0 / (1.0 + maxval + tail);
+    let tan_i = (c(1.0) - ci * ci).max(c(0.0)).sqrt() / ci;
+    let cot_i = c(1.0) / tan_i;
+    let flat = tan_i.cmp_eq(c(0.0));
+    let maxval = F::select(flat, c(1.0), erf(cot_i));
+    // As f32::clamp.
+    let ux = c(1.0 - 1e-6).min(c(1e-6).max(ux));
+    let k = c(INV_SQRT_PI as f32) * tan_i;
+    let tail = F::select(flat, c(0.0), k * exp(-cot_i * cot_i));
+    let norm = c(1.0) / (c(1.0) + maxval + tail);
     // Start: the CDF at normal incidence, inverted in closed form.
-    let mut x = maxval - (maxval + 1.0) * erf((-ln(ux)).sqrt());
-    let (mut lo, mut hi) = (-1.0f32, maxval);
+    let mut x = maxval - (maxval + c(1.0)) * erf((-ln(ux)).sqrt());
+    let (mut lo, mut hi) = (c(-1.0), maxval);
+    // Outside the bracket (or NaN): bisect instead.
+    let outside = |x: F, lo: F, hi: F| !(x.cmp_ge(lo) & x.cmp_le(hi));
+    let mut active = F::Mask::splat(true);
     for _ in 0..BECKMANN_NEWTON_STEPS {
-        // Outside the bracket (or NaN): bisect instead.
-        if !(x >= lo && x <= hi) {
-            x = 0.5 * (lo + hi);
-        }
-        let slope = erfinv(x);
-        let value = norm * (1.0 + x + k * exp(-slope * slope)) - ux;
-        if value.abs() < 1e-6 {
+        if !active.any() {
             break;
         }
-        if value > 0.0 {
-            hi = x;
-        } else {
-            lo = x;
-        }
-        x -= value / (norm * (1.0 - slope * tan_i));
+        x = F::select(active & outside(x, lo, hi), c(0.5) * (lo + hi), x);
+        let slope = erfinv(x);
+        let value = norm * (c(1.0) + x + k * exp(-slope * slope)) - ux;
+        active = active & !value.abs().cmp_lt(c(1e-6));
+        let up = value.cmp_gt(c(0.0));
+        hi = F::select(active & up, x, hi);
+        lo = F::select(active & !up, x, lo);
+        x = F::select(active, x - value / (norm * (c(1.0) - slope * tan_i)), x);
     }
-    if !(x >= lo && x <= hi) {
-        x = 0.5 * (lo + hi);
-    }
+    x = F::select(outside(x, lo, hi), c(0.5) * (lo + hi), x);
     erfinv(x)
 }
 
@@ -360,7 +376,14 @@ const BECKMANN_NEWTON_STEPS: usize = 10;
 
 /// Beckmann visible slopes for α = 1, y component (a standard normal / √2).
 pub(crate) fn beckmann_slope_y(uy: f32) -> f32 {
-    crate::simd::erfinv(2.0 * uy.clamp(1e-6, 1.0 - 1e-6) - 1.0)
+    beckmann_slope_y_lanes(uy)
+}
+
+/// [`beckmann_slope_y`] for any lanes.
+#[inline(always)]
+pub(crate) fn beckmann_slope_y_lanes<F: Float>(uy: F) -> F {
+    let c = F::splat;
+    crate::simd::erfinv(c(2.0) * c(1.0 - 1e-6).min(c(1e-6).max(uy)) - c(1.0))
 }
 
 /// Mirror reflection of `v` about the microfacet normal `m`.

@@ -151,10 +151,14 @@ pub enum LaneMaterial {
         /// Multiplier of the Fresnel reflectance.
         specular_reflectance: Spectrum,
     },
-    /// An isotropic GGX rough conductor.
+    /// A GGX or Beckmann rough conductor.
     RoughConductor {
-        /// Roughness α (before `Microfacet`'s floor of 1e-4).
-        alpha: f32,
+        /// Roughness α along u and v (before `Microfacet`'s floor of 1e-4).
+        alpha_u: f32,
+        /// Along v.
+        alpha_v: f32,
+        /// Beckmann (else GGX).
+        beckmann: bool,
         /// Real part of the relative complex IOR.
         eta: Spectrum,
         /// Its imaginary part.
@@ -171,10 +175,14 @@ pub enum LaneMaterial {
         /// Multiplier of the Fresnel transmittance.
         specular_transmittance: Spectrum,
     },
-    /// An isotropic GGX rough dielectric.
+    /// A GGX or Beckmann rough dielectric.
     RoughDielectric {
-        /// Roughness α (before `Microfacet`'s floor of 1e-4).
-        alpha: f32,
+        /// Roughness α along u and v (before `Microfacet`'s floor of 1e-4).
+        alpha_u: f32,
+        /// Along v.
+        alpha_v: f32,
+        /// Beckmann (else GGX).
+        beckmann: bool,
         /// Relative IOR.
         eta: f32,
         /// Multiplier of the Fresnel reflectance.
@@ -193,6 +201,24 @@ pub enum LaneMaterial {
         /// The probability weight of the specular lobe.
         specular_sampling_weight: f32,
     },
+}
+
+/// Constant roughnesses (α_u, α_v), as `Texture::eval_1` of a constant gives them.
+fn constant_alphas(r: &crate::bsdf::microfacet::Roughness) -> Option<(f32, f32)> {
+    let one = |t: &Texture| t.constant().map(|c| (c.x + c.y + c.z) / 3.0);
+    Some((one(&r.alpha_u)?, one(&r.alpha_v)?))
+}
+
+impl LaneMaterial {
+    /// Whether its roughness differs along u and v: its frame must follow
+    /// the surface's uv parameterisation.
+    pub fn anisotropic(&self) -> bool {
+        match *self {
+            LaneMaterial::RoughConductor { alpha_u, alpha_v, .. }
+            | LaneMaterial::RoughDielectric { alpha_u, alpha_v, .. } => alpha_u != alpha_v,
+            _ => false,
+        }
+    }
 }
 
 impl Material {
@@ -271,8 +297,8 @@ impl Material {
     }
 
     /// The material as the `path` integrator's lane vertex shades it: a
-    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, isotropic GGX `roughconductor`
-    /// or `roughdielectric`, `dielectric` or `plastic` whose parameters are constants (no texture, mask, bump,
+    /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, `roughconductor`,
+    /// `dielectric`, `roughdielectric` or `plastic` whose parameters are constants (no texture, mask, bump,
     /// normal map or two-sided wrapper).
     pub fn lane_material(&self) -> Option<LaneMaterial> {
         match self {
@@ -285,24 +311,23 @@ impl Material {
                 k: c.k.constant()?,
                 specular_reflectance: c.specular_reflectance.constant()?,
             }),
-            Material::RoughConductor(c) if matches!(c.roughness.kind, MicrofacetType::Ggx) => {
-                // As `Texture::eval_1` of a constant.
-                let one = |t: &Texture| t.constant().map(|c| (c.x + c.y + c.z) / 3.0);
-                let (au, av) = (one(&c.roughness.alpha_u)?, one(&c.roughness.alpha_v)?);
-                (au == av).then_some(())?;
+            Material::RoughConductor(c) => {
+                let (alpha_u, alpha_v) = constant_alphas(&c.roughness)?;
                 Some(LaneMaterial::RoughConductor {
-                    alpha: au,
+                    alpha_u,
+                    alpha_v,
+                    beckmann: matches!(c.roughness.kind, MicrofacetType::Beckmann),
                     eta: c.eta.constant()?,
                     k: c.k.constant()?,
                     specular_reflectance: c.specular_reflectance.constant()?,
                 })
             }
-            Material::RoughDielectric(d) if matches!(d.roughness.kind, MicrofacetType::Ggx) => {
-                let one = |t: &Texture| t.constant().map(|c| (c.x + c.y + c.z) / 3.0);
-                let (au, av) = (one(&d.roughness.alpha_u)?, one(&d.roughness.alpha_v)?);
-                (au == av).then_some(())?;
+            Material::RoughDielectric(d) => {
+                let (alpha_u, alpha_v) = constant_alphas(&d.roughness)?;
                 Some(LaneMaterial::RoughDielectric {
-                    alpha: au,
+                    alpha_u,
+                    alpha_v,
+                    beckmann: matches!(d.roughness.kind, MicrofacetType::Beckmann),
                     eta: d.eta,
                     specular_reflectance: d.specular_reflectance.constant()?,
                     specular_transmittance: d.specular_transmittance.constant()?,

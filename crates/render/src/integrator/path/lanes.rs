@@ -1,7 +1,8 @@
 //! The `path` integrator's vertex in lanes for the commonest vertices: a
 //! hit on a flat-shaded mesh, a sphere or a disk with a plain `diffuse`,
-//! `conductor`, `dielectric`, `plastic` or isotropic GGX `roughconductor`
-//! or `roughdielectric` material of constant parameters
+//! `conductor`, `dielectric`, `plastic`, `roughconductor` or
+//! `roughdielectric` (GGX or Beckmann; anisotropic ones on spheres, whose
+//! frame then follows the uv parameterisation) material of constant parameters
 //! ([`Scene::lane_material`]); the non-specular ones lit by an area light
 //! on a mesh or a sphere ([`Scene::lane_light`]) or by the scene's one
 //! environment map. A
@@ -29,13 +30,15 @@
 //! and the cosine-weighted sample (`warp::sample_cosine_hemisphere`); the
 //! smooth conductor's and dielectric's Fresnel terms and mirror or
 //! refracted directions (`fresnel_conductor`, `fresnel_dielectric`); the
-//! GGX microfacet terms and visible-normal sampling (`Microfacet`), the
+//! GGX and Beckmann microfacet terms and visible-normal sampling
+//! (`Microfacet`, Beckmann's Newton steps per lane), the
 //! rough conductor's and dielectric's values, densities and samples, and
 //! plastic's (`Plastic`, its lobe chosen per lane); the next ray
 //! (`Scene::spawn_ray`).
 
 use super::{PathIntegrator, PathState};
 use crate::accel::Hit;
+use crate::bsdf::microfacet::{beckmann_lambda_lanes, beckmann_slope_x_lanes, beckmann_slope_y_lanes, BECKMANN_G1_ONE};
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::light::{EnvMapLight, LightSelection};
@@ -43,7 +46,7 @@ use crate::material::{LaneMaterial, Material};
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::SampleStream;
 use crate::scene::{LaneLight, Scene};
-use crate::simd::{sin_cos, Float, Mask, V3};
+use crate::simd::{self, sin_cos, Float, Mask, V3};
 use glam::{Vec2, Vec3};
 
 /// The shape, material and light of a lane vertex: vertices of one kind
@@ -51,11 +54,13 @@ use glam::{Vec2, Vec3};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LaneKind {
     /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk, 3: a flat-shaded
-    /// mesh whose frame follows its texture coordinates (a textured material).
+    /// mesh whose frame follows its texture coordinates (a textured
+    /// material), 4: a sphere whose frame follows its uv parameterisation
+    /// (an anisotropic material).
     shape: u8,
     /// 0: diffuse, 1: GGX rough conductor, 4: plastic, 5: GGX rough
-    /// dielectric (these sample a light), 2: smooth conductor, 3: smooth
-    /// dielectric.
+    /// dielectric, 6 and 7: Beckmann rough conductor and dielectric (these
+    /// sample a light), 2: smooth conductor, 3: smooth dielectric.
     bsdf: u8,
     /// The light sampled: 0: an area light on a mesh, 1: the environment
     /// map, 2: an area light on a sphere (0 where none is).
@@ -64,12 +69,18 @@ pub struct LaneKind {
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 72;
+    pub const COUNT: usize = 5 * 8 * 3;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        ((self.shape * 6 + self.bsdf) * 3 + self.light) as usize
+        ((self.shape * 8 + self.bsdf) * 3 + self.light) as usize
+    }
+
+    /// Whether its microfacets are Beckmann's (else GGX's, or none).
+    #[inline(always)]
+    fn beckmann(self) -> bool {
+        self.bsdf >= 6
     }
 }
 
@@ -116,8 +127,10 @@ mod row {
     /// The BSDF sample's numbers: the 1D one, then the 2D one.
     pub const U_BSDF1: usize = 58;
     pub const U_BSDF: usize = 59;
+    /// A rough material's roughness along v (`PARAM` holds it along u).
+    pub const PARAM_V: usize = 61;
     /// How many rows there are.
-    pub const COUNT: usize = 61;
+    pub const COUNT: usize = 62;
 }
 
 /// Up to [`LaneBatch::LANES`] prepared vertices of one [`LaneKind`], as
@@ -513,26 +526,35 @@ fn clamp_unit<F: Float>(x: F) -> F {
     F::select(x.cmp_lt(-one), -one, F::select(x.cmp_gt(one), one, x))
 }
 
-/// An isotropic GGX `Microfacet` (α floored at 1e-4 as `alphas`) and the
-/// rough conductor on it (`RoughConductor`), in lanes.
-struct Ggx<F> {
-    a: F,
+/// A GGX or Beckmann `Microfacet` (α floored at 1e-4 as `alphas`) and the
+/// rough conductor and dielectric on it (`RoughConductor`,
+/// `RoughDielectric`), in lanes.
+struct Micro<F> {
+    au: F,
+    av: F,
+    /// Beckmann (else GGX), the same for a whole batch.
+    beckmann: bool,
 }
 
-impl<F: Float> Ggx<F> {
+impl<F: Float> Micro<F> {
+    /// `Microfacet::alphas`: the roughnesses floored at 1e-4.
     #[inline(always)]
-    fn new(alpha: F) -> Self {
-        Ggx { a: alpha.max(F::splat(1e-4)) }
+    fn new(alpha_u: F, alpha_v: F, beckmann: bool) -> Self {
+        Micro { au: alpha_u.max(F::splat(1e-4)), av: alpha_v.max(F::splat(1e-4)), beckmann }
     }
 
     /// `Microfacet::eval`: D(m).
     #[inline(always)]
     fn d(&self, m: V3<F>) -> F {
-        let a = self.a;
+        let (au, av) = (self.au, self.av);
         let cos2 = m.z * m.z;
-        let (x, y) = (m.x / a, m.y / a);
-        let s = x * x + y * y + cos2;
-        let r = F::splat(1.0) / (F::splat(PI) * a * a * (s * s));
+        let (x, y) = (m.x / au, m.y / av);
+        let r = if self.beckmann {
+            simd::exp(-(x * x + y * y) / cos2) / (F::splat(PI) * au * av * cos2 * cos2)
+        } else {
+            let s = x * x + y * y + cos2;
+            F::splat(1.0) / (F::splat(PI) * au * av * (s * s))
+        };
         F::select((r * m.z).cmp_gt(F::splat(1e-20)), r, F::splat(0.0))
     }
 
@@ -540,10 +562,15 @@ impl<F: Float> Ggx<F> {
     #[inline(always)]
     fn g1(&self, v: V3<F>, m: V3<F>) -> F {
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
-        let (ax, ay) = (self.a * v.x, self.a * v.y);
+        let (ax, ay) = (self.au * v.x, self.av * v.y);
         let xy = ax * ax + ay * ay;
         let t = xy / (v.z * v.z);
-        let g = F::splat(2.0) / (one + (one + t).sqrt());
+        let g = if self.beckmann {
+            let a = one / t.sqrt();
+            F::select(a.cmp_ge(F::splat(BECKMANN_G1_ONE as f32)), one, one / (one + beckmann_lambda_lanes(a)))
+        } else {
+            F::splat(2.0) / (one + (one + t).sqrt())
+        };
         let g = F::select(xy.cmp_eq(zero), one, g);
         F::select((v.dot(m) * v.z).cmp_le(zero), zero, g)
     }
@@ -574,15 +601,30 @@ impl<F: Float> Ggx<F> {
     #[inline(always)]
     fn visible_normal(&self, wo: V3<F>, u0: F, u1: F) -> V3<F> {
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
-        let a = self.a;
         // Microfacet::stretch.
-        let wp = V3::new(a * wo.x, a * wo.y, wo.z).normalize();
+        let wp = V3::new(self.au * wo.x, self.av * wo.y, wo.z).normalize();
         let sin_t = (one - wp.z * wp.z).max(zero).sqrt();
         let pole = sin_t.cmp_eq(zero);
         let sin_p = F::select(pole, zero, clamp_unit(wp.y / sin_t));
         let cos_p = F::select(pole, one, clamp_unit(wp.x / sin_t));
         let ci = wp.z;
-        // sample_visible_11 (GGX).
+        let (slope_x, slope_y) = if self.beckmann {
+            (beckmann_slope_x_lanes(ci, u0), beckmann_slope_y_lanes(u1))
+        } else {
+            ggx_slopes(ci, u0, u1)
+        };
+        // normal_from_slope.
+        let sx = (cos_p * slope_x - sin_p * slope_y) * self.au;
+        let sy = (sin_p * slope_x + cos_p * slope_y) * self.av;
+        V3::new(-sx, -sy, one).normalize()
+    }
+}
+
+/// `sample_visible_11` for GGX: the slopes for α = 1 at incidence cos θ = `ci`.
+#[inline(always)]
+fn ggx_slopes<F: Float>(ci: F, u0: F, u1: F) -> (F, F) {
+    {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
         let (px, py) = concentric_disk(u0, u1);
         let s = F::splat(0.5) * (one + ci);
         let hh = (one - px * px).max(zero).sqrt();
@@ -591,13 +633,11 @@ impl<F: Float> Ggx<F> {
         let z = (one - x * x - y * y).max(zero).sqrt();
         let si = (one - ci * ci).max(zero).sqrt();
         let norm = one / (si * y + ci * z);
-        let (slope_x, slope_y) = ((ci * y - si * z) * norm, x * norm);
-        // normal_from_slope.
-        let sx = (cos_p * slope_x - sin_p * slope_y) * a;
-        let sy = (sin_p * slope_x + cos_p * slope_y) * a;
-        V3::new(-sx, -sy, one).normalize()
+        ((ci * y - si * z) * norm, x * norm)
     }
+}
 
+impl<F: Float> Micro<F> {
     /// `Microfacet::pdf`: the visible normal density of `m` for `w`.
     #[inline(always)]
     fn pdf_m(&self, w: V3<F>, m: V3<F>) -> F {
@@ -748,11 +788,13 @@ impl PathIntegrator {
         let material = scene.lane_material(hit.shape)?;
         let bsdf = match material {
             LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse => 0,
-            LaneMaterial::RoughConductor { .. } => 1,
+            LaneMaterial::RoughConductor { beckmann: false, .. } => 1,
             LaneMaterial::Conductor { .. } => 2,
             LaneMaterial::Dielectric { .. } => 3,
             LaneMaterial::Plastic { .. } => 4,
-            LaneMaterial::RoughDielectric { .. } => 5,
+            LaneMaterial::RoughDielectric { beckmann: false, .. } => 5,
+            LaneMaterial::RoughConductor { beckmann: true, .. } => 6,
+            LaneMaterial::RoughDielectric { beckmann: true, .. } => 7,
         };
         let lit = bsdf != 2 && bsdf != 3;
         // The light BVH's choice depends on the point, found in lanes.
@@ -769,6 +811,7 @@ impl PathIntegrator {
                     0
                 }
             }
+            Shape::Sphere(_) if material.anisotropic() => 4,
             Shape::Sphere(_) => 1,
             Shape::Disk(_) => 2,
             _ => return None,
@@ -838,11 +881,12 @@ impl PathIntegrator {
         match material {
             LaneMaterial::Diffuse(r) => b.set3(row::MAT, r),
             LaneMaterial::TexturedDiffuse => {}
-            LaneMaterial::RoughConductor { alpha, eta, k, specular_reflectance } => {
+            LaneMaterial::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance, .. } => {
                 b.set3(row::MAT, eta);
                 b.set3(row::MAT + 3, k);
                 b.set3(row::MAT + 6, specular_reflectance);
-                b.set(row::PARAM, alpha);
+                b.set(row::PARAM, alpha_u);
+                b.set(row::PARAM_V, alpha_v);
             }
             LaneMaterial::Conductor { eta, k, specular_reflectance } => {
                 b.set3(row::MAT, eta);
@@ -854,11 +898,19 @@ impl PathIntegrator {
                 b.set3(row::MAT + 3, specular_transmittance);
                 b.set(row::PARAM, eta);
             }
-            LaneMaterial::RoughDielectric { alpha, eta, specular_reflectance, specular_transmittance } => {
+            LaneMaterial::RoughDielectric {
+                alpha_u,
+                alpha_v,
+                eta,
+                specular_reflectance,
+                specular_transmittance,
+                ..
+            } => {
                 b.set3(row::MAT, specular_reflectance);
                 b.set3(row::MAT + 3, specular_transmittance);
                 b.set(row::MAT + 6, eta);
-                b.set(row::PARAM, alpha);
+                b.set(row::PARAM, alpha_u);
+                b.set(row::PARAM_V, alpha_v);
             }
             LaneMaterial::Plastic { eta, diffuse, specular_reflectance, specular_sampling_weight } => {
                 b.set3(row::MAT, diffuse);
@@ -897,6 +949,10 @@ impl PathIntegrator {
                 b.set(row::RADIUS, s.radius);
                 b.set(row::B, hit.t);
                 b.set(row::FLIP, if s.flip { 1.0 } else { 0.0 });
+                if shape_kind == 4 {
+                    b.set3(row::GEO + 9, s.rot.x_axis);
+                    b.set3(row::GEO + 12, s.rot.y_axis);
+                }
             }
             Shape::Disk(d) => {
                 let m = &d.world_from_object;
@@ -969,17 +1025,29 @@ impl PathIntegrator {
             ($s:literal) => {
                 match k.bsdf {
                     0 => lit_b!($s, 0),
-                    1 => lit_b!($s, 1),
+                    1 | 6 => lit_b!($s, 1),
                     4 => lit_b!($s, 2),
                     _ => lit_b!($s, 3),
                 }
             };
         }
         match (k.shape, k.bsdf) {
-            (0, 0 | 1 | 4 | 5) => lit!(0),
-            (1, 0 | 1 | 4 | 5) => lit!(1),
-            (2, 0 | 1 | 4 | 5) => lit!(2),
-            (_, 0 | 1 | 4 | 5) => lit!(3),
+            (0, 0 | 1 | 4..) => lit!(0),
+            (1, 0 | 1 | 4..) => lit!(1),
+            (2, 0 | 1 | 4..) => lit!(2),
+            (3, 0 | 1 | 4..) => lit!(3),
+            // Anisotropic rough conductors and dielectrics only.
+            (_, 1 | 5..) => {
+                let micro = |b| if b == 1 || b == 6 { 1 } else { 3 };
+                match (k.light, micro(k.bsdf)) {
+                    (0, 1) => self.lit::<F, 4, 0, 1>(None, v, out),
+                    (1, 1) => self.lit::<F, 4, 1, 1>(env, v, out),
+                    (_, 1) => self.lit::<F, 4, 2, 1>(None, v, out),
+                    (0, _) => self.lit::<F, 4, 0, 3>(None, v, out),
+                    (1, _) => self.lit::<F, 4, 1, 3>(env, v, out),
+                    (_, _) => self.lit::<F, 4, 2, 3>(None, v, out),
+                }
+            }
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
             (2, b) => specular::<F, 2>(b == 3, v, out),
@@ -1053,12 +1121,12 @@ impl PathIntegrator {
                 (one - plastic_specular_probability(f_i, g(row::MAT + 6))) * (wi_l.z.max(zero) * F::splat(INV_PI));
             (V3::select(front, f, V3::splat(Vec3::ZERO)), F::select(front, pdf, zero))
         } else if B == 3 {
-            let ggx = Ggx::new(g(row::PARAM));
-            ggx.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
+            let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
+            micro.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
         } else {
-            let ggx = Ggx::new(g(row::PARAM));
+            let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
-            ggx.eval_pdf(h.wo, wi_l, eta, k, spec)
+            micro.eval_pdf(h.wo, wi_l, eta, k, spec)
         };
         let f = f * wi_l.z.abs();
         let contributes = sampled & f.ne_zero();
@@ -1101,15 +1169,15 @@ impl PathIntegrator {
             let go = !h.wo.z.cmp_le(zero) & (delta | !pdf_d.cmp_le(zero));
             (wi, F::select(delta, p_spec, pdf_d), V3::select(delta, weight_s, weight_d), go)
         } else if B == 3 {
-            let ggx = Ggx::new(g(row::PARAM));
+            let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (wi, pdf, weight, eta, go) =
-                ggx.dielectric_sample(h.wo, g(row::U_BSDF1), u0, u1, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3));
+                micro.dielectric_sample(h.wo, g(row::U_BSDF1), u0, u1, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3));
             eta_next = eta;
             (wi, pdf, weight, go)
         } else {
-            let ggx = Ggx::new(g(row::PARAM));
+            let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
-            ggx.sample(h.wo, u0, u1, eta, k, spec)
+            micro.sample(h.wo, u0, u1, eta, k, spec)
         };
         let wi_next = h.to_world(wi_next);
         out.shadow = contributes.bitmask();
@@ -1187,13 +1255,21 @@ fn hit<F: Float, const S: u8>(v: &LaneBatch) -> LaneHit<F> {
                 (p, n, V3::select(det.cmp_ne(zero), dpdu, fs))
             }
         }
-        1 => {
+        1 | 4 => {
             // Sphere::interaction: the point re-projected onto the surface.
             let (c, z_axis, o) = (gv(row::GEO), gv(row::GEO + 3), gv(row::GEO + 6));
             let at_t = o + gv(row::D) * g(row::B);
             let n = (at_t - c).normalize();
             let p = c + n * g(row::RADIUS);
-            let dpdu = z_axis.cross(n);
+            let dpdu = if S == 4 {
+                // With the uv parameterisation: l = rotᵀ n, dp/du = rot (−l.y, l.x, 0) · 2π r.
+                let (x_axis, y_axis) = (gv(row::GEO + 9), gv(row::GEO + 12));
+                let (lx, ly) = (x_axis.dot(n), y_axis.dot(n));
+                let w = x_axis * -ly + y_axis * lx + z_axis * zero;
+                w * (g(row::RADIUS) * F::splat(2.0) * F::splat(PI))
+            } else {
+                z_axis.cross(n)
+            };
             (p, V3::select(v.mask::<F>(row::FLIP), -n, n), dpdu)
         }
         _ => {
