@@ -715,11 +715,8 @@ impl<F: Float> Micro<F> {
     fn sample(&self, wo: V3<F>, u0: F, u1: F, eta: V3<F>, k: V3<F>, spec: V3<F>) -> (V3<F>, F, V3<F>, F::Mask) {
         let zero = F::splat(0.0);
         let m = self.visible_normal(wo, u0, u1);
-        // Microfacet::pdf.
-        let d = self.d(m);
-        let g1o = self.g1(wo, m);
         let cos_om = wo.dot(m);
-        let pdf_m = F::select(d.cmp_eq(zero), zero, d * g1o * cos_om.abs() / wo.z);
+        let pdf_m = self.pdf_m(wo, m);
         // reflect_m: 2 (wo·m) m − wo.
         let wi = m * (F::splat(2.0) * cos_om) - wo;
         let g1 = self.g1(wi, m);
