@@ -77,11 +77,11 @@ fn glb() -> Vec<u8> {
     let mut json = doc();
     json["buffers"][0].as_object_mut().unwrap().remove("uri");
     let mut j = json.to_string().into_bytes();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = std::fs::read(scene("boxes.bin")).unwrap();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + b.len();

@@ -209,6 +209,33 @@ pub struct Hit {
 impl Hit {
     /// [`Hit::instance`] of a hit outside every instance.
     pub const NOT_INSTANCED: u32 = u32::MAX;
+
+    /// Whether this hit wins over `best`: nearer, or at exactly the same
+    /// distance with a lower (instance, shape, index). Both traversals keep
+    /// the least hit in this order, so a ray's hit does not depend on the
+    /// order in which leaves are visited (coplanar shapes and the shared
+    /// edges of triangles tie at equal `t`).
+    #[inline(always)]
+    pub fn beats(&self, best: &Option<Hit>) -> bool {
+        match best {
+            None => true,
+            Some(b) => {
+                self.t < b.t
+                    || (self.t == b.t && (self.instance, self.shape, self.index) < (b.instance, b.shape, b.index))
+            }
+        }
+    }
+}
+
+/// The distance up to which a traversal keeps testing once it has a hit at
+/// `t`, never beyond the ray's own `t_max`: a few ulps past `t`, so that
+/// every primitive hit at `t` or nearer passes the range test (the
+/// triangle test checks its range before dividing, with its own rounding)
+/// and [`Hit::beats`] decides among them.
+#[inline(always)]
+pub(super) fn search_limit(t: f32, t_max: f32) -> f32 {
+    // t > 0 and finite: adding to the bits steps up by ulps.
+    f32::from_bits(t.to_bits() + 16).min(t_max)
 }
 
 /// An 8-wide BVH over [`Primitive`]s, built by [`Accel::build`]; the
@@ -395,7 +422,8 @@ impl Accel {
     }
 
     /// Closest hit with 0 < t < ray.t_max, given the shapes and instances
-    /// the tree was built over.
+    /// the tree was built over; of hits at equal t, the least by
+    /// [`Hit::beats`].
     #[inline]
     pub fn intersect(&self, ray: &Ray, shapes: &[Shape], instances: &[Instance]) -> Option<Hit> {
         let root = self.root?;
@@ -451,6 +479,8 @@ impl Accel {
         instances: &[Instance],
     ) -> Option<Hit> {
         let mut ray = *ray;
+        // `ray.t_max` becomes the search limit; hits stay below this.
+        let t_max = ray.t_max;
         let inv_d = ray.d.recip();
         let o = [F8::splat(ray.o.x), F8::splat(ray.o.y), F8::splat(ray.o.z)];
         let id = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
@@ -535,24 +565,22 @@ impl Accel {
                             });
                         }
                         let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
-                        let mut l = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
                         while mask != 0 {
-                            let k = mask.trailing_zeros() as usize;
+                            let l = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
-                            if t[k] < t[l] {
-                                l = k;
+                            let [shape, index] = self.tri_ids[blk as usize][l];
+                            let h = Hit {
+                                t: t[l],
+                                uv: Vec2::new(b1[l], b2[l]),
+                                shape,
+                                index,
+                                instance: Hit::NOT_INSTANCED,
+                            };
+                            if h.beats(&best) {
+                                ray.t_max = search_limit(h.t, t_max);
+                                best = Some(h);
                             }
                         }
-                        let [shape, index] = self.tri_ids[blk as usize][l];
-                        ray.t_max = t[l];
-                        best = Some(Hit {
-                            t: t[l],
-                            uv: Vec2::new(b1[l], b2[l]),
-                            shape,
-                            index,
-                            instance: Hit::NOT_INSTANCED,
-                        });
                     }
                 }
             } else {
@@ -562,8 +590,10 @@ impl Accel {
                         if ANY {
                             return Some(h);
                         }
-                        ray.t_max = h.t;
-                        best = Some(h);
+                        if h.beats(&best) {
+                            ray.t_max = search_limit(h.t, t_max);
+                            best = Some(h);
+                        }
                     }
                 }
             }

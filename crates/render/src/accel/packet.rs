@@ -32,26 +32,20 @@
 //! single-ray kernel).
 //!
 //! **Agreement with the single-ray kernel.** Both traversals are
-//! conservative (a box whose primitives a ray hits before its `t_max` is
-//! entered) and accept a hit only when it is strictly nearer than the best
-//! so far, so the closest-hit distance `t` of every ray is bitwise the
-//! single-ray one, and so is `occluded`. The order in which leaves are
-//! visited differs (it follows the packet, not the ray), so where two
-//! primitives are hit at exactly the same `t` (a ray through an edge or
-//! vertex shared by two triangles, which the watertight test hits on both
-//! sides), the primitive reported, and with it `uv`, `shape` and `index`,
-//! may be the other one of the tied pair: each kernel keeps the first
-//! visited. Apart from such exact ties, the hit (shape, index, instance,
-//! uv bits) is the single-ray one. One narrower case is left open in
-//! principle: the triangle test checks its range before dividing
-//! (`t_scaled` against `t_max * det`, both rounded), so of two hits a few
-//! ulps apart the nearer can fail that check against the farther one's
-//! distance when the farther is found first; then the kernel that finds
-//! the farther first keeps it, and the two kernels differ in the last bits
-//! of t. No recorded ray of the tests shows it (see `agrees`, which treats
-//! only equal t bits as a tie).
+//! conservative (a box whose primitives a ray hits before its search limit
+//! is entered) and keep, of all hits, the least by [`Hit::beats`]: the
+//! nearest, and among hits at exactly the same `t` (coplanar shapes, or a
+//! ray through an edge or vertex shared by two triangles, which the
+//! watertight test hits on both sides) the lowest (instance, shape,
+//! index). Once a ray has a hit at `t`, its search limit is a few ulps past
+//! `t` (`search_limit`), so every primitive hit at `t` or nearer still
+//! passes its range test wherever it is visited (the triangle test checks
+//! its range before dividing, with its own rounding). The hit of every ray
+//! (t, uv, shape, index, instance, bit for bit) and `occluded` are
+//! therefore the single-ray ones, whatever order the leaves are visited
+//! in; the tests check both kernels against every primitive tested alone.
 
-use super::bvh::{dequantize, prim_hit, Accel, Hit, Primitive, OTHER, STACK};
+use super::bvh::{dequantize, prim_hit, search_limit, Accel, Hit, Primitive, OTHER, STACK};
 use super::instance::Instance;
 use super::tri4::{intersect4, RayLanes};
 use crate::geometry::triangle::RayShear;
@@ -245,8 +239,8 @@ impl<F: Float> RayTri<F> {
 
 impl Accel {
     /// Closest hits of `rays` (at most `F::WIDTH`, at most [`MAX_PACKET`])
-    /// traversed as one packet, into `out[..rays.len()]`: the same as
-    /// [`Accel::intersect`] per ray, up to exact ties (see the module notes).
+    /// traversed as one packet, into `out[..rays.len()]`: bitwise
+    /// [`Accel::intersect`] per ray (see the module notes).
     pub fn intersect_packet<F: Float>(
         &self,
         rays: &[Ray],
@@ -284,6 +278,8 @@ impl Accel {
         let all = (1u32 << rays.len()) - 1;
         let lanes = Lanes::<F>::new(rays);
         let ray_tri = RayTri::<F>::new(&lanes);
+        // Per ray, the search limit: its own t_max, then a few ulps past
+        // its closest hit so far (`search_limit`).
         let mut t_max = F::Array::default();
         for (l, r) in rays.iter().enumerate() {
             t_max.as_mut()[l] = r.t_max;
@@ -293,15 +289,16 @@ impl Accel {
         // Rays still searching (for `ANY`: not yet blocked).
         let mut alive = all;
         let mut hit = 0u32;
-        // Ray `r` hit `h`: for `ANY` it stops, else `h` is its closest so far.
+        // Ray `r` hit `h`: for `ANY` it stops, else `h` is its closest so
+        // far if it beats the best one.
         macro_rules! record {
             ($r:expr, $h:expr) => {{
-                let (r, h) = ($r, $h);
+                let (r, h): (usize, Hit) = ($r, $h);
                 hit |= 1 << r;
                 if ANY {
                     alive &= !(1 << r);
-                } else {
-                    t_max.as_mut()[r] = h.t;
+                } else if h.beats(&best[r]) {
+                    t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
                     best[r] = Some(h);
                 }
             }};
@@ -311,7 +308,7 @@ impl Accel {
         loop {
             if cur.info == 0 && cur.mask & alive & (cur.mask & alive).wrapping_sub(1) == 0 {
                 // One ray left in this subtree: walk it with the single-ray
-                // kernel (its hits count as here: strictly nearer ones only).
+                // kernel (its best hit counts as one found here).
                 let r = (cur.mask & alive).trailing_zeros() as usize;
                 let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
                 if let Some(h) = self.traverse_slot::<ANY>(&ray, (cur.child, cur.info), shapes, instances) {
@@ -391,16 +388,16 @@ impl Accel {
                             while mask != 0 {
                                 let r = mask.trailing_zeros() as usize;
                                 mask &= mask - 1;
-                                let tr = t.as_ref()[r];
-                                if tr < t_max.as_ref()[r] {
-                                    t_max.as_mut()[r] = tr;
-                                    best[r] = Some(Hit {
-                                        t: tr,
-                                        uv: Vec2::new(b1.as_ref()[r], b2.as_ref()[r]),
-                                        shape,
-                                        index,
-                                        instance: Hit::NOT_INSTANCED,
-                                    });
+                                let h = Hit {
+                                    t: t.as_ref()[r],
+                                    uv: Vec2::new(b1.as_ref()[r], b2.as_ref()[r]),
+                                    shape,
+                                    index,
+                                    instance: Hit::NOT_INSTANCED,
+                                };
+                                if h.beats(&best[r]) {
+                                    t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
+                                    best[r] = Some(h);
                                 }
                             }
                         }
@@ -424,24 +421,22 @@ impl Accel {
                             continue;
                         }
                         let (t, b1, b2) = (t.to_array(), b1.to_array(), b2.to_array());
-                        let mut k = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
                         while mask != 0 {
-                            let j = mask.trailing_zeros() as usize;
+                            let k = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
-                            if t[j] < t[k] {
-                                k = j;
+                            let [shape, index] = self.tri_ids[blk as usize][k];
+                            let h = Hit {
+                                t: t[k],
+                                uv: Vec2::new(b1[k], b2[k]),
+                                shape,
+                                index,
+                                instance: Hit::NOT_INSTANCED,
+                            };
+                            if h.beats(&best[r]) {
+                                t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
+                                best[r] = Some(h);
                             }
                         }
-                        let [shape, index] = self.tri_ids[blk as usize][k];
-                        t_max.as_mut()[r] = t[k];
-                        best[r] = Some(Hit {
-                            t: t[k],
-                            uv: Vec2::new(b1[k], b2[k]),
-                            shape,
-                            index,
-                            instance: Hit::NOT_INSTANCED,
-                        });
                     }
                 }
             } else {
@@ -475,7 +470,10 @@ impl Accel {
                                     index: 0,
                                     instance: Hit::NOT_INSTANCED,
                                 };
-                                (t_max.as_mut()[r], best[r]) = (h.t, Some(h));
+                                if h.beats(&best[r]) {
+                                    t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
+                                    best[r] = Some(h);
+                                }
                             }
                             continue;
                         }
@@ -560,39 +558,11 @@ impl<F: Copy> Stack<F> {
     }
 }
 
-/// Whether a packet's closest hit `packet` agrees with the single-ray
-/// kernel's `single` for `ray` under the tie rule of the module notes:
-/// the same hit (t bits, shape, index, instance, uv bits), or, where the
-/// primitive differs, the same t bits with the packet's primitive, tested
-/// alone against `ray`, hit at exactly that t with exactly that uv.
-pub fn agrees(shapes: &[Shape], instances: &[Instance], ray: &Ray, packet: Option<Hit>, single: Option<Hit>) -> bool {
-    let key = |h: &Hit| (h.t.to_bits(), h.shape, h.index, h.instance, h.uv.x.to_bits(), h.uv.y.to_bits());
-    match (packet, single) {
-        (None, None) => true,
-        (Some(p), Some(s)) if key(&p) == key(&s) => true,
-        (Some(p), Some(s)) if p.t.to_bits() == s.t.to_bits() => {
-            let alone = if p.instance != Hit::NOT_INSTANCED {
-                instances[p.instance as usize].intersect(ray, shapes).map(|h| (h.t, h.uv))
-            } else {
-                match &shapes[p.shape as usize] {
-                    Shape::Mesh(m) => crate::geometry::triangle::intersect_triangle(
-                        ray,
-                        &RayShear::new(ray.d),
-                        &m.vertices(p.index as usize),
-                    )
-                    .map(|(t, b1, b2)| (t, Vec2::new(b1, b2))),
-                    shape => shape.intersect_prim(p.index as usize, ray),
-                }
-            };
-            // An instance reports its own closest hit, which ties too.
-            alone.is_some_and(|(t, uv)| {
-                t.to_bits() == p.t.to_bits()
-                    && (p.instance != Hit::NOT_INSTANCED
-                        || (uv.x.to_bits(), uv.y.to_bits()) == (p.uv.x.to_bits(), p.uv.y.to_bits()))
-            })
-        }
-        _ => false,
-    }
+/// Whether two closest hits are the same hit, bit for bit (t, uv, shape,
+/// index, instance): what the packet and single-ray kernels must give.
+pub fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
+    let key = |h: Hit| (h.t.to_bits(), h.shape, h.index, h.instance, h.uv.x.to_bits(), h.uv.y.to_bits());
+    a.map(key) == b.map(key)
 }
 
 #[cfg(test)]
@@ -650,6 +620,7 @@ pub(crate) mod tests {
                 rot: quat_to_matrix([q.x, q.y, q.z, q.w]).as_mat3(),
             }
         };
+        let half = TriangleMesh { indices: g.indices[..n as usize * n as usize].to_vec(), ..g.clone() };
         let cloud: Vec<Ellipsoid> = (0..60).map(ellipsoid).collect();
         let shells: Vec<Ellipsoid> = (60..100).map(ellipsoid).collect();
         vec![
@@ -666,7 +637,56 @@ pub(crate) mod tests {
                 glam::DQuat::IDENTITY,
                 glam::DVec3::new(6.0, 1.0, 5.0),
             ))),
+            // Exact ties between shapes: the grid again, half of it (the same
+            // vertices, so the same t bits), a sphere twice, and two
+            // overlapping coplanar disks.
+            Shape::Mesh(Mesh::new(half, false)),
+            Shape::sphere(Vec3::new(8.0, 2.0, 1.0), 0.8, false),
+            Shape::sphere(Vec3::new(8.0, 2.0, 1.0), 0.8, false),
+            Shape::disk(
+                glam::Mat4::from_scale_rotation_translation(
+                    Vec3::splat(2.0),
+                    glam::Quat::IDENTITY,
+                    Vec3::new(3.0, 3.0, 0.5),
+                ),
+                false,
+            ),
+            Shape::disk(
+                glam::Mat4::from_scale_rotation_translation(
+                    Vec3::splat(2.0),
+                    glam::Quat::IDENTITY,
+                    Vec3::new(4.0, 3.5, 0.5),
+                ),
+                false,
+            ),
         ]
+    }
+
+    /// The closest hit found without a tree: every primitive tested, the
+    /// least under [`Hit::beats`] kept, and how many hits tie with it.
+    fn brute_force(shapes: &[Shape], ray: &Ray) -> (Option<Hit>, usize) {
+        let mut best: Option<Hit> = None;
+        let mut all = Vec::new();
+        let shear = RayShear::new(ray.d);
+        for (sid, shape) in shapes.iter().enumerate() {
+            for i in 0..shape.prim_count() {
+                let found = match shape {
+                    Shape::Mesh(m) => crate::geometry::triangle::intersect_triangle(ray, &shear, &m.vertices(i))
+                        .map(|(t, b1, b2)| (t, Vec2::new(b1, b2))),
+                    _ => shape.intersect_prim(i, ray),
+                };
+                if let Some((t, uv)) = found {
+                    let index = if shape.is_multi_part() || matches!(shape, Shape::Mesh(_)) { i as u32 } else { 0 };
+                    let h = Hit { t, uv, shape: sid as u32, index, instance: Hit::NOT_INSTANCED };
+                    all.push(t);
+                    if h.beats(&best) {
+                        best = Some(h);
+                    }
+                }
+            }
+        }
+        let ties = best.map_or(0, |b| all.iter().filter(|&&t| t == b.t).count());
+        (best, ties)
     }
 
     /// Curves along a helix (every tenth segment left out), lifted by `lift`.
@@ -738,6 +758,13 @@ pub(crate) mod tests {
         let accel = Accel::build_shapes(&shapes);
         let rays = rays();
         let (mut hits, mut ties, mut parts) = (0, 0, 0);
+        // The single-ray kernel against every primitive tested alone.
+        for (i, ray) in rays.iter().enumerate() {
+            let (expect, tied) = brute_force(&shapes, ray);
+            let single = accel.intersect(ray, &shapes, &[]);
+            assert!(same_hit(single, expect), "ray {i}: {single:?} vs every primitive's {expect:?}");
+            ties += (tied > 1) as usize;
+        }
         for n in [F::WIDTH, 3.min(F::WIDTH)] {
             for (c, chunk) in rays.chunks(n).enumerate() {
                 let mut out = [None; MAX_PACKET];
@@ -745,16 +772,9 @@ pub(crate) mod tests {
                 let blocked = accel.occluded_packet::<F>(chunk, &shapes, &[]);
                 for (r, ray) in chunk.iter().enumerate() {
                     let single = accel.intersect(ray, &shapes, &[]);
-                    assert!(
-                        agrees(&shapes, &[], ray, out[r], single),
-                        "{} chunk {c} ray {r}: {:?} vs {:?}",
-                        F::NAME,
-                        out[r],
-                        single
-                    );
+                    assert!(same_hit(out[r], single), "{} chunk {c} ray {r}: {:?} vs {:?}", F::NAME, out[r], single);
                     hits += single.is_some() as usize;
                     parts += single.is_some_and(|h| shapes[h.shape as usize].is_multi_part()) as usize;
-                    ties += (out[r].map(|h| (h.shape, h.index)) != single.map(|h| (h.shape, h.index))) as usize;
                     assert_eq!(
                         blocked & (1 << r) != 0,
                         accel.occluded(ray, &shapes, &[]),
@@ -767,7 +787,9 @@ pub(crate) mod tests {
         }
         assert!(hits > 3000, "{hits}");
         assert!(parts > 300, "{parts} hits on ellipsoids and shells");
-        eprintln!("{}: {hits} hits ({parts} on multi-part shapes), {ties} resolved by the tie rule", F::NAME);
+        // Shared edges and vertices, the duplicated grid, sphere and disks.
+        assert!(ties > 500, "{ties} rays whose closest hit ties");
+        eprintln!("{}: {hits} hits ({parts} on multi-part shapes), {ties} ties", F::NAME);
     }
 
     #[test]
