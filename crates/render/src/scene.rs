@@ -41,8 +41,10 @@ pub struct ShapeInfo {
 pub enum LaneLight {
     /// On a mesh.
     Mesh {
-        /// Its shape: `shapes[shape]`.
-        shape: u32,
+        /// Its triangles: `Scene::lane_light_tris()[first..first + count]`.
+        first: u32,
+        /// How many.
+        count: u32,
         /// Its density per unit area (`Mesh::area_pdf`).
         area_pdf: f32,
         /// The radiance.
@@ -61,6 +63,20 @@ pub enum LaneLight {
         /// Whether it emits from both sides.
         two_sided: bool,
     },
+}
+
+/// A triangle of a mesh light as lane vertices pick it
+/// ([`Scene::lane_light_tris`]): bucket `b` of the mesh's alias table
+/// (`Mesh::pick_triangle`'s) and the corners of triangle `b`, in one
+/// record, so that a pick follows no pointer through the shape.
+#[derive(Debug, Clone, Copy)]
+pub struct LaneLightTri {
+    /// The share of the bucket kept by triangle `b`.
+    pub keep: f32,
+    /// The triangle taking the rest (an index among the light's own).
+    pub other: u32,
+    /// Triangle `b`'s corners.
+    pub p: [Vec3; 3],
 }
 
 /// Shapes, materials, lights and the BVH, with the queries integrators use.
@@ -94,6 +110,8 @@ pub struct Scene {
     lane_material: Vec<Option<LaneMaterial>>,
     /// Per light: [`Scene::lane_light`].
     lane_lights: Vec<Option<LaneLight>>,
+    /// The triangles of the mesh lights among `lane_lights`.
+    lane_light_tris: Vec<LaneLightTri>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
     pub ray_log: Option<RayLog>,
@@ -198,6 +216,7 @@ impl Scene {
                 })
             })
             .collect();
+        let mut lane_light_tris = Vec::new();
         let lane_lights = lights
             .iter()
             .map(|l| {
@@ -206,7 +225,14 @@ impl Scene {
                 let two_sided = a.two_sided;
                 match &shapes[a.shape as usize] {
                     Shape::Mesh(m) | Shape::CulledMesh(m) => {
-                        Some(LaneLight::Mesh { shape: a.shape, area_pdf: m.area_pdf(), li, two_sided })
+                        let alias = m.area_alias()?;
+                        let (first, count) = (u32::try_from(lane_light_tris.len()).ok()?, alias.len() as u32);
+                        lane_light_tris.extend(alias.iter().enumerate().map(|(b, &(keep, other))| LaneLightTri {
+                            keep,
+                            other,
+                            p: m.vertices(b),
+                        }));
+                        Some(LaneLight::Mesh { first, count, area_pdf: m.area_pdf(), li, two_sided })
                     }
                     Shape::Sphere(s) => {
                         let flip = if s.flip { 1.0 } else { 0.0 };
@@ -230,6 +256,7 @@ impl Scene {
             reads_uv,
             lane_material,
             lane_lights,
+            lane_light_tris,
             ray_log: None,
             media: Vec::new(),
             shape_media: Vec::new(),
@@ -318,6 +345,12 @@ impl Scene {
     #[inline(always)]
     pub fn lane_light(&self, i: usize) -> Option<&LaneLight> {
         self.lane_lights[i].as_ref()
+    }
+
+    /// The triangles of a [`LaneLight::Mesh`] (its `first..first + count`).
+    #[inline(always)]
+    pub fn lane_light_tris(&self, first: u32, count: u32) -> &[LaneLightTri] {
+        &self.lane_light_tris[first as usize..][..count as usize]
     }
 
     /// Whether the segment from `si` along `wi` is blocked before `dist`.

@@ -136,11 +136,19 @@ impl Filter {
     fn taps<const N: usize>(&self, u: f32) -> [f32; N] {
         let m = (N / 2) as i32;
         let x: [f32; N] = std::array::from_fn(|k| u + (m - k as i32) as f32 - 0.5);
+        // Box and tent: `eval`'s expressions, with the match taken once
+        // per sample rather than once per tap.
+        match self.kind {
+            FilterKind::Box => return std::array::from_fn(|k| if x[k].abs() <= 0.5 { 1.0 } else { 0.0 }),
+            FilterKind::Tent { radius } => return std::array::from_fn(|k| (1.0 - x[k].abs() / radius).max(0.0)),
+            _ => {}
+        }
         if N != 5 || self.table.len() != TABLE_PADDED || !(0.0..=1.0).contains(&u) {
-            return x.map(|x| self.weight(x));
+            return std::array::from_fn(|k| self.weight(x[k]));
         }
         let table: &[f32; TABLE_PADDED] = self.table[..].try_into().unwrap();
-        x.map(|x| {
+        std::array::from_fn(|k| {
+            let x = x[k];
             // |x| ≤ 2.5 and radius > 1.5 (margin 2): 0 ≤ t < TABLE_PADDED − 2.
             let t = x.abs() * self.inv_step;
             debug_assert!((0.0..(TABLE_PADDED - 2) as f32).contains(&t));

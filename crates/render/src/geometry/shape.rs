@@ -75,6 +75,12 @@ impl Mesh {
         Some((i, ux))
     }
 
+    /// The alias table behind [`Self::pick_triangle`] (a bucket per
+    /// triangle), for tables that copy it; `None` for a mesh without area.
+    pub(crate) fn area_alias(&self) -> Option<&[(f32, u32)]> {
+        self.area_distrib.as_ref().map(|d| d.alias())
+    }
+
     /// The density per unit area of [`Shape::sample_point`] on this mesh.
     #[inline]
     pub fn area_pdf(&self) -> f32 {

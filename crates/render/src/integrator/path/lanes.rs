@@ -44,6 +44,7 @@ use crate::geometry::{Ray, Shape};
 use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
+use crate::sampling::distrib1d::alias_pick;
 use crate::sampling::SampleStream;
 use crate::scene::{LaneLight, Scene};
 use crate::simd::{self, sin_cos, Float, Mask, V3};
@@ -826,7 +827,7 @@ impl PathIntegrator {
             None,
             Env,
             Sphere(Vec3, Vec3),
-            Tri(&'a crate::geometry::Mesh, usize, f32, f32),
+            Tri(&'a [Vec3; 3], f32, f32),
         }
         // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
         let dim = rng.dim();
@@ -851,12 +852,11 @@ impl PathIntegrator {
                 LaneLight::Sphere { center, params, li, two_sided } => {
                     Some((Picked::Sphere(center, params), pmf, li, two_sided))
                 }
-                LaneLight::Mesh { shape, area_pdf, li, two_sided } => {
-                    let (Shape::Mesh(mesh) | Shape::CulledMesh(mesh)) = &scene.shapes[shape as usize] else {
-                        break 'pick None;
-                    };
-                    let Some((t, ux)) = mesh.pick_triangle(u_light.x) else { break 'pick None };
-                    Some((Picked::Tri(mesh, t, ux, area_pdf), pmf, li, two_sided))
+                LaneLight::Mesh { first, count, area_pdf, li, two_sided } => {
+                    // Mesh::pick_triangle's pick, on the light's own table.
+                    let tris = scene.lane_light_tris(first, count);
+                    let (t, ux) = alias_pick(u_light.x, tris.len(), |b| (tris[b].keep, tris[b].other));
+                    Some((Picked::Tri(&tris[t].p, ux, area_pdf), pmf, li, two_sided))
                 }
             }
         };
@@ -977,8 +977,7 @@ impl PathIntegrator {
                     b.set(row::U_LIGHT, u_light.x);
                     b.set(row::U_LIGHT + 1, u_light.y);
                 }
-                Picked::Tri(mesh, t, ux, area_pdf) => {
-                    let [q0, q1, q2] = mesh.vertices(t);
+                Picked::Tri(&[q0, q1, q2], ux, area_pdf) => {
                     b.set3(row::LIGHT_TRI, q0);
                     b.set3(row::LIGHT_TRI + 3, q1);
                     b.set3(row::LIGHT_TRI + 6, q2);
