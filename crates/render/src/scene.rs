@@ -2,6 +2,7 @@
 //! light sampling (selection included). Nothing else is exposed to them.
 
 use crate::accel::{Accel, Hit, Instance, Primitive};
+use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::{Light, LightSample, LightSampler, LightSelection};
@@ -112,6 +113,8 @@ pub struct Scene {
     lane_lights: Vec<Option<LaneLight>>,
     /// The triangles of the mesh lights among `lane_lights`.
     lane_light_tris: Vec<LaneLightTri>,
+    /// The transmittance tables of the `roughplastic`s among `lane_material`.
+    lane_tables: Vec<[f32; TRANSMITTANCE_RES]>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
     pub ray_log: Option<RayLog>,
@@ -195,6 +198,10 @@ impl Scene {
             })
             .collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };
+        // Per material first, so that a table is copied once per material.
+        let mut lane_tables = Vec::new();
+        let per_material: Vec<Option<LaneMaterial>> =
+            materials.iter().map(|m| m.lane_material(&mut lane_tables)).collect();
         let lane_material = shapes
             .iter()
             .zip(&shape_info)
@@ -205,11 +212,15 @@ impl Scene {
                     Shape::Sphere(_) | Shape::Disk(_) => (true, false),
                     _ => (false, false),
                 };
-                let m = materials.get(info.material as usize).filter(|_| flat && info.light.is_none());
+                let m = per_material
+                    .get(info.material as usize)
+                    .copied()
+                    .flatten()
+                    .filter(|_| flat && info.light.is_none());
                 // Textures read the uv parameterisation, which lanes find on
                 // meshes only; anisotropic roughness its dp/du, which lanes
                 // find on spheres only.
-                m.and_then(Material::lane_material).filter(|m| match m {
+                m.filter(|m| match m {
                     LaneMaterial::TexturedDiffuse => mesh,
                     _ if m.anisotropic() => matches!(shape, Shape::Sphere(_)),
                     _ => !uv,
@@ -257,6 +268,7 @@ impl Scene {
             lane_material,
             lane_lights,
             lane_light_tris,
+            lane_tables,
             ray_log: None,
             media: Vec::new(),
             shape_media: Vec::new(),
@@ -345,6 +357,12 @@ impl Scene {
     #[inline(always)]
     pub fn lane_light(&self, i: usize) -> Option<&LaneLight> {
         self.lane_lights[i].as_ref()
+    }
+
+    /// The transmittance tables that [`LaneMaterial::RoughPlastic`]'s `table` indexes.
+    #[inline(always)]
+    pub fn lane_tables(&self) -> &[[f32; TRANSMITTANCE_RES]] {
+        &self.lane_tables
     }
 
     /// The triangles of a [`LaneLight::Mesh`] (its `first..first + count`).

@@ -101,7 +101,7 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
 /// Every kind of lane vertex at once: spheres, rectangles (meshes) and
 /// disks with diffuse (on a checkerboard-textured floor too), smooth conductor, smooth dielectric, rough
 /// conductor and dielectric (GGX and Beckmann, isotropic and anisotropic: the latter in lanes on spheres)
-/// and plastic (linear and nonlinear) materials, lit by a rectangle area light, a small sphere area
+/// plastic (linear and nonlinear) and rough plastic (GGX and Beckmann) materials, lit by a rectangle area light, a small sphere area
 /// light (sampled by its cone), a large sphere area light around everything
 /// (sampled by area from inside) and an environment map, each picked a
 /// quarter of the time, so that every bin of the lane kernels runs and must
@@ -123,6 +123,9 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
         r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/><float name="int_ior" value="1.4"/></bsdf>"#,
         r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.7"/></bsdf>"#,
         r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/><float name="int_ior" value="1.7"/><boolean name="nonlinear" value="true"/></bsdf>"#,
+        r#"<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><rgb name="diffuse_reflectance" value="0.3, 0.6, 0.2"/></bsdf>"#,
+        r#"<bsdf type="roughplastic"><string name="distribution" value="beckmann"/><float name="alpha" value="0.3"/><float name="int_ior" value="1.6"/><rgb name="diffuse_reflectance" value="0.7, 0.2, 0.2"/><boolean name="nonlinear" value="true"/></bsdf>"#,
+        r#"<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.08"/><float name="int_ior" value="1.33"/><rgb name="specular_reflectance" value="0.8, 0.9, 1.0"/></bsdf>"#,
     ];
     let mut shapes = String::new();
     for (k, m) in materials.iter().enumerate() {

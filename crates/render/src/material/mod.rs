@@ -11,6 +11,7 @@ pub mod blend;
 pub mod bumpmap;
 pub mod normalmap;
 
+use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::bsdf::{
     Blend, Bsdf, BsdfKind, BsdfParams, CoatedConductorParams, CoatedDiffuseParams, ConductorParams, DielectricParams,
     DiffuseParams, DiffuseTransmissionParams, GltfPbrParams, HairParams, MeasuredParams, MicrofacetType, Nested,
@@ -190,6 +191,28 @@ pub enum LaneMaterial {
         /// Multiplier of the Fresnel transmittance.
         specular_transmittance: Spectrum,
     },
+    /// A GGX or Beckmann `roughplastic`.
+    RoughPlastic {
+        /// Roughness α along u and v (before `Microfacet`'s floor of 1e-4).
+        alpha_u: f32,
+        /// Along v.
+        alpha_v: f32,
+        /// Beckmann (else GGX).
+        beckmann: bool,
+        /// Relative IOR.
+        eta: f32,
+        /// The diffuse lobe's albedo after internal reflections, as
+        /// `RoughPlastic::eval` finds it from the reflectance.
+        diffuse: Spectrum,
+        /// Tint of the specular reflection.
+        specular_reflectance: Spectrum,
+        /// The probability weight of the specular lobe.
+        specular_sampling_weight: f32,
+        /// Its transmittance table: the index of a copy of
+        /// `RoughPlasticTables::external_transmittance` in the tables
+        /// [`Material::lane_material`] was given.
+        table: u32,
+    },
     /// Smooth `plastic`.
     Plastic {
         /// Relative IOR.
@@ -215,7 +238,8 @@ impl LaneMaterial {
     pub fn anisotropic(&self) -> bool {
         match *self {
             LaneMaterial::RoughConductor { alpha_u, alpha_v, .. }
-            | LaneMaterial::RoughDielectric { alpha_u, alpha_v, .. } => alpha_u != alpha_v,
+            | LaneMaterial::RoughDielectric { alpha_u, alpha_v, .. }
+            | LaneMaterial::RoughPlastic { alpha_u, alpha_v, .. } => alpha_u != alpha_v,
             _ => false,
         }
     }
@@ -298,9 +322,10 @@ impl Material {
 
     /// The material as the `path` integrator's lane vertex shades it: a
     /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, `roughconductor`,
-    /// `dielectric`, `roughdielectric` or `plastic` whose parameters are constants (no texture, mask, bump,
-    /// normal map or two-sided wrapper).
-    pub fn lane_material(&self) -> Option<LaneMaterial> {
+    /// `dielectric`, `roughdielectric`, `plastic` or `roughplastic` whose parameters are constants (no
+    /// texture, mask, bump, normal map or two-sided wrapper). A
+    /// `roughplastic`'s transmittance table is appended to `tables`.
+    pub fn lane_material(&self, tables: &mut Vec<[f32; TRANSMITTANCE_RES]>) -> Option<LaneMaterial> {
         match self {
             Material::Diffuse(d) => match d.reflectance.constant() {
                 Some(c) => Some(LaneMaterial::Diffuse(c)),
@@ -348,6 +373,24 @@ impl Material {
                     specular_reflectance: model.specular_reflectance,
                     specular_sampling_weight: model.specular_sampling_weight,
                 })
+            }
+            Material::RoughPlastic(p) => {
+                let rho = p.diffuse_reflectance.constant()?;
+                let f_int = p.tables.internal_reflectance;
+                // RoughPlastic::eval's diffuse albedo, the same operations.
+                let diffuse = if p.nonlinear { rho / (Spectrum::ONE - rho * f_int) } else { rho / (1.0 - f_int) };
+                let lane = LaneMaterial::RoughPlastic {
+                    alpha_u: p.distr.alpha_u,
+                    alpha_v: p.distr.alpha_v,
+                    beckmann: matches!(p.distr.kind, MicrofacetType::Beckmann),
+                    eta: p.eta,
+                    diffuse,
+                    specular_reflectance: p.specular_reflectance.constant()?,
+                    specular_sampling_weight: p.specular_sampling_weight,
+                    table: u32::try_from(tables.len()).ok()?,
+                };
+                tables.push(p.tables.external_transmittance[..].try_into().ok()?);
+                Some(lane)
             }
             Material::Dielectric(d) => Some(LaneMaterial::Dielectric {
                 eta: d.eta,

@@ -39,6 +39,7 @@
 use super::{PathIntegrator, PathState};
 use crate::accel::Hit;
 use crate::bsdf::microfacet::{beckmann_lambda_lanes, beckmann_slope_x_lanes, beckmann_slope_y_lanes, BECKMANN_G1_ONE};
+use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::light::{EnvMapLight, LightSelection};
@@ -47,7 +48,7 @@ use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::distrib1d::alias_pick;
 use crate::sampling::SampleStream;
 use crate::scene::{LaneLight, Scene};
-use crate::simd::{self, sin_cos, Float, Mask, V3};
+use crate::simd::{self, sin_cos, Float, Int, Mask, V3};
 use glam::{Vec2, Vec3};
 
 /// The shape, material and light of a lane vertex: vertices of one kind
@@ -60,8 +61,9 @@ pub struct LaneKind {
     /// (an anisotropic material).
     shape: u8,
     /// 0: diffuse, 1: GGX rough conductor, 4: plastic, 5: GGX rough
-    /// dielectric, 6 and 7: Beckmann rough conductor and dielectric (these
-    /// sample a light), 2: smooth conductor, 3: smooth dielectric.
+    /// dielectric, 6 and 7: Beckmann rough conductor and dielectric, 8 and
+    /// 9: GGX and Beckmann rough plastic (these sample a light), 2: smooth
+    /// conductor, 3: smooth dielectric.
     bsdf: u8,
     /// The light sampled: 0: an area light on a mesh, 1: the environment
     /// map, 2: an area light on a sphere (0 where none is).
@@ -70,18 +72,18 @@ pub struct LaneKind {
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 5 * 8 * 3;
+    pub const COUNT: usize = 5 * 10 * 3;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
     pub fn index(self) -> usize {
-        ((self.shape * 8 + self.bsdf) * 3 + self.light) as usize
+        ((self.shape * 10 + self.bsdf) * 3 + self.light) as usize
     }
 
     /// Whether its microfacets are Beckmann's (else GGX's, or none).
     #[inline(always)]
     fn beckmann(self) -> bool {
-        self.bsdf >= 6
+        matches!(self.bsdf, 6 | 7 | 9)
     }
 }
 
@@ -733,6 +735,100 @@ impl<F: Float> Micro<F> {
     }
 }
 
+/// A `roughplastic` (`RoughPlastic`) in lanes: its microfacets, constants
+/// and each lane's transmittance table.
+struct LaneRoughPlastic<'a, F> {
+    micro: Micro<F>,
+    eta: F,
+    diffuse: V3<F>,
+    spec: V3<F>,
+    weight: F,
+    tables: &'a [[f32; TRANSMITTANCE_RES]],
+    table: [f32; LaneBatch::LANES],
+}
+
+impl<'a, F: Float> LaneRoughPlastic<'a, F> {
+    /// The material of batch `v` (rows as `lane_vertex` fills them).
+    #[inline(always)]
+    fn new(v: &LaneBatch, tables: &'a [[f32; TRANSMITTANCE_RES]]) -> Self {
+        LaneRoughPlastic {
+            micro: Micro::new(v.get::<F>(row::PARAM), v.get::<F>(row::PARAM_V), v.kind.beckmann()),
+            eta: v.get::<F>(row::MAT + 7),
+            diffuse: v.get3::<F>(row::MAT),
+            spec: v.get3::<F>(row::MAT + 3),
+            weight: v.get::<F>(row::MAT + 6),
+            tables,
+            table: v.rows[row::MAT + 8],
+        }
+    }
+
+    /// `RoughPlasticTables::transmittance` at `cos_theta`: each lane's
+    /// table, linearly interpolated with the same operations.
+    #[inline(always)]
+    fn transmittance(&self, cos_theta: F) -> F {
+        let last = (TRANSMITTANCE_RES - 2) as f32;
+        let x = cos_theta * F::splat((TRANSMITTANCE_RES - 1) as f32);
+        // `(x.max(0.0) as usize).min(len − 2)`; the index is clamped again
+        // for lanes whose x is NaN (their result is not used).
+        let i = x.max(F::splat(0.0)).min(F::splat(last)).to_int_trunc();
+        let t = x - F::from_int(i);
+        let i = i.to_array();
+        let at = |l: usize, k: usize| {
+            let j = i.as_ref()[l].clamp(0, last as i32) as usize;
+            self.tables[self.table[l] as usize][j + k]
+        };
+        let (a, b) = (simd::gather::<F>(|l| at(l, 0)), simd::gather::<F>(|l| at(l, 1)));
+        a + (b - a) * t
+    }
+
+    /// `RoughPlastic::prob_specular` given t(θ_o).
+    #[inline(always)]
+    fn prob_specular(&self, t_o: F) -> F {
+        let one = F::splat(1.0);
+        let s = (one - t_o) * self.weight;
+        let d = t_o * (one - self.weight);
+        s / (s + d)
+    }
+
+    /// `RoughPlastic::eval` and `pdf`: (f, density), given t(θ_o).
+    #[inline(always)]
+    fn eval_pdf(&self, wo: V3<F>, wi: V3<F>, t_o: F) -> (V3<F>, F) {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let up = !wo.z.cmp_le(zero) & !wi.z.cmp_le(zero);
+        let h = (wo + wi).normalize();
+        let d = self.micro.d(h);
+        let f = fresnel_dielectric(wo.dot(h), self.eta).0;
+        let g1o = self.micro.g1(wo, h);
+        let g = g1o * self.micro.g1(wi, h);
+        let specular = self.spec * (f * d * g / (F::splat(4.0) * wo.z * wi.z));
+        let specular = V3::select(d.cmp_eq(zero), V3::splat(Vec3::ZERO), specular);
+        let t_i = self.transmittance(wi.z);
+        let value = specular + self.diffuse * (F::splat(INV_PI) / (self.eta * self.eta) * t_o * t_i);
+        let p_spec = self.prob_specular(t_o);
+        let spec_pdf = d * g1o / (F::splat(4.0) * wo.z);
+        let pdf = p_spec * spec_pdf + (one - p_spec) * (wi.z.max(zero) * F::splat(INV_PI));
+        (V3::select(up, value, V3::splat(Vec3::ZERO)), F::select(up, pdf, zero))
+    }
+
+    /// `RoughPlastic::sample`: (direction, density, weight, whether there
+    /// is one); `u` picks the lobe.
+    #[inline(always)]
+    fn sample(&self, wo: V3<F>, u: F, u0: F, u1: F) -> (V3<F>, F, V3<F>, F::Mask) {
+        let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        let t_o = self.transmittance(wo.z);
+        let specular = u.cmp_lt(self.prob_specular(t_o));
+        // reflect_m of a visible normal, or sample_cosine_hemisphere.
+        let m = self.micro.visible_normal(wo, u0, u1);
+        let wi_s = m * (F::splat(2.0) * wo.dot(m)) - wo;
+        let (dx, dy) = concentric_disk(u0, u1);
+        let dz = (one - (dx * dx + dy * dy)).max(zero).sqrt();
+        let wi = V3::select(specular, wi_s, V3::new(dx, dy, dz));
+        let (f, pdf) = self.eval_pdf(wo, wi, t_o);
+        let go = !wo.z.cmp_le(zero) & pdf.cmp_gt(zero);
+        (wi, pdf, f * (wi.z / pdf), go)
+    }
+}
+
 /// The hit of a lane vertex: point, geometric normal, shading frame (s, t;
 /// its normal is the geometric one) and the outgoing direction in it.
 struct LaneHit<F> {
@@ -793,6 +889,8 @@ impl PathIntegrator {
             LaneMaterial::RoughDielectric { beckmann: false, .. } => 5,
             LaneMaterial::RoughConductor { beckmann: true, .. } => 6,
             LaneMaterial::RoughDielectric { beckmann: true, .. } => 7,
+            LaneMaterial::RoughPlastic { beckmann: false, .. } => 8,
+            LaneMaterial::RoughPlastic { beckmann: true, .. } => 9,
         };
         let lit = bsdf != 2 && bsdf != 3;
         // The light BVH's choice depends on the point, found in lanes.
@@ -915,6 +1013,25 @@ impl PathIntegrator {
                 b.set(row::MAT + 6, specular_sampling_weight);
                 b.set(row::PARAM, eta);
             }
+            LaneMaterial::RoughPlastic {
+                alpha_u,
+                alpha_v,
+                eta,
+                diffuse,
+                specular_reflectance,
+                specular_sampling_weight,
+                table,
+                ..
+            } => {
+                b.set3(row::MAT, diffuse);
+                b.set3(row::MAT + 3, specular_reflectance);
+                b.set(row::MAT + 6, specular_sampling_weight);
+                b.set(row::MAT + 7, eta);
+                // Exact: there are far fewer than 2^24 tables.
+                b.set(row::MAT + 8, table as f32);
+                b.set(row::PARAM, alpha_u);
+                b.set(row::PARAM_V, alpha_v);
+            }
         }
         match shape {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
@@ -1001,7 +1118,13 @@ impl PathIntegrator {
     /// Runs the vertices of `b` (at most `F::WIDTH`, all of one [`LaneKind`])
     /// at once; `out[l]` is lane `l`'s outcome. `env` as for
     /// [`Self::lane_vertex`].
-    pub fn lane_vertices<F: Float>(&self, env: Option<&EnvMapLight>, b: &mut LaneBatch, out: &mut LaneOutcomes) {
+    pub fn lane_vertices<F: Float>(
+        &self,
+        env: Option<&EnvMapLight>,
+        tables: &[[f32; TRANSMITTANCE_RES]],
+        b: &mut LaneBatch,
+        out: &mut LaneOutcomes,
+    ) {
         if b.is_empty() {
             return;
         }
@@ -1011,9 +1134,9 @@ impl PathIntegrator {
         macro_rules! lit_b {
             ($s:literal, $b:literal) => {
                 match k.light {
-                    0 => self.lit::<F, $s, 0, $b>(None, v, out),
-                    1 => self.lit::<F, $s, 1, $b>(env, v, out),
-                    _ => self.lit::<F, $s, 2, $b>(None, v, out),
+                    0 => self.lit::<F, $s, 0, $b>(None, tables, v, out),
+                    1 => self.lit::<F, $s, 1, $b>(env, tables, v, out),
+                    _ => self.lit::<F, $s, 2, $b>(None, tables, v, out),
                 }
             };
         }
@@ -1023,6 +1146,7 @@ impl PathIntegrator {
                     0 => lit_b!($s, 0),
                     1 | 6 => lit_b!($s, 1),
                     4 => lit_b!($s, 2),
+                    8 | 9 => lit_b!($s, 4),
                     _ => lit_b!($s, 3),
                 }
             };
@@ -1032,16 +1156,23 @@ impl PathIntegrator {
             (1, 0 | 1 | 4..) => lit!(1),
             (2, 0 | 1 | 4..) => lit!(2),
             (3, 0 | 1 | 4..) => lit!(3),
-            // Anisotropic rough conductors and dielectrics only.
+            // Anisotropic rough conductors, dielectrics and plastics only.
             (_, 1 | 5..) => {
-                let micro = |b| if b == 1 || b == 6 { 1 } else { 3 };
+                let micro = |b| match b {
+                    1 | 6 => 1,
+                    8 | 9 => 4,
+                    _ => 3,
+                };
                 match (k.light, micro(k.bsdf)) {
-                    (0, 1) => self.lit::<F, 4, 0, 1>(None, v, out),
-                    (1, 1) => self.lit::<F, 4, 1, 1>(env, v, out),
-                    (_, 1) => self.lit::<F, 4, 2, 1>(None, v, out),
-                    (0, _) => self.lit::<F, 4, 0, 3>(None, v, out),
-                    (1, _) => self.lit::<F, 4, 1, 3>(env, v, out),
-                    (_, _) => self.lit::<F, 4, 2, 3>(None, v, out),
+                    (0, 1) => self.lit::<F, 4, 0, 1>(None, tables, v, out),
+                    (1, 1) => self.lit::<F, 4, 1, 1>(env, tables, v, out),
+                    (_, 1) => self.lit::<F, 4, 2, 1>(None, tables, v, out),
+                    (0, 4) => self.lit::<F, 4, 0, 4>(None, tables, v, out),
+                    (1, 4) => self.lit::<F, 4, 1, 4>(env, tables, v, out),
+                    (_, 4) => self.lit::<F, 4, 2, 4>(None, tables, v, out),
+                    (0, _) => self.lit::<F, 4, 0, 3>(None, tables, v, out),
+                    (1, _) => self.lit::<F, 4, 1, 3>(env, tables, v, out),
+                    (_, _) => self.lit::<F, 4, 2, 3>(None, tables, v, out),
                 }
             }
             (0, b) => specular::<F, 0>(b == 3, v, out),
@@ -1054,11 +1185,13 @@ impl PathIntegrator {
     /// [`Self::lane_vertices`] for a vertex with light sampling on shape
     /// kind `S`, lit by light kind `L` (0: an area light on a mesh, 1: the
     /// environment map, 2: an area light on a sphere), with BSDF `B` (0:
-    /// diffuse, 1: GGX rough conductor, 2: plastic, 3: GGX rough dielectric).
+    /// diffuse, 1: rough conductor, 2: plastic, 3: rough dielectric, 4:
+    /// rough plastic, its transmittance tables in `tables`).
     #[inline(always)]
     fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
         env: Option<&EnvMapLight>,
+        tables: &[[f32; TRANSMITTANCE_RES]],
         v: &LaneBatch,
         out: &mut LaneOutcomes,
     ) {
@@ -1119,6 +1252,9 @@ impl PathIntegrator {
         } else if B == 3 {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             micro.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
+        } else if B == 4 {
+            let rp = LaneRoughPlastic::new(v, tables);
+            rp.eval_pdf(h.wo, wi_l, rp.transmittance(h.wo.z))
         } else {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
@@ -1164,6 +1300,8 @@ impl PathIntegrator {
             let wi = V3::select(delta, V3::new(-h.wo.x, -h.wo.y, h.wo.z), V3::new(dx, dy, dz));
             let go = !h.wo.z.cmp_le(zero) & (delta | !pdf_d.cmp_le(zero));
             (wi, F::select(delta, p_spec, pdf_d), V3::select(delta, weight_s, weight_d), go)
+        } else if B == 4 {
+            LaneRoughPlastic::new(v, tables).sample(h.wo, g(row::U_BSDF1), u0, u1)
         } else if B == 3 {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (wi, pdf, weight, eta, go) =
