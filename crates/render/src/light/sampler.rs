@@ -4,7 +4,7 @@
 use super::bvh::LightBvh;
 use super::Light;
 use crate::geometry::Shape;
-use crate::math::luminance;
+use crate::math::{fast, luminance};
 use crate::sampling::Distribution1D;
 use glam::Vec3;
 
@@ -71,7 +71,8 @@ impl LightSampler {
         match self {
             LightSampler::Uniform { count: 0 } => None,
             &LightSampler::Uniform { count } => {
-                Some((((u * count as f32) as usize).min(count - 1), 1.0 / count as f32))
+                // fast::index is `as usize` for u * count in [0, 2^31) and NaN.
+                Some((fast::index(u * count as f32).min(count - 1), 1.0 / count as f32))
             }
             LightSampler::Power(d) => {
                 let (i, pmf, _) = d.sample_discrete(u);
