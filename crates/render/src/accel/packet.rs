@@ -388,17 +388,8 @@ impl Accel {
                             while mask != 0 {
                                 let r = mask.trailing_zeros() as usize;
                                 mask &= mask - 1;
-                                let h = Hit {
-                                    t: t.as_ref()[r],
-                                    uv: Vec2::new(b1.as_ref()[r], b2.as_ref()[r]),
-                                    shape,
-                                    index,
-                                    instance: Hit::NOT_INSTANCED,
-                                };
-                                if h.beats(&best[r]) {
-                                    t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
-                                    best[r] = Some(h);
-                                }
+                                let uv = Vec2::new(b1.as_ref()[r], b2.as_ref()[r]);
+                                record!(r, Hit { t: t.as_ref()[r], uv, shape, index, instance: Hit::NOT_INSTANCED });
                             }
                         }
                         continue;
@@ -425,17 +416,8 @@ impl Accel {
                             let k = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
                             let [shape, index] = self.tri_ids[blk as usize][k];
-                            let h = Hit {
-                                t: t[k],
-                                uv: Vec2::new(b1[k], b2[k]),
-                                shape,
-                                index,
-                                instance: Hit::NOT_INSTANCED,
-                            };
-                            if h.beats(&best[r]) {
-                                t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
-                                best[r] = Some(h);
-                            }
+                            let uv = Vec2::new(b1[k], b2[k]);
+                            record!(r, Hit { t: t[k], uv, shape, index, instance: Hit::NOT_INSTANCED });
                         }
                     }
                 }
@@ -463,17 +445,8 @@ impl Accel {
                             while mask != 0 {
                                 let r = mask.trailing_zeros() as usize;
                                 mask &= mask - 1;
-                                let h = Hit {
-                                    t: t.as_ref()[r],
-                                    uv: Vec2::ZERO,
-                                    shape,
-                                    index: 0,
-                                    instance: Hit::NOT_INSTANCED,
-                                };
-                                if h.beats(&best[r]) {
-                                    t_max.as_mut()[r] = search_limit(h.t, rays[r].t_max);
-                                    best[r] = Some(h);
-                                }
+                                let uv = Vec2::ZERO;
+                                record!(r, Hit { t: t.as_ref()[r], uv, shape, index: 0, instance: Hit::NOT_INSTANCED });
                             }
                             continue;
                         }
