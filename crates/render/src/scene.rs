@@ -80,6 +80,10 @@ pub struct LaneLightTri {
     pub p: [Vec3; 3],
 }
 
+/// The most triangles a mesh light may have to be sampled in lanes
+/// ([`LaneLightTri`] copies each: 2.9 MB at most per light).
+const MAX_LANE_LIGHT_TRIANGLES: usize = 1 << 16;
+
 /// Shapes, materials, lights and the BVH, with the queries integrators use.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -236,7 +240,10 @@ impl Scene {
                 let two_sided = a.two_sided;
                 match &shapes[a.shape as usize] {
                     Shape::Mesh(m) | Shape::CulledMesh(m) => {
-                        let alias = m.area_alias()?;
+                        // The table copies the corners (44 bytes a triangle):
+                        // a huge emissive mesh stays with the scalar vertex
+                        // rather than doubling its memory.
+                        let alias = m.area_alias().filter(|a| a.len() <= MAX_LANE_LIGHT_TRIANGLES)?;
                         let (first, count) = (u32::try_from(lane_light_tris.len()).ok()?, alias.len() as u32);
                         lane_light_tris.extend(alias.iter().enumerate().map(|(b, &(keep, other))| LaneLightTri {
                             keep,
