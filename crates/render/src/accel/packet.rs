@@ -593,6 +593,10 @@ pub(crate) mod tests {
                 rot: quat_to_matrix([q.x, q.y, q.z, q.w]).as_mat3(),
             }
         };
+        // Radius 2 in the plane z = 0.5 (coplanar, so they tie).
+        let disk = |c: Vec3| {
+            Shape::disk(glam::Mat4::from_scale_rotation_translation(Vec3::splat(2.0), glam::Quat::IDENTITY, c), false)
+        };
         let half = TriangleMesh { indices: g.indices[..n as usize * n as usize].to_vec(), ..g.clone() };
         let cloud: Vec<Ellipsoid> = (0..60).map(ellipsoid).collect();
         let shells: Vec<Ellipsoid> = (60..100).map(ellipsoid).collect();
@@ -616,22 +620,8 @@ pub(crate) mod tests {
             Shape::Mesh(Mesh::new(half, false)),
             Shape::sphere(Vec3::new(8.0, 2.0, 1.0), 0.8, false),
             Shape::sphere(Vec3::new(8.0, 2.0, 1.0), 0.8, false),
-            Shape::disk(
-                glam::Mat4::from_scale_rotation_translation(
-                    Vec3::splat(2.0),
-                    glam::Quat::IDENTITY,
-                    Vec3::new(3.0, 3.0, 0.5),
-                ),
-                false,
-            ),
-            Shape::disk(
-                glam::Mat4::from_scale_rotation_translation(
-                    Vec3::splat(2.0),
-                    glam::Quat::IDENTITY,
-                    Vec3::new(4.0, 3.5, 0.5),
-                ),
-                false,
-            ),
+            disk(Vec3::new(3.0, 3.0, 0.5)),
+            disk(Vec3::new(4.0, 3.5, 0.5)),
         ]
     }
 

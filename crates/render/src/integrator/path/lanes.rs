@@ -811,11 +811,10 @@ impl<'a, F: Float> LaneRoughPlastic<'a, F> {
     }
 
     /// `RoughPlastic::sample`: (direction, density, weight, whether there
-    /// is one); `u` picks the lobe.
+    /// is one), given t(θ_o); `u` picks the lobe.
     #[inline(always)]
-    fn sample(&self, wo: V3<F>, u: F, u0: F, u1: F) -> (V3<F>, F, V3<F>, F::Mask) {
+    fn sample(&self, wo: V3<F>, t_o: F, u: F, u0: F, u1: F) -> (V3<F>, F, V3<F>, F::Mask) {
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
-        let t_o = self.transmittance(wo.z);
         let specular = u.cmp_lt(self.prob_specular(t_o));
         // reflect_m of a visible normal, or sample_cosine_hemisphere.
         let m = self.micro.visible_normal(wo, u0, u1);
@@ -1233,6 +1232,13 @@ impl PathIntegrator {
             let sampled = ok & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
             (wi, dist, pdf * g(row::PMF), gv(row::LI), sampled)
         };
+        // A rough plastic's material and its transmittance at wo, shared by
+        // its evaluation and its sample.
+        let plastic = (B == 4).then(|| {
+            let rp = LaneRoughPlastic::new(v, tables);
+            let t_o = rp.transmittance(h.wo.z);
+            (rp, t_o)
+        });
         // The BSDF's value and density (Bsdf::eval_pdf), MIS-weighted.
         let wi_l = h.to_local(wi);
         let (f, bsdf_pdf) = if B == 0 {
@@ -1252,9 +1258,8 @@ impl PathIntegrator {
         } else if B == 3 {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             micro.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
-        } else if B == 4 {
-            let rp = LaneRoughPlastic::new(v, tables);
-            rp.eval_pdf(h.wo, wi_l, rp.transmittance(h.wo.z))
+        } else if let Some((rp, t_o)) = &plastic {
+            rp.eval_pdf(h.wo, wi_l, *t_o)
         } else {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
@@ -1300,8 +1305,8 @@ impl PathIntegrator {
             let wi = V3::select(delta, V3::new(-h.wo.x, -h.wo.y, h.wo.z), V3::new(dx, dy, dz));
             let go = !h.wo.z.cmp_le(zero) & (delta | !pdf_d.cmp_le(zero));
             (wi, F::select(delta, p_spec, pdf_d), V3::select(delta, weight_s, weight_d), go)
-        } else if B == 4 {
-            LaneRoughPlastic::new(v, tables).sample(h.wo, g(row::U_BSDF1), u0, u1)
+        } else if let Some((rp, t_o)) = &plastic {
+            rp.sample(h.wo, *t_o, g(row::U_BSDF1), u0, u1)
         } else if B == 3 {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (wi, pdf, weight, eta, go) =
