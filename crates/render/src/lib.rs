@@ -2,7 +2,7 @@
 //! crate builds a [`render::RenderJob`] and this crate renders it.
 //!
 //! Layers, bottom up: `math` / `simd` → `sampling` → `geometry` → `accel` →
-//! `texture` → `bsdf` → `material` / `light` / `camera` / `film` / `medium` → `scene` → `integrator` → `render`.
+//! `texture` → `bsdf` → `material` / `light` / `camera` / `film` / `medium` → `scene` → `guiding` → `integrator` → `render`.
 
 #![warn(missing_docs)]
 
@@ -11,6 +11,7 @@ pub mod bsdf;
 pub mod camera;
 pub mod film;
 pub mod geometry;
+pub mod guiding;
 pub mod integrator;
 pub mod light;
 pub mod material;

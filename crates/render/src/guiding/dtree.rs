@@ -1,0 +1,339 @@
+//! The directional quadtree of path guiding (Müller, Gross and Novák,
+//! "Practical Path Guiding for Efficient Light-Transport Simulation", EGSR
+//! 2017, sec. 3.2): a piecewise-constant density over the sphere of
+//! directions, refined where the incident radiance is large.
+//!
+//! Directions live on the unit square by the cylindrical map
+//! (u, v) = ((cos θ + 1) / 2, φ / 2π), which preserves area: a density p on
+//! the square is p / 4π per steradian. A node splits its square into four
+//! quadrants, numbered `ix + 2 iy`.
+//!
+//! Two forms: [`DTreeBuilder`] gathers one iteration's radiance records
+//! (sums in f64, in the order records come, so the result does not depend
+//! on threads), and [`DTree`] is its frozen, normalised copy that sampling
+//! and [`DTree::pdf`] read.
+
+use crate::math::PI;
+use glam::{Vec2, Vec3};
+
+/// Deepest level a quadtree refines to (the paper's 20).
+pub const MAX_DEPTH: u32 = 20;
+
+/// A quadtree node: per quadrant, the index of its child node (0: the
+/// quadrant is a leaf; node 0 is the root, nobody's child).
+#[derive(Debug, Clone, Copy, Default)]
+struct Node {
+    child: [u32; 4],
+}
+
+/// Square position of a direction (the cylindrical map).
+#[inline]
+pub fn dir_to_square(d: Vec3) -> Vec2 {
+    let z = d.z.clamp(-1.0, 1.0);
+    let mut phi = d.y.atan2(d.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let v = phi * (0.5 / PI);
+    // atan2 of a tiny negative y rounds phi + 2π to 2π exactly.
+    Vec2::new(((z + 1.0) * 0.5).min(ONE_BELOW), if v >= 1.0 { 0.0 } else { v })
+}
+
+/// The direction at a square position (inverse of [`dir_to_square`]).
+#[inline]
+pub fn square_to_dir(p: Vec2) -> Vec3 {
+    let z = 2.0 * p.x - 1.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (2.0 * PI * p.y).sin_cos();
+    Vec3::new(r * c, r * s, z)
+}
+
+/// The largest f32 below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// One iteration's radiance records on a fixed structure.
+#[derive(Debug, Clone)]
+pub struct DTreeBuilder {
+    nodes: Vec<Node>,
+    /// Per node, the radiance recorded in each quadrant (Σ L / p).
+    sums: Vec<[f64; 4]>,
+}
+
+impl Default for DTreeBuilder {
+    /// The root alone: four leaf quadrants.
+    fn default() -> Self {
+        DTreeBuilder { nodes: vec![Node::default()], sums: vec![[0.0; 4]] }
+    }
+}
+
+impl DTreeBuilder {
+    /// Adds `value` (a radiance estimate over its sampling density) to the
+    /// leaf quadrant holding square position `p` and to every quadrant above it.
+    pub fn record(&mut self, p: Vec2, value: f64) {
+        let (mut p, mut node) = (p, 0usize);
+        loop {
+            let (ix, iy) = (p.x >= 0.5, p.y >= 0.5);
+            let q = ix as usize + 2 * iy as usize;
+            self.sums[node][q] += value;
+            p = Vec2::new(if ix { p.x * 2.0 - 1.0 } else { p.x * 2.0 }, if iy { p.y * 2.0 - 1.0 } else { p.y * 2.0 });
+            match self.nodes[node].child[q] {
+                0 => return,
+                c => node = c as usize,
+            }
+        }
+    }
+
+    /// The radiance recorded in all.
+    pub fn total(&self) -> f64 {
+        self.sums[0].iter().sum()
+    }
+
+    /// The sampling tree of these records: each quadrant's probability its
+    /// share of its node's sum (a quarter each where a node got nothing).
+    pub fn freeze(&self) -> DTree {
+        let prob = self
+            .sums
+            .iter()
+            .map(|s| {
+                let t: f64 = s.iter().sum();
+                if t > 0.0 && t.is_finite() {
+                    s.map(|x| (x / t) as f32)
+                } else {
+                    [0.25; 4]
+                }
+            })
+            .collect();
+        DTree { nodes: self.nodes.clone(), prob }
+    }
+
+    /// An empty builder whose structure refines this one's by its records
+    /// (the paper's reset): a quadrant holding more than `threshold` of the
+    /// total is subdivided (down to [`MAX_DEPTH`]), one holding less is a
+    /// leaf. Where the old tree has no children, its quadrant's sum is
+    /// taken as spread evenly over the four new ones.
+    pub fn refined(&self, threshold: f64) -> DTreeBuilder {
+        let total = self.total();
+        let mut out = DTreeBuilder::default();
+        // (new node, its old node or None with the old quadrant's sum, depth)
+        let mut stack: Vec<(usize, Option<usize>, f64, u32)> = vec![(0, Some(0), total, 1)];
+        while let Some((new, old, sum, depth)) = stack.pop() {
+            for q in 0..4 {
+                let (s, old_child) = match old {
+                    Some(o) => (self.sums[o][q], self.nodes[o].child[q]),
+                    None => (sum / 4.0, 0),
+                };
+                let fraction = if total > 0.0 { s / total } else { 0.25f64.powi(depth as i32) };
+                if depth < MAX_DEPTH && fraction > threshold {
+                    let c = out.nodes.len();
+                    out.nodes.push(Node::default());
+                    out.sums.push([0.0; 4]);
+                    out.nodes[new].child[q] = c as u32;
+                    stack.push((c, (old_child != 0).then_some(old_child as usize), s, depth + 1));
+                }
+            }
+        }
+        out
+    }
+
+    /// Nodes in the tree (for memory reports).
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+}
+
+/// A frozen quadtree: the density that guided directions are drawn from.
+#[derive(Debug, Clone)]
+pub struct DTree {
+    nodes: Vec<Node>,
+    /// Per node, each quadrant's probability given the node (they sum to 1).
+    prob: Vec<[f32; 4]>,
+}
+
+impl Default for DTree {
+    /// The uniform density over the sphere.
+    fn default() -> Self {
+        DTreeBuilder::default().freeze()
+    }
+}
+
+impl DTree {
+    /// A square position drawn from the density with `u` in [0, 1)², and
+    /// its density on the square (the product over levels of 4 × the
+    /// chosen quadrant's probability). Hierarchical sample warping: each
+    /// level picks a column, then a row in it, and rescales `u` to reuse it.
+    pub fn sample_square(&self, u: Vec2) -> (Vec2, f32) {
+        let (mut u, mut node, mut pdf) = (u, 0usize, 1.0f32);
+        let (mut origin, mut size) = (Vec2::ZERO, 1.0f32);
+        loop {
+            let p = &self.prob[node];
+            // The column (ix), then the row (iy) within it.
+            let (left, right) = (p[0] + p[2], p[1] + p[3]);
+            let pl = left / (left + right);
+            let ix = if u.x < pl {
+                u.x /= pl;
+                0
+            } else {
+                u.x = (u.x - pl) / (1.0 - pl);
+                1
+            };
+            let (bottom, top) = (p[ix], p[ix + 2]);
+            let pb = bottom / (bottom + top);
+            let iy = if u.y < pb {
+                u.y /= pb;
+                0
+            } else {
+                u.y = (u.y - pb) / (1.0 - pb);
+                1
+            };
+            u = u.min(Vec2::splat(ONE_BELOW));
+            let q = ix + 2 * iy;
+            pdf *= 4.0 * p[q];
+            size *= 0.5;
+            origin += Vec2::new(ix as f32, iy as f32) * size;
+            match self.nodes[node].child[q] {
+                0 => return ((origin + u * size).min(Vec2::splat(ONE_BELOW)), pdf),
+                c => node = c as usize,
+            }
+        }
+    }
+
+    /// The density on the square at `p`.
+    pub fn pdf_square(&self, p: Vec2) -> f32 {
+        let (mut p, mut node, mut pdf) = (p, 0usize, 1.0f32);
+        loop {
+            let (ix, iy) = (p.x >= 0.5, p.y >= 0.5);
+            let q = ix as usize + 2 * iy as usize;
+            pdf *= 4.0 * self.prob[node][q];
+            p = Vec2::new(if ix { p.x * 2.0 - 1.0 } else { p.x * 2.0 }, if iy { p.y * 2.0 - 1.0 } else { p.y * 2.0 });
+            match self.nodes[node].child[q] {
+                0 => return pdf,
+                c => node = c as usize,
+            }
+        }
+    }
+
+    /// A world direction drawn from the density, and its density per
+    /// steradian.
+    pub fn sample(&self, u: Vec2) -> (Vec3, f32) {
+        let (p, pdf) = self.sample_square(u);
+        (square_to_dir(p), pdf * (0.25 / PI))
+    }
+
+    /// The density per steradian of direction `d`.
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        self.pdf_square(dir_to_square(d)) * (0.25 / PI)
+    }
+
+    /// Nodes in the tree (for memory reports).
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::chi2::{alpha, chi2_test, integrate_over_sphere};
+    use crate::testing::TestRng;
+
+    /// Radiance from a bright cap around `axis` over a dim uniform floor.
+    fn lobe(axis: Vec3, d: Vec3) -> f64 {
+        0.05 + if d.dot(axis) > 0.9 { 30.0 } else { 0.0 }
+    }
+
+    /// A builder trained over `iterations` on records of `lobe`, drawn
+    /// uniformly (as L / p with p = 1 / 4π), the structure refined between iterations.
+    fn trained(iterations: u32, n: usize) -> DTreeBuilder {
+        let axis = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let mut rng = TestRng::new(7);
+        let mut b = DTreeBuilder::default();
+        for it in 0..iterations {
+            if it > 0 {
+                b = b.refined(0.01);
+            }
+            for _ in 0..n {
+                let d = square_to_dir(rng.next_2d());
+                b.record(dir_to_square(d), lobe(axis, d) * 4.0 * std::f64::consts::PI);
+            }
+        }
+        b
+    }
+
+    #[test]
+    fn square_map_round_trips() {
+        let mut rng = TestRng::new(1);
+        for _ in 0..10_000 {
+            let p = rng.next_2d();
+            let q = dir_to_square(square_to_dir(p));
+            let d = (p - q).abs();
+            // φ wraps at 1: positions near v = 0 and v = 1 are one direction.
+            assert!(d.x < 1e-3 && (d.y < 1e-4 || d.y > 1.0 - 1e-4), "{p} -> {q}");
+        }
+    }
+
+    #[test]
+    fn refinement_follows_energy() {
+        let b = trained(4, 20_000);
+        let t = b.freeze();
+        assert!(t.node_count() > 8, "the tree refined: {} nodes", t.node_count());
+        // The density is high in the lobe and low outside it.
+        let axis = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let inside = t.pdf(axis);
+        let outside = t.pdf(-axis);
+        assert!(inside > 50.0 * outside, "inside {inside}, outside {outside}");
+        // A uniform density refines to the threshold's depth: quadrants of
+        // 1/4, 1/16 and 1/64 of the total (> 1 %) split, those of 1/256 do not.
+        let mut u = DTreeBuilder::default();
+        let mut rng = TestRng::new(3);
+        for _ in 0..100_000 {
+            u.record(rng.next_2d(), 1.0);
+        }
+        assert_eq!(u.refined(0.01).node_count(), 1 + 4 + 16 + 64);
+    }
+
+    /// Exactly (the midpoint rule on a grid finer than the deepest leaf) on
+    /// the square, and on the sphere within the quadrature's error.
+    #[test]
+    fn pdf_integrates_to_one() {
+        for t in [DTree::default(), trained(3, 10_000).freeze(), trained(5, 40_000).freeze()] {
+            let n = 1024;
+            let mut sum = 0.0f64;
+            for i in 0..n {
+                for j in 0..n {
+                    let p = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                    sum += t.pdf_square(p) as f64;
+                }
+            }
+            let square = sum / (n * n) as f64;
+            assert!((square - 1.0).abs() < 1e-5, "∫ pdf = {square} on the square ({} nodes)", t.node_count());
+            let sphere = integrate_over_sphere(|d| t.pdf(d) as f64);
+            assert!((sphere - 1.0).abs() < 5e-3, "∫ pdf dω = {sphere} ({} nodes)", t.node_count());
+        }
+    }
+
+    /// Directions drawn by `sample` follow `pdf` (chi-square), and the
+    /// density `sample` returns is `pdf` at the direction drawn.
+    #[test]
+    fn sampling_matches_pdf() {
+        let trees = [DTree::default(), trained(3, 10_000).freeze(), trained(6, 40_000).freeze()];
+        let a = alpha(trees.len() + 1);
+        for (i, t) in trees.iter().enumerate() {
+            let p = chi2_test(
+                200_000,
+                11 + i as u64,
+                |_, u| {
+                    let (d, pdf) = t.sample(u);
+                    let q = t.pdf(d);
+                    assert!((pdf - q).abs() <= 1e-4 * q, "sample's pdf {pdf}, pdf() {q} at {d}");
+                    Some(d)
+                },
+                |d| t.pdf(d) as f64,
+            );
+            assert!(p > a, "tree {i} ({} nodes): p = {p}", t.node_count());
+        }
+        // Power: a wrong density (the uniform one) is rejected for a refined tree.
+        let t = &trees[2];
+        let p = chi2_test(200_000, 99, |_, u| Some(t.sample(u).0), |_| 0.25 / std::f64::consts::PI);
+        assert!(p < a, "a wrong pdf passed: p = {p}");
+    }
+}

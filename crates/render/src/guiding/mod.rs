@@ -1,0 +1,275 @@
+//! Path guiding (Müller, Gross and Novák, "Practical Path Guiding for
+//! Efficient Light-Transport Simulation", EGSR 2017): an SD-tree, a binary
+//! tree over space whose leaves each hold a directional quadtree
+//! ([`dtree`]) of the radiance arriving there, learnt from the paths of
+//! earlier passes and sampled, mixed with the BSDF, at later ones.
+//!
+//! **Deterministic.** A pass's records ([`GuideRecord`]) are gathered per
+//! tile in sample order and handed to [`Guide::update`] in tile order;
+//! each spatial leaf takes its records in that order (leaves in parallel,
+//! each alone), so the guide of pass k is a pure function of the scene,
+//! the seed and the passes before k, whatever the threads.
+//!
+//! **Unbiased.** The guide only changes where directions are drawn: the
+//! integrator weights a guided vertex by the mixture's density, which is
+//! positive wherever the BSDF's is (see `integrator::path`).
+
+pub mod dtree;
+
+use crate::geometry::Aabb;
+use dtree::{dir_to_square, DTree, DTreeBuilder};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+pub use dtree::MAX_DEPTH;
+
+/// A quadtree quadrant holding more than this share of a leaf's radiance is
+/// subdivided (the paper's ρ = 0.01).
+pub const SUBDIVIDE_SHARE: f64 = 0.01;
+
+/// A spatial leaf splits once an iteration gives it more than this many
+/// records times √(2^iteration) (the paper's c = 12,000, for passes that
+/// double in length).
+pub const SPATIAL_THRESHOLD: f64 = 12_000.0;
+
+/// One radiance estimate for training: at point `p`, radiance `value`
+/// (channel mean, divided by the density the direction was drawn with)
+/// arrived from the direction at square position `dir`
+/// ([`dtree::dir_to_square`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GuideRecord {
+    /// Where the radiance arrived.
+    pub p: Vec3,
+    /// The direction it came from, on the square.
+    pub dir: Vec2,
+    /// L / p.
+    pub value: f32,
+}
+
+impl GuideRecord {
+    /// The record of radiance `radiance` (channel mean) from world
+    /// direction `d` at `p`, drawn with density `pdf`; `None` unless all is finite.
+    pub fn new(p: Vec3, d: Vec3, radiance: f32, pdf: f32) -> Option<GuideRecord> {
+        let value = radiance / pdf;
+        (value.is_finite() && value >= 0.0 && p.is_finite()).then(|| GuideRecord { p, dir: dir_to_square(d), value })
+    }
+}
+
+/// A spatial node: its two children (0: it is a leaf, `leaf` its index).
+#[derive(Debug, Clone, Copy)]
+struct SNode {
+    child: [u32; 2],
+    leaf: u32,
+}
+
+/// A region of space and what it learnt.
+#[derive(Debug, Clone, Default)]
+struct Leaf {
+    /// The density guided directions are drawn from this pass.
+    sampling: DTree,
+    /// This pass's records.
+    building: DTreeBuilder,
+    /// Records this pass.
+    records: u64,
+}
+
+/// The SD-tree: a binary tree over a cube around the scene, split at
+/// midpoints along x, y, z in turn by depth.
+#[derive(Debug, Clone)]
+pub struct Guide {
+    min: Vec3,
+    size: f32,
+    nodes: Vec<SNode>,
+    leaves: Vec<Leaf>,
+    /// Updates so far; the guide samples once there was one.
+    iterations: u32,
+}
+
+impl Guide {
+    /// An untrained guide over the cube around `bounds` (slightly enlarged
+    /// so that no surface lies on its faces).
+    pub fn new(bounds: Aabb) -> Guide {
+        let (lo, hi) = if bounds.min.cmple(bounds.max).all() && bounds.min.is_finite() && bounds.max.is_finite() {
+            (bounds.min, bounds.max)
+        } else {
+            (Vec3::ZERO, Vec3::ONE)
+        };
+        let size = (hi - lo).max_element().max(1e-3) * 1.02;
+        let centre = (lo + hi) * 0.5;
+        Guide {
+            min: centre - Vec3::splat(size * 0.5),
+            size,
+            nodes: vec![SNode { child: [0; 2], leaf: 0 }],
+            leaves: vec![Leaf::default()],
+            iterations: 0,
+        }
+    }
+
+    /// Whether the guide has learnt from a pass (before that it is not used).
+    pub fn trained(&self) -> bool {
+        self.iterations > 0
+    }
+
+    /// Passes learnt from.
+    pub fn iterations(&self) -> u32 {
+        self.iterations
+    }
+
+    /// The spatial leaf holding `p` (clamped into the cube).
+    fn leaf_index(&self, p: Vec3) -> usize {
+        let mut t = ((p - self.min) / self.size).clamp(Vec3::ZERO, Vec3::ONE);
+        let (mut node, mut axis) = (0usize, 0usize);
+        loop {
+            let n = self.nodes[node];
+            if n.child[0] == 0 {
+                return n.leaf as usize;
+            }
+            let hi = t[axis] >= 0.5;
+            t[axis] = if hi { t[axis] * 2.0 - 1.0 } else { t[axis] * 2.0 };
+            node = n.child[hi as usize] as usize;
+            axis = (axis + 1) % 3;
+        }
+    }
+
+    /// The directional density at `p`.
+    pub fn at(&self, p: Vec3) -> &DTree {
+        &self.leaves[self.leaf_index(p)].sampling
+    }
+
+    /// Ends a pass: its `records` (in tile order, each tile's in sample
+    /// order) become the guide of the next pass. Space is split where a
+    /// leaf got many records, and each leaf's quadtree refined where its
+    /// radiance is large.
+    pub fn update(&mut self, records: &[GuideRecord]) {
+        // Records grouped by leaf, keeping their order (a counting sort).
+        let leaf_of: Vec<u32> = records.par_iter().map(|r| self.leaf_index(r.p) as u32).collect();
+        let mut start = vec![0usize; self.leaves.len() + 1];
+        for &l in &leaf_of {
+            start[l as usize + 1] += 1;
+        }
+        for i in 0..self.leaves.len() {
+            start[i + 1] += start[i];
+        }
+        let mut order = vec![0u32; records.len()];
+        let mut fill = start.clone();
+        for (i, &l) in leaf_of.iter().enumerate() {
+            order[fill[l as usize]] = i as u32;
+            fill[l as usize] += 1;
+        }
+        self.leaves.par_iter_mut().enumerate().for_each(|(l, leaf)| {
+            for &i in &order[start[l]..start[l + 1]] {
+                let r = &records[i as usize];
+                leaf.building.record(r.dir, r.value as f64);
+            }
+            leaf.records += (start[l + 1] - start[l]) as u64;
+            leaf.sampling = leaf.building.freeze();
+        });
+        // Space: leaves with many records split (their children share the
+        // records, half each, and keep what the parent learnt).
+        let threshold = SPATIAL_THRESHOLD * 2f64.powi(self.iterations as i32).sqrt();
+        let mut stack: Vec<(usize, u32)> = vec![(0, 0)];
+        while let Some((node, depth)) = stack.pop() {
+            let n = self.nodes[node];
+            if n.child[0] != 0 {
+                stack.extend(n.child.iter().map(|&c| (c as usize, depth + 1)));
+                continue;
+            }
+            let leaf = &mut self.leaves[n.leaf as usize];
+            if (leaf.records as f64) <= threshold || depth >= 60 {
+                continue;
+            }
+            leaf.records /= 2;
+            let copy = leaf.clone();
+            let c = self.nodes.len() as u32;
+            self.leaves.push(copy);
+            self.nodes.push(SNode { child: [0; 2], leaf: n.leaf });
+            self.nodes.push(SNode { child: [0; 2], leaf: self.leaves.len() as u32 - 1 });
+            self.nodes[node].child = [c, c + 1];
+            stack.extend([(c as usize, depth + 1), (c as usize + 1, depth + 1)]);
+        }
+        // Directions: the next pass records on a structure refined by this one's radiance.
+        self.leaves.par_iter_mut().for_each(|leaf| {
+            leaf.building = leaf.building.refined(SUBDIVIDE_SHARE);
+            leaf.records = 0;
+        });
+        self.iterations += 1;
+    }
+
+    /// Spatial leaves and quadtree nodes (sampling trees), for reports.
+    pub fn size(&self) -> (usize, usize) {
+        (self.leaves.len(), self.leaves.iter().map(|l| l.sampling.node_count()).sum())
+    }
+
+    /// Bytes the guide holds (both trees of every leaf).
+    pub fn memory(&self) -> usize {
+        let per_node = 16 + 16 + 16 + 32;
+        self.nodes.len() * std::mem::size_of::<SNode>()
+            + self
+                .leaves
+                .iter()
+                .map(|l| std::mem::size_of::<Leaf>() + per_node * l.sampling.node_count().max(l.building.node_count()))
+                .sum::<usize>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::TestRng;
+
+    fn unit_box() -> Aabb {
+        Aabb { min: Vec3::ZERO, max: Vec3::ONE }
+    }
+
+    /// Radiance from +z in the half x < 0.5, from −z in the other.
+    fn records(n: usize, seed: u64) -> Vec<GuideRecord> {
+        let mut rng = TestRng::new(seed);
+        (0..n)
+            .map(|_| {
+                let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+                let d = dtree::square_to_dir(rng.next_2d());
+                let bright = if p.x < 0.5 { d.z > 0.8 } else { d.z < -0.8 };
+                let l = if bright { 10.0 } else { 0.1 };
+                GuideRecord::new(p, d, l, 0.25 / crate::math::PI).unwrap()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn learns_where_light_comes_from() {
+        let mut g = Guide::new(unit_box());
+        assert!(!g.trained());
+        for it in 0..4 {
+            g.update(&records(40_000 << it, it as u64));
+        }
+        let (leaves, nodes) = g.size();
+        assert!(leaves >= 2 && nodes > 2 * 21, "{leaves} leaves, {nodes} nodes");
+        let (left, right) = (Vec3::new(0.2, 0.5, 0.5), Vec3::new(0.8, 0.5, 0.5));
+        let (up, down) = (Vec3::Z, -Vec3::Z);
+        assert!(g.at(left).pdf(up) > 20.0 * g.at(left).pdf(down));
+        assert!(g.at(right).pdf(down) > 20.0 * g.at(right).pdf(up));
+        println!("guide: {leaves} leaves, {nodes} nodes, {} KiB", g.memory() / 1024);
+    }
+
+    /// The same records give the same guide, whichever the threads.
+    #[test]
+    fn update_is_deterministic() {
+        let build = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut g = Guide::new(unit_box());
+                for it in 0..3 {
+                    g.update(&records(30_000 << it, 10 + it as u64));
+                }
+                g
+            })
+        };
+        let (a, b) = (build(1), build(3));
+        let mut rng = TestRng::new(5);
+        for _ in 0..1000 {
+            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let d = dtree::square_to_dir(rng.next_2d());
+            assert_eq!(a.at(p).pdf(d).to_bits(), b.at(p).pdf(d).to_bits());
+        }
+    }
+}
