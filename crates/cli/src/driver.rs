@@ -10,6 +10,7 @@
 use crate::progress::Progress;
 use anyhow::Result;
 use penumbra_render::film::Film;
+use penumbra_render::guiding::Guide;
 use penumbra_render::render::{RenderJob, RenderStats};
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -58,6 +59,8 @@ pub struct State {
     pub spp: u32,
     /// Render time so far, over all runs (seconds).
     pub seconds: f64,
+    /// The path guide learnt so far (`None` without guiding).
+    pub guide: Option<Guide>,
 }
 
 /// Why the loop stopped.
@@ -178,7 +181,9 @@ pub fn run(
         let t0 = Instant::now();
         let n = range.end - range.start;
         let active = active.as_deref();
-        let r = pool.install(|| job.render_pass_masked(&mut state.film, range, active, &tick, cancel));
+        let train = job.trains_guide(state.spp);
+        let guide = state.guide.as_mut().map(|g| (g, train));
+        let r = pool.install(|| job.render_pass_guided(&mut state.film, range, active, guide, &tick, cancel));
         let Some(s) = r else {
             break Stop::Cancelled;
         };

@@ -133,6 +133,12 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         job.filter = Filter::new(FilterKind::Box);
     }
     let spp = job.sampler.spp;
+    if part.is_some() && job.new_guide().is_some() {
+        bail!(
+            "--part cannot be combined with the path integrator's guiding = true yet: each part would train its own guide, \
+             and the merged image would not be the single-machine render"
+        );
+    }
     let samples = part.map_or(0..spp, |p| p.samples(spp));
     if samples.is_empty() {
         bail!("--part {}: with {spp} spp this part has no samples; use at most {spp} parts", part.unwrap());
@@ -291,7 +297,13 @@ fn resume(plan: &Plan) -> Result<State> {
     }
     let scene = crate::memory::resident().unwrap_or(0);
     crate::memory::check(job.width, job.height, layers, a.checkpoint.is_some(), a.max_memory, scene)?;
-    let empty = State { film: Film::with_layers(job.width, job.height, layers), passes: 0, spp: 0, seconds: 0.0 };
+    let empty = State {
+        film: Film::with_layers(job.width, job.height, layers),
+        passes: 0,
+        spp: 0,
+        seconds: 0.0,
+        guide: job.new_guide(),
+    };
     let Some(ck) = &a.checkpoint else { return Ok(empty) };
     if a.fresh {
         let _ = std::fs::remove_file(ck);
@@ -302,7 +314,13 @@ fn resume(plan: &Plan) -> Result<State> {
     if c.film.layers() != *layers || (c.film.width, c.film.height) != (job.width, job.height) {
         bail!("checkpoint '{}' holds other image layers or another size; use --fresh", ck.display());
     }
-    Ok(State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds })
+    if job.new_guide().is_some() && c.spp > 0 {
+        bail!(
+            "checkpoint '{}': resuming a render with guiding = true is not supported yet (the checkpoint has no guide); use --fresh",
+            ck.display()
+        );
+    }
+    Ok(State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds, guide: None })
 }
 
 /// What the pass loop leaves for the report.

@@ -87,13 +87,25 @@ pub fn render<'py>(
     if !params.is_empty() {
         settings.set("params", &params);
     }
-    let mut state = State { film: Film::with_layers(job.width, job.height, &layers), passes: 0, spp: 0, seconds: 0.0 };
+    let mut state = State {
+        film: Film::with_layers(job.width, job.height, &layers),
+        passes: 0,
+        spp: 0,
+        seconds: 0.0,
+        guide: job.new_guide(),
+    };
     if let Some(path) = &checkpoint {
         if let Some(c) = Checkpoint::load_matching(path, &settings).map_err(anyhow_error)? {
             if c.film.layers() != layers || (c.film.width, c.film.height) != (job.width, job.height) {
                 return Err(error(format!("checkpoint '{}' holds other layers or another size", path.display())));
             }
-            state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds };
+            if state.guide.is_some() && c.spp > 0 {
+                return Err(error(format!(
+                    "checkpoint '{}': resuming a render with guiding = true is not supported yet; delete it to start over",
+                    path.display()
+                )));
+            }
+            state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds, guide: None };
         }
     }
     let save = |st: &State| -> anyhow::Result<()> {

@@ -9,32 +9,9 @@
 mod common;
 
 use common::{
-    assert_agree, compare as compare_estimates, injected_errors, render_with_sampler, render_with_variance, root,
-    Estimate,
+    assert_agree, compare as compare_estimates, injected_errors, reference, render_with_sampler, render_with_variance,
+    root,
 };
-use penumbra_scene::image_io::read_exr;
-
-fn reference(name: &str) -> Estimate {
-    let img = read_exr(&root().join("tests/refs").join(format!("{name}.exr"))).unwrap();
-    let var = read_exr(&root().join("tests/refs").join(format!("{name}_var.exr"))).unwrap();
-    let f = |v: &Vec<[f32; 3]>| v.iter().map(|p| p.map(|c| c as f64)).collect();
-    Estimate {
-        width: img.width,
-        height: img.height,
-        mean: f(&img.pixels),
-        var: f(&var.pixels),
-        batches: manifest_batches(name),
-        block_var: None,
-    }
-}
-
-/// The batch count tools/make_refs.py recorded for `name` in tests/refs/manifest.json.
-fn manifest_batches(name: &str) -> u32 {
-    let text = std::fs::read_to_string(root().join("tests/refs/manifest.json")).unwrap();
-    let entry = &text[text.find(&format!("\"{name}\": {{")).unwrap_or_else(|| panic!("{name} not in manifest.json"))..];
-    let field = &entry[entry.find("\"batches\":").unwrap() + 10..];
-    field.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
-}
 
 /// Every comparison must resolve an error of this fraction in each
 /// channel's image mean (the mean z-test's limit, 4.5 standard errors at

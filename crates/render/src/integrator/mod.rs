@@ -29,7 +29,7 @@ pub use bruteforce::{BruteForceIntegrator, HemisphereSampling};
 pub use depth::DepthIntegrator;
 pub use direct::DirectIntegrator;
 pub use moment::MomentIntegrator;
-pub use path::PathIntegrator;
+pub use path::{Guiding, PathIntegrator};
 pub use ptracer::ParticleTracer;
 pub use volpath::VolPathIntegrator;
 

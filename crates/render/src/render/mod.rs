@@ -10,6 +10,7 @@ pub use stream::LANE_WIDTHS;
 use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
 use crate::geometry::Ray;
+use crate::guiding::{Guide, GuideRecord};
 use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
 use crate::material::Scratch;
@@ -80,14 +81,33 @@ struct TileResult {
     y0: i32,
     film: Film,
     stats: RenderStats,
+    /// The guide's training records, in sample order.
+    records: Vec<GuideRecord>,
 }
 
 impl RenderJob {
     /// Adds samples `samples` (sample indices) of every pixel to `film`.
     /// `progress` is called after each tile with the samples it added.
+    /// With path guiding, a new guide learns from passes of 1, 1, 2, 4, …
+    /// samples while within its training budget (as the command line's
+    /// schedule), and guides the rest, rendered in one pass.
     pub fn render_into(&self, film: &mut Film, samples: Range<u32>, progress: &(dyn Fn(u64) + Sync)) -> RenderStats {
         let never = AtomicBool::new(false);
-        self.render_pass(film, samples, progress, &never).expect("not cancelled")
+        let Some(mut guide) = self.new_guide() else {
+            return self.render_pass(film, samples, progress, &never).expect("not cancelled");
+        };
+        let mut stats = RenderStats::default();
+        let (mut start, mut pass) = (samples.start, 0u32);
+        while start < samples.end {
+            let done = start - samples.start;
+            let train = self.trains_guide(done);
+            let end = if train { (start + (1u32 << pass.saturating_sub(1))).min(samples.end) } else { samples.end };
+            let guide = Some((&mut guide, train));
+            let s = self.render_pass_guided(film, start..end, None, guide, progress, &never).expect("not cancelled");
+            stats.add(&s);
+            (start, pass) = (end, pass + 1);
+        }
+        stats
     }
 
     /// As [`render_into`](Self::render_into), but checks `cancel` before each
@@ -115,12 +135,69 @@ impl RenderJob {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Option<RenderStats> {
+        self.render_pass_guided(film, samples, active, None, progress, cancel)
+    }
+
+    /// Whether the pass that starts after `spp_done` samples per pixel
+    /// trains the path integrator's guide: with guiding on, while the
+    /// samples rendered are below the training budget's share of the
+    /// sampler's count.
+    pub fn trains_guide(&self, spp_done: u32) -> bool {
+        match &self.integrator {
+            Integrator::Path(p) => p.guiding.is_some_and(|g| (spp_done as f32) < g.budget * self.sampler.spp as f32),
+            _ => false,
+        }
+    }
+
+    /// A new guide for this scene when the path integrator guides.
+    pub fn new_guide(&self) -> Option<Guide> {
+        match &self.integrator {
+            Integrator::Path(p) if p.guiding.is_some() => Some(Guide::new(self.scene.bounds())),
+            _ => None,
+        }
+    }
+
+    /// As [`render_pass_masked`](Self::render_pass_masked), with path
+    /// guiding: vertices are guided by `guide` once it is trained, and
+    /// with `train` the pass's records (in tile order) update it afterwards.
+    /// Guided passes run one path at a time (the stream has no guide yet).
+    pub fn render_pass_guided(
+        &self,
+        film: &mut Film,
+        samples: Range<u32>,
+        active: Option<&[bool]>,
+        guide: Option<(&mut Guide, bool)>,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Option<RenderStats> {
+        let (guide, train) = match guide {
+            Some((g, train)) => (Some(g), train),
+            None => (None, false),
+        };
+        let stats = self.render_pass_inner(film, samples, active, guide.as_deref(), train, progress, cancel)?;
+        if let (Some(g), true) = (guide, train) {
+            g.update(&stats.1);
+        }
+        Some(stats.0)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn render_pass_inner(
+        &self,
+        film: &mut Film,
+        samples: Range<u32>,
+        active: Option<&[bool]>,
+        guide: Option<&Guide>,
+        train: bool,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Option<(RenderStats, Vec<GuideRecord>)> {
         assert_eq!((film.width, film.height), (self.width, self.height));
         if let Some(a) = active {
             assert_eq!(a.len(), film.acc.len());
         }
         if let Integrator::PTracer(pt) = &self.integrator {
-            return self.render_particles(pt, film, samples, progress, cancel);
+            return self.render_particles(pt, film, samples, progress, cancel).map(|s| (s, Vec::new()));
         }
         assert!(
             film.channels.is_empty() || film.channels == self.integrator.channel_names(),
@@ -143,7 +220,7 @@ impl RenderJob {
                 let (tx, ty) = (t % tiles_x * TILE, t / tiles_x * TILE);
                 let size = (TILE.min(gw - tx), TILE.min(gh - ty));
                 let (x0, y0) = (tx as i32 - left as i32, ty as i32 - top as i32);
-                let r = self.render_tile(x0, y0, size, samples.clone(), &layers, active);
+                let r = self.render_tile(x0, y0, size, samples.clone(), &layers, active, guide, train);
                 progress(r.stats.samples);
                 Some(r)
             })
@@ -154,7 +231,9 @@ impl RenderJob {
         }
         // Added in tile order: the sums do not depend on the scheduling.
         let mut stats = RenderStats::default();
-        for r in results {
+        let mut records = Vec::new();
+        for mut r in results {
+            records.append(&mut r.records);
             for y in 0..r.film.height {
                 let iy = r.y0 + y as i32;
                 if iy < 0 || iy >= self.height as i32 {
@@ -172,7 +251,7 @@ impl RenderJob {
             }
             stats.add(&r.stats);
         }
-        Some(stats)
+        Some((stats, records))
     }
 
     /// Pixels sampled beyond the image on each side (left, top, right,
@@ -200,7 +279,9 @@ impl RenderJob {
     /// Renders the pixels [x0, x0+w) × [y0, y0+h) (image coordinates; may
     /// start in the crop ring) into a film with the filter's margin. With
     /// `active`, only pixels marked there take samples (ring pixels follow
-    /// the nearest image pixel).
+    /// the nearest image pixel). Path vertices are guided by `guide` and,
+    /// with `train`, give the guide's training records.
+    #[allow(clippy::too_many_arguments)]
     fn render_tile(
         &self,
         x0: i32,
@@ -209,6 +290,8 @@ impl RenderJob {
         samples: Range<u32>,
         layers: &FilmLayers,
         active: Option<&[bool]>,
+        guide: Option<&Guide>,
+        train: bool,
     ) -> TileResult {
         let m = self.filter.margin().min(MAX_MARGIN);
         let mut tile = Tile {
@@ -222,7 +305,9 @@ impl RenderJob {
         };
         tile.aov_values = vec![0f32; tile.film.aov_channels()];
         let pixels = self.tile_pixels(x0, y0, (w, h), active);
-        match (&self.integrator, self.stream && self.scene.ray_log.is_none()) {
+        let guided = train || guide.is_some_and(|g| g.trained());
+        let mut records = Vec::new();
+        match (&self.integrator, self.stream && self.scene.ray_log.is_none() && !guided) {
             (Integrator::Path(path), true) => stream::render(self, path, &pixels, samples, &mut tile),
             _ => {
                 // The integrator's own output channels (the `aov` and `moment` integrators').
@@ -238,7 +323,13 @@ impl RenderJob {
                         tile.scratch.reset();
                         let (scene, stats, scratch) = (&self.scene, &mut tile.stats.rays, &tile.scratch);
                         let l = if ch.is_empty() {
-                            self.integrator.li(scene, &ray, &mut rng, stats, scratch)
+                            match &self.integrator {
+                                Integrator::Path(path) if guided => {
+                                    let r = train.then_some(&mut records);
+                                    path.li_guided(scene, &ray, &mut rng, stats, scratch, guide, r)
+                                }
+                                i => i.li(scene, &ray, &mut rng, stats, scratch),
+                            }
                         } else {
                             let diff = self.ray_diff(p.global, u, &ray);
                             self.integrator.sample(scene, &ray, diff.as_ref(), &mut rng, stats, scratch, &mut ch)
@@ -256,7 +347,7 @@ impl RenderJob {
             }
         }
         let Tile { film, stats, .. } = tile;
-        TileResult { x0: x0 - m as i32, y0: y0 - m as i32, film, stats }
+        TileResult { x0: x0 - m as i32, y0: y0 - m as i32, film, stats, records }
     }
 
     /// The pixels of the tile [x0, x0+w) × [y0, y0+h) that take samples, in

@@ -5,8 +5,8 @@ use super::{plugin, Plugins};
 use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
-    AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, HemisphereSampling, Integrator,
-    MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator,
+    AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, Guiding, HemisphereSampling,
+    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -171,9 +171,31 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
             term: termination(node)?,
             hide_emitters: node.bool("hide_emitters", false)?,
             mis: node.bool("mis", true)?,
+            guiding: guiding(node)?,
         }),
         light_selection(node)?,
     ))
+}
+
+/// `guiding`, `guiding_budget` and `guiding_bsdf_fraction` (see `integrator::path`).
+fn guiding(node: &Node) -> Result<Option<Guiding>> {
+    let on = node.bool("guiding", false)?;
+    let d = Guiding::default();
+    let budget = node.float("guiding_budget", d.budget as f64)?;
+    if !(0.0..=1.0).contains(&budget) {
+        return Err(LoadError::at(
+            node.loc_of("guiding_budget"),
+            "guiding_budget must be in [0, 1] (a share of the samples)",
+        ));
+    }
+    let fraction = node.float("guiding_bsdf_fraction", d.bsdf_fraction as f64)?;
+    if !(fraction > 0.0 && fraction <= 1.0) {
+        return Err(LoadError::at(
+            node.loc_of("guiding_bsdf_fraction"),
+            "guiding_bsdf_fraction must be in (0, 1]: the BSDF must keep a share of the samples for the estimate to stay unbiased",
+        ));
+    }
+    Ok(on.then_some(Guiding { budget: budget as f32, bsdf_fraction: fraction as f32 }))
 }
 
 /// `volpath` and `volpathmis` (one estimator; see `integrator::volpath`).

@@ -375,3 +375,26 @@ pub fn injected_errors(e: &Estimate) -> Vec<(&'static str, Estimate)> {
     }
     vec![("lobe too wide (3x3 blur)", blur), ("mirrored", mirror), ("10 % too bright over a fifth", bright)]
 }
+
+/// The Mitsuba reference of tests/scenes/`name`.xml (tests/refs/, with its variance image).
+pub fn reference(name: &str) -> Estimate {
+    let img = penumbra_scene::image_io::read_exr(&root().join("tests/refs").join(format!("{name}.exr"))).unwrap();
+    let var = penumbra_scene::image_io::read_exr(&root().join("tests/refs").join(format!("{name}_var.exr"))).unwrap();
+    let f = |v: &Vec<[f32; 3]>| v.iter().map(|p| p.map(|c| c as f64)).collect();
+    Estimate {
+        width: img.width,
+        height: img.height,
+        mean: f(&img.pixels),
+        var: f(&var.pixels),
+        batches: manifest_batches(name),
+        block_var: None,
+    }
+}
+
+/// The batch count tools/make_refs.py recorded for `name` in tests/refs/manifest.json.
+fn manifest_batches(name: &str) -> u32 {
+    let text = std::fs::read_to_string(root().join("tests/refs/manifest.json")).unwrap();
+    let entry = &text[text.find(&format!("\"{name}\": {{")).unwrap_or_else(|| panic!("{name} not in manifest.json"))..];
+    let field = &entry[entry.find("\"batches\":").unwrap() + 10..];
+    field.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
+}

@@ -10,13 +10,28 @@
 //! | hide_emitters | boolean | false (camera rays pass through emitters; environment black) |
 //! | mis           | boolean | true: power heuristic; false: the lecture's split, emitted light only through light samples, reflected light only through BSDF samples |
 //! | throughput_threshold | float | 0 (off): stop when max(β) falls below it; biased |
+//! | guiding       | boolean | false: path guiding ([`crate::guiding`]), learnt in the first passes |
+//! | guiding_budget | float  | 0.25: the share of the samples whose passes train the guide (their samples are kept) |
+//! | guiding_bsdf_fraction | float | 0.5: at a guided vertex, the probability of drawing from the BSDF rather than the guide |
+//!
+//! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
+//! draws its direction from the BSDF with probability α
+//! (`guiding_bsdf_fraction`), else from the guide's quadtree at the
+//! point, and weighs it by f cos θ / (α p_bsdf + (1 − α) p_guide) (one-sample
+//! MIS, balance heuristic; Müller et al. 2017, sec. 4). That mixed density
+//! replaces the BSDF's in both MIS weights against light sampling, so
+//! every estimate stays unbiased: the mixture is positive wherever the
+//! BSDF's density is. A delta lobe drawn by the BSDF keeps its weight over α.
 
 mod lanes;
 
 pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes};
 
 use super::{RayStats, Termination};
+use crate::bsdf::{Bsdf, BsdfSample};
 use crate::geometry::{Ray, SurfaceInteraction};
+use crate::guiding::dtree::DTree;
+use crate::guiding::{Guide, GuideRecord};
 use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
@@ -35,12 +50,43 @@ pub struct PathIntegrator {
     /// Weight light and BSDF samples by the power heuristic; when false,
     /// each kind of sample estimates its own part of the integral.
     pub mis: bool,
+    /// Path guiding: how the guide is trained and mixed with the BSDF
+    /// (`None`: off). The guide itself is the render's state, passed to
+    /// [`Self::li_guided`] pass by pass.
+    pub guiding: Option<Guiding>,
+}
+
+/// The `path` integrator's guiding parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Guiding {
+    /// The share of the samples whose passes train the guide.
+    pub budget: f32,
+    /// α: the probability that a guided vertex draws from the BSDF, in (0, 1].
+    pub bsdf_fraction: f32,
+}
+
+impl Default for Guiding {
+    fn default() -> Self {
+        Guiding { budget: 0.25, bsdf_fraction: 0.5 }
+    }
 }
 
 impl Default for PathIntegrator {
     fn default() -> Self {
-        PathIntegrator { term: Termination::default(), hide_emitters: false, mis: true }
+        PathIntegrator { term: Termination::default(), hide_emitters: false, mis: true, guiding: None }
     }
+}
+
+/// A guided vertex's direction, as [`GuideRecord`] needs it once the
+/// path's radiance is known.
+#[derive(Debug, Clone, Copy)]
+pub struct Sampled {
+    /// The vertex.
+    pub p: Vec3,
+    /// The direction drawn (world).
+    pub d: Vec3,
+    /// The density it was drawn with.
+    pub pdf: f32,
 }
 
 /// A path between two vertices: all that [`PathIntegrator::li`] keeps from
@@ -125,10 +171,13 @@ pub struct Vertex {
     /// Whether the path goes on: then the closest hit of `PathState::ray`
     /// is the next vertex's input.
     pub go_on: bool,
+    /// The non-delta direction drawn for the next segment, for the guide's
+    /// training (`None` after a delta lobe, or when nothing was drawn).
+    pub sampled: Option<Sampled>,
 }
 
 impl Vertex {
-    const DONE: Vertex = Vertex { shadow: None, go_on: false };
+    const DONE: Vertex = Vertex { shadow: None, go_on: false, sampled: None };
 }
 
 impl PathIntegrator {
@@ -144,19 +193,59 @@ impl PathIntegrator {
         stats: &mut RayStats,
         scratch: &Scratch,
     ) -> Spectrum {
+        self.li_guided(scene, camera_ray, rng, stats, scratch, None, None)
+    }
+
+    /// [`Self::li`] guided by `guide` (see the module notes) and, with
+    /// `records`, adding a training record for each non-delta direction
+    /// drawn: the radiance the rest of the path brought back along it,
+    /// over the throughput, over the density it was drawn with.
+    #[allow(clippy::too_many_arguments)]
+    pub fn li_guided(
+        &self,
+        scene: &Scene,
+        camera_ray: &Ray,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+        scratch: &Scratch,
+        guide: Option<&Guide>,
+        records: Option<&mut Vec<GuideRecord>>,
+    ) -> Spectrum {
         let Some(mut st) = self.start(camera_ray) else { return Spectrum::ZERO };
+        // Per drawn direction: it, the throughput after it, the radiance before it.
+        let mut drawn: Vec<(Sampled, Spectrum, Spectrum)> = Vec::new();
         loop {
             stats.rays += 1;
             let hit = scene.intersect(&st.ray);
-            let v = self.vertex(scene, &mut st, hit, rng, scratch);
+            let v = self.vertex_guided(scene, &mut st, hit, rng, scratch, guide);
             if let Some(r) = v.shadow {
                 stats.shadow_rays += 1;
                 st.shadow_done(scene.occluded_ray(&r));
             }
+            if let (Some(s), Some(_)) = (v.sampled, records.as_ref()) {
+                // Ended by roulette: the rest brings nothing (β = 0).
+                drawn.push((s, if v.go_on { st.beta } else { Spectrum::ZERO }, st.l));
+            }
             if !v.go_on {
-                return st.radiance();
+                break;
             }
         }
+        if let Some(records) = records {
+            for (s, beta, before) in drawn {
+                // L_i = (radiance after) / β per channel, averaged over the channels β carries.
+                let after = st.l - before;
+                let (mut sum, mut n) = (0.0, 0);
+                for c in 0..3 {
+                    if beta[c] > 0.0 {
+                        sum += after[c] / beta[c];
+                        n += 1;
+                    }
+                }
+                let radiance = if n > 0 { sum / n as f32 } else { 0.0 };
+                records.extend(GuideRecord::new(s.p, s.d, radiance, s.pdf));
+            }
+        }
+        st.radiance()
     }
 
     /// A path leaving the camera along `camera_ray`, or `None` when
@@ -179,6 +268,21 @@ impl PathIntegrator {
         rng: &mut SampleStream,
         scratch: &Scratch,
     ) -> Vertex {
+        self.vertex_guided(scene, st, hit, rng, scratch, None)
+    }
+
+    /// [`Self::vertex`], its direction drawn from the mix of the BSDF and
+    /// `guide` once the guide is trained (see the module notes).
+    #[inline(always)]
+    pub fn vertex_guided(
+        &self,
+        scene: &Scene,
+        st: &mut PathState,
+        hit: Option<SurfaceInteraction>,
+        rng: &mut SampleStream,
+        scratch: &Scratch,
+        guide: Option<&Guide>,
+    ) -> Vertex {
         let Some(mut si) = hit else {
             // Escaped: environment emission, MIS-weighted against light sampling.
             if st.prev_delta {
@@ -194,7 +298,7 @@ impl PathIntegrator {
         };
         if st.depth == 0 && self.hide_emitters && scene.shape_info[si.shape as usize].light.is_some() {
             st.ray = scene.spawn_ray(&si, st.ray.d);
-            return Vertex { shadow: None, go_on: true };
+            return Vertex { shadow: None, go_on: true, sampled: None };
         }
 
         // Emission at the hit, MIS-weighted against light sampling at the previous vertex.
@@ -213,6 +317,9 @@ impl PathIntegrator {
         }
         let bsdf = scene.bsdf(&mut si, scratch);
         let wo = si.to_local(si.wo);
+        // The guide's density here, where a lobe is not delta.
+        let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
+        let guide = guide.filter(|g| g.trained() && bsdf.has_smooth()).map(|g| g.at(si.p));
 
         // Light sampling (next-event estimation).
         let mut shadow = None;
@@ -225,6 +332,10 @@ impl PathIntegrator {
                 let (f, bsdf_pdf) = if mis { bsdf.eval_pdf(wo, wi) } else { (bsdf.eval(wo, wi), 0.0) };
                 let f = f * wi.z.abs();
                 if f != Spectrum::ZERO {
+                    let bsdf_pdf = match guide {
+                        Some(d) => alpha * bsdf_pdf + (1.0 - alpha) * d.pdf(ls.wi),
+                        None => bsdf_pdf,
+                    };
                     let w = if mis { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
                     st.pending = st.beta * f * ls.li * (w / ls.pdf);
                     shadow = Some(scene.shadow_ray(&si, ls.wi, ls.dist));
@@ -235,17 +346,55 @@ impl PathIntegrator {
         // BSDF sampling for the next segment.
         let u = rng.next_1d();
         let u2 = rng.next_2d();
-        let Some(bs) = bsdf.sample(wo, u, u2) else { return Vertex { shadow, go_on: false } };
+        let sample = match guide {
+            Some(d) => Self::sample_guided(&bsdf, d, alpha, &si, wo, u, u2),
+            None => bsdf.sample(wo, u, u2),
+        };
+        let Some(bs) = sample else { return Vertex { shadow, go_on: false, sampled: None } };
         st.beta *= bs.weight;
         st.eta *= bs.eta;
         let wi = si.to_world(bs.wi);
+        let sampled = (!bs.delta).then_some(Sampled { p: si.p, d: wi, pdf: bs.pdf });
         st.prev_p = si.p;
         st.prev_n = si.n;
         st.prev_bsdf_pdf = bs.pdf;
         st.prev_delta = bs.delta;
         st.ray = scene.spawn_ray(&si, wi);
         st.depth += 1;
-        Vertex { shadow, go_on: self.roulette(st, rng) }
+        Vertex { shadow, go_on: self.roulette(st, rng), sampled }
+    }
+
+    /// The next direction drawn from the BSDF with probability `alpha`
+    /// (`u` below it, rescaled, picks the lobe), else from the guide `d`
+    /// with `u2`; a non-delta direction weighted by the mixed density.
+    #[inline(never)]
+    fn sample_guided(
+        bsdf: &Bsdf,
+        d: &DTree,
+        alpha: f32,
+        si: &SurfaceInteraction,
+        wo: Vec3,
+        u: f32,
+        u2: glam::Vec2,
+    ) -> Option<BsdfSample> {
+        let (wi, eta) = if u < alpha {
+            let bs = bsdf.sample(wo, u / alpha, u2)?;
+            if bs.delta {
+                // The guide never draws it: weight over the probability of asking the BSDF.
+                return Some(BsdfSample { pdf: bs.pdf * alpha, weight: bs.weight / alpha, ..bs });
+            }
+            (bs.wi, bs.eta)
+        } else {
+            // The relative IOR is unknown here; 1 only changes Russian roulette's odds.
+            (si.to_local(d.sample(u2).0), 1.0)
+        };
+        let (f, pdf_bsdf) = bsdf.eval_pdf(wo, wi);
+        let pdf = alpha * pdf_bsdf + (1.0 - alpha) * d.pdf(si.to_world(wi));
+        let f = f * wi.z.abs();
+        if pdf.is_nan() || pdf <= 0.0 || f == Spectrum::ZERO {
+            return None;
+        }
+        Some(BsdfSample { wi, pdf, weight: f / pdf, delta: false, null: false, eta })
     }
 
     /// Russian roulette after a bounce: whether the path goes on (its
