@@ -20,26 +20,37 @@ pub const DEFAULT_MAX_PASS_SPP: u32 = 16;
 
 /// The fixed schedule of a render's passes: the sample indices `samples`,
 /// added in passes of 1, 1, 2, 4, 8, ... samples, at most `max_pass_spp`
-/// each (0 counts as 1).
+/// each (0 counts as 1), except those that start within the first
+/// `uncapped` samples: a guide's training passes keep doubling, so that
+/// each learns from as many samples as all before it (Müller et al. 2017).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Schedule {
     pub samples: Range<u32>,
     pub max_pass_spp: u32,
+    pub uncapped: u32,
 }
 
 impl Schedule {
     /// The sample indices of pass `pass`, or `None` once all are done.
     pub fn pass(&self, pass: u32) -> Option<Range<u32>> {
         let cap = self.max_pass_spp.max(1) as u64;
-        let size = |p: u32| if p == 0 { 1 } else { 1u64.checked_shl(p - 1).unwrap_or(u64::MAX).min(cap) };
-        let mut start = self.samples.start as u64;
+        let first = self.samples.start as u64;
+        let size = |p: u32, start: u64| {
+            let doubled = if p == 0 { 1 } else { 1u64.checked_shl(p - 1).unwrap_or(u64::MAX) };
+            if start - first < self.uncapped as u64 {
+                doubled
+            } else {
+                doubled.min(cap)
+            }
+        };
+        let mut start = first;
         for p in 0..pass {
-            start += size(p);
+            start = start.saturating_add(size(p, start));
             if start >= self.samples.end as u64 {
                 return None;
             }
         }
-        let end = (start + size(pass)).min(self.samples.end as u64);
+        let end = start.saturating_add(size(pass, start)).min(self.samples.end as u64);
         (start < end).then_some(start as u32..end as u32)
     }
 
@@ -227,7 +238,7 @@ mod tests {
 
     #[test]
     fn schedule_doubles_up_to_the_cap_and_covers_the_range() {
-        let schedule = Schedule { samples: 3..40, max_pass_spp: 8 };
+        let schedule = Schedule { samples: 3..40, max_pass_spp: 8, uncapped: 0 };
         let passes: Vec<Range<u32>> = (0..).map_while(|p| schedule.pass(p)).collect();
         let sizes: Vec<u32> = passes.iter().map(|p| p.end - p.start).collect();
         assert_eq!(sizes, [1, 1, 2, 4, 8, 8, 8, 5]);
@@ -237,11 +248,23 @@ mod tests {
         }
         assert_eq!(passes.last().unwrap().end, 40);
         assert_eq!(schedule.spp(), 37);
-        assert_eq!(Schedule { samples: 0..1, max_pass_spp: 16 }.pass(1), None);
-        assert_eq!(Schedule { samples: 0..0, max_pass_spp: 16 }.pass(0), None);
+        assert_eq!(Schedule { samples: 0..1, max_pass_spp: 16, uncapped: 0 }.pass(1), None);
+        assert_eq!(Schedule { samples: 0..0, max_pass_spp: 16, uncapped: 0 }.pass(0), None);
         // A cap of 0 counts as 1.
-        let sizes: Vec<u32> =
-            (0..).map_while(|p| Schedule { samples: 0..4, max_pass_spp: 0 }.pass(p)).map(|r| r.len() as u32).collect();
+        let sizes: Vec<u32> = (0..)
+            .map_while(|p| Schedule { samples: 0..4, max_pass_spp: 0, uncapped: 0 }.pass(p))
+            .map(|r| r.len() as u32)
+            .collect();
         assert_eq!(sizes, [1, 1, 1, 1]);
+    }
+
+    #[test]
+    fn training_passes_keep_doubling_past_the_cap() {
+        let schedule = Schedule { samples: 0..200, max_pass_spp: 8, uncapped: 50 };
+        let sizes: Vec<u32> = (0..).map_while(|p| schedule.pass(p)).map(|r| r.len() as u32).collect();
+        // Passes starting below 50 double (the last one starts at 32); then 8 at a time.
+        let mut expected = vec![1, 1, 2, 4, 8, 16, 32];
+        expected.extend([8; 17]);
+        assert_eq!(sizes, expected);
     }
 }

@@ -144,7 +144,7 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         bail!("--part {}: with {spp} spp this part has no samples; use at most {spp} parts", part.unwrap());
     }
     let settings = settings(a, &scene_bytes, &job, part, &layers);
-    let schedule = Schedule { samples, max_pass_spp: a.max_pass_spp.max(1) };
+    let schedule = Schedule { samples, max_pass_spp: a.max_pass_spp.max(1), uncapped: job.guide_training_spp() };
     Ok(Plan { args: a, job, part, threads, layers, schedule, settings, command: command_line() })
 }
 

@@ -78,3 +78,42 @@ fn particle_tracer_survives_resume_and_parts() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("ptracer"));
     fs::remove_dir_all(&d).ok();
 }
+
+/// Path guiding end to end: the guided image is the same for any thread
+/// count and pass cap (the guide learns from records in tile order, and
+/// its training passes double whatever `--max-pass-spp` says); resuming a
+/// guided render and `--part` are refused with a message, not rendered wrong.
+#[test]
+fn guided_path_is_deterministic_and_refuses_what_it_cannot_keep() {
+    let d = common::tmpdir("integrators", "guided");
+    let args = ["--integrator", "path:max_depth=6,guiding=true", "--spp", "24"];
+    let one = render(&scene("cbox_diffuse"), &d.join("one.exr"), &[&args[..], &["--threads", "1"]].concat());
+    let two = render(
+        &scene("cbox_diffuse"),
+        &d.join("two.exr"),
+        &[&args[..], &["--threads", "2", "--max-pass-spp", "2"]].concat(),
+    );
+    let plain =
+        render(&scene("cbox_diffuse"), &d.join("plain.exr"), &["--integrator", "path:max_depth=6", "--spp", "24"]);
+    for (c, v) in &one.channels {
+        assert!(v.iter().zip(two.ch(c)).all(|(a, b)| a.to_bits() == b.to_bits()), "{c} depends on the threads");
+    }
+    assert_ne!(one.ch("R"), plain.ch("R"), "guiding changed nothing");
+    let out = bin()
+        .arg("render")
+        .arg(scene("cbox_diffuse"))
+        .args(args)
+        .args(["--part", "0/2", "-o"])
+        .arg(d.join("part.exr"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--part cannot be combined"), "{out:?}");
+    let ck = d.join("ck.bin");
+    let ck_args = [&args[..], &["--checkpoint", ck.to_str().unwrap()]].concat();
+    render(&scene("cbox_diffuse"), &d.join("first.exr"), &[&ck_args[..], &["--time", "0"]].concat());
+    let out =
+        bin().arg("render").arg(scene("cbox_diffuse")).args(&ck_args).arg("-o").arg(d.join("r.exr")).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not supported yet"), "{out:?}");
+}

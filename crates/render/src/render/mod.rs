@@ -143,9 +143,15 @@ impl RenderJob {
     /// samples rendered are below the training budget's share of the
     /// sampler's count.
     pub fn trains_guide(&self, spp_done: u32) -> bool {
+        spp_done < self.guide_training_spp()
+    }
+
+    /// Samples per pixel whose passes train the guide: the budget's share
+    /// of the sampler's count, rounded up (0 without guiding).
+    pub fn guide_training_spp(&self) -> u32 {
         match &self.integrator {
-            Integrator::Path(p) => p.guiding.is_some_and(|g| (spp_done as f32) < g.budget * self.sampler.spp as f32),
-            _ => false,
+            Integrator::Path(p) => p.guiding.map_or(0, |g| (g.budget as f64 * self.sampler.spp as f64).ceil() as u32),
+            _ => 0,
         }
     }
 
