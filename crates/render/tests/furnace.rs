@@ -76,10 +76,10 @@ fn grey_sphere_reflects_its_albedo() {
     assert!((mean - 0.8).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}");
 }
 
-#[test]
-fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
-    // Closed diffuse sphere, emitting Le inwards, albedo rho: L = Le / (1 - rho)
-    // (the Neumann series of the rendering equation in closed form).
+/// Closed diffuse sphere, emitting Le inwards, albedo rho: L = Le / (1 - rho)
+/// (the Neumann series of the rendering equation in closed form), rendered
+/// with the integrator `with` makes of the job.
+fn emitting_sphere_is_le_over_one_minus_rho(with: impl FnOnce(RenderJob) -> RenderJob) {
     let (le, rho) = (0.5f32, 0.6f32);
     let scene = Scene::new(
         vec![Shape::sphere(Vec3::ZERO, 1.0, true)],
@@ -88,11 +88,16 @@ fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
         vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le).into(), two_sided: false })],
     );
     let spp = 256;
-    let j = job(scene, Vec3::new(0.0, 0.0, 0.3), Vec3::new(0.0, 0.0, -1.0), 60.0, spp);
+    let j = with(job(scene, Vec3::new(0.0, 0.0, 0.3), Vec3::new(0.0, 0.0, -1.0), 60.0, spp));
     let (_, mean, se) = mean_and_error(&j, spp);
     let expected = (le / (1.0 - rho)) as f64;
     assert!((mean - expected).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}, expected {expected}");
     assert!((mean - expected).abs() < 0.01 * expected);
+}
+
+#[test]
+fn inside_an_emitting_sphere_radiance_is_le_over_one_minus_rho() {
+    emitting_sphere_is_le_over_one_minus_rho(|j| j);
 }
 
 #[test]
@@ -194,7 +199,7 @@ fn guided_white_furnace_renders_one() {
     let spp = 256;
     let plain = job(white_sphere_in_constant_env(1.0), Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, spp);
     let j = guided(plain.clone());
-    let (img, mean, se) = mean_and_error(&j, spp);
+    let (_, mean, se) = mean_and_error(&j, spp);
     assert!((mean - 1.0).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}");
     assert!((mean - 1.0).abs() < 0.005, "mean {mean}");
     // The guide was used: the first half is not the unguided render in the
@@ -207,22 +212,9 @@ fn guided_white_furnace_renders_one() {
         plain.render_pass(&mut b, r, &|_| {}, &never).unwrap();
     }
     assert_ne!(a.develop(), b.develop(), "guiding changed nothing");
-    assert!(!img.is_empty());
 }
 
 #[test]
 fn guided_emitting_sphere_radiance_is_le_over_one_minus_rho() {
-    let (le, rho) = (0.5f32, 0.6f32);
-    let scene = Scene::new(
-        vec![Shape::sphere(Vec3::ZERO, 1.0, true)],
-        vec![ShapeInfo { material: 0, light: Some(0) }],
-        vec![Material::Diffuse(penumbra_render::bsdf::DiffuseParams { reflectance: Vec3::splat(rho).into() })],
-        vec![Light::Area(AreaLight { shape: 0, radiance: Vec3::splat(le).into(), two_sided: false })],
-    );
-    let spp = 256;
-    let j = guided(job(scene, Vec3::new(0.0, 0.0, 0.3), Vec3::new(0.0, 0.0, -1.0), 60.0, spp));
-    let (_, mean, se) = mean_and_error(&j, spp);
-    let expected = (le / (1.0 - rho)) as f64;
-    assert!((mean - expected).abs() < 4.0 * se + 1e-4, "mean {mean} ± {se}, expected {expected}");
-    assert!((mean - expected).abs() < 0.01 * expected);
+    emitting_sphere_is_le_over_one_minus_rho(guided);
 }

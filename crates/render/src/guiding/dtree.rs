@@ -51,6 +51,15 @@ pub fn square_to_dir(p: Vec2) -> Vec3 {
 /// The largest f32 below 1.
 const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// The quadrant of a node's square holding `p`, and `p` in that quadrant's
+/// own unit square: the one descent step `record` and `pdf_square` share.
+#[inline]
+fn quadrant(p: Vec2) -> (usize, Vec2) {
+    let (ix, iy) = (p.x >= 0.5, p.y >= 0.5);
+    let q = ix as usize + 2 * iy as usize;
+    (q, Vec2::new(if ix { p.x * 2.0 - 1.0 } else { p.x * 2.0 }, if iy { p.y * 2.0 - 1.0 } else { p.y * 2.0 }))
+}
+
 /// One iteration's radiance records on a fixed structure.
 #[derive(Debug, Clone)]
 pub struct DTreeBuilder {
@@ -72,10 +81,9 @@ impl DTreeBuilder {
     pub fn record(&mut self, p: Vec2, value: f64) {
         let (mut p, mut node) = (p, 0usize);
         loop {
-            let (ix, iy) = (p.x >= 0.5, p.y >= 0.5);
-            let q = ix as usize + 2 * iy as usize;
+            let q;
+            (q, p) = quadrant(p);
             self.sums[node][q] += value;
-            p = Vec2::new(if ix { p.x * 2.0 - 1.0 } else { p.x * 2.0 }, if iy { p.y * 2.0 - 1.0 } else { p.y * 2.0 });
             match self.nodes[node].child[q] {
                 0 => return,
                 c => node = c as usize,
@@ -201,10 +209,9 @@ impl DTree {
     pub fn pdf_square(&self, p: Vec2) -> f32 {
         let (mut p, mut node, mut pdf) = (p, 0usize, 1.0f32);
         loop {
-            let (ix, iy) = (p.x >= 0.5, p.y >= 0.5);
-            let q = ix as usize + 2 * iy as usize;
+            let q;
+            (q, p) = quadrant(p);
             pdf *= 4.0 * self.prob[node][q];
-            p = Vec2::new(if ix { p.x * 2.0 - 1.0 } else { p.x * 2.0 }, if iy { p.y * 2.0 - 1.0 } else { p.y * 2.0 });
             match self.nodes[node].child[q] {
                 0 => return pdf,
                 c => node = c as usize,
