@@ -271,6 +271,28 @@ impl Bsdf<'_> {
         self.opacity > 0.0 && with_model!(&self.kind, b => b.has_smooth(), null => false)
     }
 
+    /// Whether no lobe transmits: f(wo, wi) is 0 unless wi is on wo's side
+    /// of the surface (a mask's null lobe aside, which is delta). Path
+    /// guiding folds its directions onto that side for such a BSDF. False
+    /// where unsure (a blend), which only forgoes the fold.
+    #[inline]
+    pub fn reflects_only(&self) -> bool {
+        use BsdfKind::*;
+        matches!(
+            self.kind,
+            Diffuse(_)
+                | Conductor(_)
+                | RoughConductor(_)
+                | Plastic(_)
+                | RoughPlastic(_)
+                | PPlastic(_)
+                | CoatedDiffuse(_)
+                | CoatedConductor(_)
+                | Measured(_)
+                | GltfPbr(_)
+        )
+    }
+
     /// f(wo, wi) without the cosine, scaled by the opacity; local directions.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {

@@ -17,7 +17,8 @@
 //! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
 //! draws its direction from the BSDF with probability α
 //! (`guiding_bsdf_fraction`), else from the guide's quadtree at the
-//! point, and weighs it by f cos θ / (α p_bsdf + (1 − α) p_guide) (one-sample
+//! point (folded onto wo's side of the surface when the BSDF only reflects,
+//! [`GuideDensity`]), and weighs it by f cos θ / (α p_bsdf + (1 − α) p_guide) (one-sample
 //! MIS, balance heuristic; Müller et al. 2017, sec. 4). That mixed density
 //! replaces the BSDF's in both MIS weights against light sampling, so
 //! every estimate stays unbiased: the mixture is positive wherever the
@@ -30,8 +31,7 @@ pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes};
 use super::{RayStats, Termination};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::geometry::{Ray, SurfaceInteraction};
-use crate::guiding::dtree::DTree;
-use crate::guiding::{Guide, GuideRecord};
+use crate::guiding::{Guide, GuideDensity, GuideRecord};
 use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
@@ -319,7 +319,10 @@ impl PathIntegrator {
         let wo = si.to_local(si.wo);
         // The guide's density here, where a lobe is not delta.
         let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
-        let guide = guide.filter(|g| g.trained() && bsdf.has_smooth()).map(|g| g.at(si.p));
+        let guide = guide.filter(|g| g.trained() && bsdf.has_smooth()).map(|g| GuideDensity {
+            tree: g.at(si.p),
+            fold: bsdf.reflects_only().then(|| si.to_world(Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 }))),
+        });
 
         // Light sampling (next-event estimation).
         let mut shadow = None;
@@ -333,7 +336,7 @@ impl PathIntegrator {
                 let f = f * wi.z.abs();
                 if f != Spectrum::ZERO {
                     let bsdf_pdf = match guide {
-                        Some(d) => alpha * bsdf_pdf + (1.0 - alpha) * d.pdf(ls.wi),
+                        Some(g) => alpha * bsdf_pdf + (1.0 - alpha) * g.pdf(ls.wi),
                         None => bsdf_pdf,
                     };
                     let w = if mis { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
@@ -347,7 +350,7 @@ impl PathIntegrator {
         let u = rng.next_1d();
         let u2 = rng.next_2d();
         let sample = match guide {
-            Some(d) => Self::sample_guided(&bsdf, d, alpha, &si, wo, u, u2),
+            Some(g) => Self::sample_guided(&bsdf, &g, alpha, &si, wo, u, u2),
             None => bsdf.sample(wo, u, u2),
         };
         let Some(bs) = sample else { return Vertex { shadow, go_on: false, sampled: None } };
@@ -370,7 +373,7 @@ impl PathIntegrator {
     #[inline(never)]
     fn sample_guided(
         bsdf: &Bsdf,
-        d: &DTree,
+        g: &GuideDensity,
         alpha: f32,
         si: &SurfaceInteraction,
         wo: Vec3,
@@ -386,10 +389,10 @@ impl PathIntegrator {
             (bs.wi, bs.eta)
         } else {
             // The relative IOR is unknown here; 1 only changes Russian roulette's odds.
-            (si.to_local(d.sample(u2).0), 1.0)
+            (si.to_local(g.sample(u2)), 1.0)
         };
         let (f, pdf_bsdf) = bsdf.eval_pdf(wo, wi);
-        let pdf = alpha * pdf_bsdf + (1.0 - alpha) * d.pdf(si.to_world(wi));
+        let pdf = alpha * pdf_bsdf + (1.0 - alpha) * g.pdf(si.to_world(wi));
         let f = f * wi.z.abs();
         if pdf.is_nan() || pdf <= 0.0 || f == Spectrum::ZERO {
             return None;
