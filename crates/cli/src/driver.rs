@@ -149,7 +149,9 @@ pub fn run(
     state: &mut State,
     mut hooks: Hooks,
 ) -> Result<Outcome> {
-    let (schedule, budget, cancel) = (&opts.schedule, &opts.budget, opts.cancel);
+    let (budget, cancel) = (&opts.budget, opts.cancel);
+    // Under a time budget a guide's training may end early (below).
+    let mut schedule = opts.schedule.clone();
     let pixels = job.width as u64 * job.height as u64;
     let left = schedule.spp().saturating_sub(state.spp) as u64;
     let progress = Progress::new(left * pixels, opts.quiet);
@@ -168,7 +170,7 @@ pub fn run(
     let mut stats = RenderStats::default();
     let mut extras = Extras::default();
     let stop = loop {
-        let Some(range) = schedule.pass(state.passes) else {
+        let Some(mut range) = schedule.pass(state.passes) else {
             break Stop::Complete;
         };
         let mut active = None;
@@ -181,8 +183,18 @@ pub fn run(
             }
         }
         if let (Some(limit), Some(per)) = (budget.time, per_spp) {
-            let n = (range.end - range.start) as f64;
-            if start.elapsed().as_secs_f64() + per * n > limit {
+            let ends_at = |r: &Range<u32>| start.elapsed().as_secs_f64() + per * (r.end - r.start) as f64;
+            // A guide trains for its budget's share of the time: once the
+            // next (doubled) training pass would end later, training stops
+            // and the time left goes to guided passes of the usual size.
+            if state.spp < schedule.uncapped && ends_at(&range) > job.guide_training_share() * limit {
+                schedule.uncapped = state.spp;
+                match schedule.pass(state.passes) {
+                    Some(r) => range = r,
+                    None => break Stop::Complete,
+                }
+            }
+            if ends_at(&range) > limit {
                 break Stop::TimeUp;
             }
         }
@@ -192,7 +204,7 @@ pub fn run(
         let t0 = Instant::now();
         let n = range.end - range.start;
         let active = active.as_deref();
-        let train = job.trains_guide(state.spp);
+        let train = job.trains_guide(state.spp) && state.spp < schedule.uncapped;
         let guide = state.guide.as_mut().map(|g| (g, train));
         let r = pool.install(|| job.render_pass_guided(&mut state.film, range, active, guide, &tick, cancel));
         let Some(s) = r else {

@@ -15,6 +15,8 @@ const SCENES: &[(&str, &[(&str, &str)])] = &[
     ("scenes/cornell-box.xml", &[("res", "128")]),
     ("tests/scenes/envmap_sun.xml", &[("res", "128")]),
     ("scenes/material-showcase.xml", &[("width", "192"), ("height", "80")]),
+    ("scenes/door-ajar.xml", &[]),
+    ("scenes/glass-caustic.xml", &[]),
 ];
 const REFERENCE_SPP: u32 = 2048;
 
@@ -59,8 +61,21 @@ pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) 
         "\nequal-time error: {budget} s of rendering each, relMSE against Mitsuba at {REFERENCE_SPP} spp ({variant})"
     );
     println!(
-        "(pen: the scene's sampler, as Mitsuba; sobol: Penumbra with --sampler sobol)\n{:<22} {:>9} {:>9} {:>13} {:>9} {:>13} {:>10} {:>9} {:>13} {:>10}",
-        "scene", "size", "mi spp", "mi relMSE", "pen spp", "pen relMSE", "mi / pen", "sobol spp", "sobol relMSE", "mi / sobol"
+        "(pen: the scene's sampler, as Mitsuba; sobol: Penumbra with --sampler sobol; guided: with path guiding)\n\
+         {:<22} {:>9} {:>9} {:>13} {:>9} {:>13} {:>10} {:>9} {:>13} {:>10} {:>10} {:>13} {:>11}",
+        "scene",
+        "size",
+        "mi spp",
+        "mi relMSE",
+        "pen spp",
+        "pen relMSE",
+        "mi / pen",
+        "sobol spp",
+        "sobol relMSE",
+        "mi / sobol",
+        "guided spp",
+        "guided relMSE",
+        "mi / guided"
     );
     for (scene, defines) in SCENES {
         let stem = Path::new(scene).file_stem().unwrap().to_string_lossy().into_owned();
@@ -93,9 +108,9 @@ pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) 
         let mi_spp = field(&text, "mitsuba_budget", "spp=").unwrap_or(f64::NAN);
         let mi_secs = field(&text, "mitsuba_budget", "seconds=").unwrap_or(f64::NAN);
 
-        // Penumbra with the scene's sampler, then with `--sampler sobol`.
-        let penumbra = |sampler: Option<&str>| -> Result<(f64, f64)> {
-            let out = tmp.join(format!("{stem}-penumbra-{}.exr", sampler.unwrap_or("scene")));
+        // Penumbra with the scene's sampler, with `--sampler sobol`, and guided.
+        let penumbra = |sampler: Option<&str>, guided: bool| -> Result<(f64, f64)> {
+            let out = tmp.join(format!("{stem}-penumbra-{}-{guided}.exr", sampler.unwrap_or("scene")));
             let mut cmd = Command::new(std::env::current_exe()?);
             cmd.args(["render", "--quiet", "--spp", "1000000", "--seed", "1000", "--threads", &threads.to_string()])
                 .args(["--time", &budget.to_string(), "-o"])
@@ -103,6 +118,9 @@ pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) 
                 .arg(scene);
             if let Some(s) = sampler {
                 cmd.args(["--sampler", s]);
+            }
+            if guided {
+                cmd.args(["--integrator", "path:guiding=true"]);
             }
             for (k, v) in *defines {
                 cmd.arg("-D").arg(format!("{k}={v}"));
@@ -120,14 +138,17 @@ pub fn table(python: Option<&Path>, variant: &str, budget: f64, threads: usize) 
                 .unwrap_or(f64::NAN);
             Ok((spp, rel_mse(&out, &reference)?))
         };
-        let (pen_spp, pen_err) = penumbra(None)?;
-        let (sobol_spp, sobol_err) = penumbra(Some("sobol"))?;
+        let (pen_spp, pen_err) = penumbra(None, false)?;
+        let (sobol_spp, sobol_err) = penumbra(Some("sobol"), false)?;
+        let (guided_spp, guided_err) = penumbra(None, true)?;
         let mi_err = rel_mse(&mi_out, &reference)?;
         let size = read_exr(&reference).map(|i| format!("{}x{}", i.width, i.height)).unwrap_or_default();
         println!(
-            "{stem:<22} {size:>9} {mi_spp:>9.0} {mi_err:>13.4e} {pen_spp:>9.0} {pen_err:>13.4e} {:>9.2}x {sobol_spp:>9.0} {sobol_err:>13.4e} {:>9.2}x",
+            "{stem:<22} {size:>9} {mi_spp:>9.0} {mi_err:>13.4e} {pen_spp:>9.0} {pen_err:>13.4e} {:>9.2}x {sobol_spp:>9.0} \
+             {sobol_err:>13.4e} {:>9.2}x {guided_spp:>10.0} {guided_err:>13.4e} {:>10.2}x",
             mi_err / pen_err,
-            mi_err / sobol_err
+            mi_err / sobol_err,
+            mi_err / guided_err
         );
         if (mi_secs - budget).abs() > 0.25 * budget {
             println!("  (Mitsuba's budget render took {mi_secs:.2} s, not {budget} s: its time per spp varied)");

@@ -146,6 +146,15 @@ impl RenderJob {
         spp_done < self.guide_training_spp()
     }
 
+    /// The share of a render's time (or samples) that trains the path
+    /// integrator's guide: its `guiding_budget` (0 without guiding).
+    pub fn guide_training_share(&self) -> f64 {
+        match &self.integrator {
+            Integrator::Path(p) => p.guiding.map_or(0.0, |g| g.budget as f64),
+            _ => 0.0,
+        }
+    }
+
     /// Samples per pixel whose passes train the guide: the budget's share
     /// of the sampler's count, rounded up (0 without guiding).
     pub fn guide_training_spp(&self) -> u32 {

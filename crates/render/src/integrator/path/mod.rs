@@ -11,7 +11,7 @@
 //! | mis           | boolean | true: power heuristic; false: the lecture's split, emitted light only through light samples, reflected light only through BSDF samples |
 //! | throughput_threshold | float | 0 (off): stop when max(β) falls below it; biased |
 //! | guiding       | boolean | false: path guiding ([`crate::guiding`]), learnt in the first passes |
-//! | guiding_budget | float  | 0.25: the share of the samples whose passes train the guide (their samples are kept) |
+//! | guiding_budget | float  | 0.25: the share of the samples (under `--time`, of the time) whose passes train the guide (their samples are kept) |
 //! | guiding_bsdf_fraction | float | 0.5: at a guided vertex, the probability of drawing from the BSDF rather than the guide |
 //!
 //! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
