@@ -380,19 +380,20 @@ impl PathIntegrator {
         u: f32,
         u2: glam::Vec2,
     ) -> Option<BsdfSample> {
-        let (wi, eta) = if u < alpha {
+        let (wi, eta, pdf_guide) = if u < alpha {
             let bs = bsdf.sample(wo, u / alpha, u2)?;
             if bs.delta {
                 // The guide never draws it: weight over the probability of asking the BSDF.
                 return Some(BsdfSample { pdf: bs.pdf * alpha, weight: bs.weight / alpha, ..bs });
             }
-            (bs.wi, bs.eta)
+            (bs.wi, bs.eta, g.pdf(si.to_world(bs.wi)))
         } else {
             // The relative IOR is unknown here; 1 only changes Russian roulette's odds.
-            (si.to_local(g.sample(u2)), 1.0)
+            let (d, pdf) = g.sample(u2);
+            (si.to_local(d), 1.0, pdf)
         };
         let (f, pdf_bsdf) = bsdf.eval_pdf(wo, wi);
-        let pdf = alpha * pdf_bsdf + (1.0 - alpha) * g.pdf(si.to_world(wi));
+        let pdf = alpha * pdf_bsdf + (1.0 - alpha) * pdf_guide;
         let f = f * wi.z.abs();
         if pdf.is_nan() || pdf <= 0.0 || f == Spectrum::ZERO {
             return None;
