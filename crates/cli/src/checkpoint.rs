@@ -11,21 +11,23 @@
 //! variance moments follow; string: the integrator's output channels,
 //! newline-separated), per pixel R, G, B sums and the weight sum as
 //! f64, then the AOV sums (f64, the AOVs' channels per pixel), then the
-//! moments (`film::MOMENTS` = 8 f64 per pixel), and a CRC-32 of everything
-//! before it. Formats 1 (no layers), 2 (7 moments, no Σ w³) and 3 (no
-//! integrator channels) are refused with a message.
+//! moments (`film::MOMENTS` = 8 f64 per pixel), a u8 that is 1 when the path
+//! guide follows and the guide ([`Guide::encode`]), and a CRC-32 of
+//! everything before it. Formats 1 (no layers), 2 (7 moments, no Σ w³), 3
+//! (no integrator channels) and 4 (no guide) are refused with a message.
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
 use penumbra_render::film::{channel_count, AovKind};
 use penumbra_render::film::{Film, FilmLayers, MOMENTS};
+use penumbra_render::guiding::Guide;
 use penumbra_scene::atomic;
 use std::fs;
 use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
-const FORMAT: u32 = 4;
+const FORMAT: u32 = 5;
 
 /// A render's state after `passes` whole passes.
 #[derive(Debug, Clone)]
@@ -37,6 +39,8 @@ pub struct Checkpoint {
     pub spp: u32,
     pub seconds: f64,
     pub film: Film,
+    /// The path guide as it was after `passes` (guided renders only).
+    pub guide: Option<Guide>,
 }
 
 fn put_str(out: &mut Vec<u8>, s: &str) {
@@ -69,6 +73,10 @@ impl Checkpoint {
         }
         for v in self.film.aov.iter().chain(self.film.moments.iter().flatten()) {
             out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.push(self.guide.is_some() as u8);
+        if let Some(g) = &self.guide {
+            g.encode(&mut out);
         }
         let crc = crc32fast::hash(&out);
         out.extend_from_slice(&crc.to_le_bytes());
@@ -110,8 +118,9 @@ impl Checkpoint {
         // hostile) header must not ask for memory its data does not hold.
         let per_pixel = 4 + channel_count(&layers.aovs) + layers.channels.len() + if variance { MOMENTS } else { 0 };
         let values = n as u128 * per_pixel as u128;
+        // The film's data, then the guide's flag (and the guide).
         let have = (r.b.len() - r.at) as u128;
-        if have != values * 8 {
+        if have < values * 8 + 1 || (have > values * 8 + 1 && r.b[r.at + values as usize * 8] != 1) {
             return Err(corrupt(&format!(
                 "its size does not match its resolution ({width} x {height} pixels of {per_pixel} values need \
                  {} bytes of data, it has {have})",
@@ -128,7 +137,26 @@ impl Checkpoint {
         for v in film.aov.iter_mut().chain(film.moments.iter_mut().flatten()) {
             *v = f64::from_bits(r.u64()?);
         }
-        Ok(Checkpoint { version, settings, seed, passes, spp, seconds, film })
+        let guide = match r.u8()? {
+            0 => None,
+            _ => Some(Guide::decode(r.b, &mut r.at).map_err(|e| corrupt(&format!("its path guide is damaged: {e}")))?),
+        };
+        if r.at != r.b.len() {
+            return Err(corrupt("it has bytes after its data"));
+        }
+        Ok(Checkpoint { version, settings, seed, passes, spp, seconds, film, guide })
+    }
+
+    /// The path guide a render resumed from this checkpoint goes on with,
+    /// given `fresh`, the render's new guide (`None` without guiding): the
+    /// one saved, or `fresh` if no pass was rendered.
+    pub fn resume_guide(&mut self, fresh: Option<Guide>) -> std::result::Result<Option<Guide>, String> {
+        match (fresh, self.guide.take()) {
+            (None, _) => Ok(None),
+            (Some(_), Some(g)) => Ok(Some(g)),
+            (Some(fresh), None) if self.spp == 0 => Ok(Some(fresh)),
+            (Some(_), None) => Err("it has no path guide, which this render needs".into()),
+        }
     }
 
     /// Writes atomically: temporary file, fsync, rename, fsync directory.
@@ -212,7 +240,16 @@ mod tests {
         film.aov[4 * 4 + 1] = 0.375;
         film.moments[5][6] = 1e-300;
         let settings = Settings { entries: vec![("spp".into(), "8".into())] };
-        let ck = Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film };
+        let ck = Checkpoint {
+            version: VERSION.into(),
+            settings,
+            seed: 9,
+            passes: 3,
+            spp: 4,
+            seconds: 1.5,
+            film,
+            guide: None,
+        };
         let bytes = ck.encode();
         let back = Checkpoint::decode(&bytes, "x").unwrap();
         assert_eq!(back.film.acc, ck.film.acc);
@@ -234,7 +271,16 @@ mod tests {
         let layers = FilmLayers { aovs: vec![AovKind::Albedo], variance: true, channels: Vec::new() };
         let film = Film::with_layers(2, 1, &layers);
         let settings = Settings { entries: vec![("spp".into(), "8".into())] };
-        let ck = Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film };
+        let ck = Checkpoint {
+            version: VERSION.into(),
+            settings,
+            seed: 9,
+            passes: 3,
+            spp: 4,
+            seconds: 1.5,
+            film,
+            guide: None,
+        };
         let mut bytes = ck.encode();
         bytes.truncate(bytes.len() - 4);
         let at = bytes.windows(8).position(|w| w == [2, 0, 0, 0, 1, 0, 0, 0]).unwrap();

@@ -222,6 +222,7 @@ impl Plan<'_> {
             spp: st.spp,
             seconds: st.seconds,
             film: st.film.clone(),
+            guide: st.guide.clone(),
         };
         ck.save(path)
     }
@@ -314,13 +315,10 @@ fn resume(plan: &Plan) -> Result<State> {
     if c.film.layers() != *layers || (c.film.width, c.film.height) != (job.width, job.height) {
         bail!("checkpoint '{}' holds other image layers or another size; use --fresh", ck.display());
     }
-    if job.new_guide().is_some() && c.spp > 0 {
-        bail!(
-            "checkpoint '{}': resuming a render with guiding = true is not supported yet (the checkpoint has no guide); use --fresh",
-            ck.display()
-        );
-    }
-    Ok(State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds, guide: None })
+    let mut c = c;
+    let guide =
+        c.resume_guide(job.new_guide()).map_err(|e| anyhow!("checkpoint '{}': {e}; use --fresh", ck.display()))?;
+    Ok(State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds, guide })
 }
 
 /// What the pass loop leaves for the report.
@@ -454,7 +452,7 @@ fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
         match stats.rays.packet_lanes.checked_div(stats.rays.packets) {
             Some(width) => format!(
                 " ({:.0} % of {width}-ray packet lanes used, {:.0} % of vertices shaded in lanes, {:.0} % of their lanes used)",
-                100.0 * rays as f64 / stats.rays.packet_lanes as f64,
+                100.0 * stats.rays.packet_rays as f64 / stats.rays.packet_lanes as f64,
                 100.0 * stats.rays.lane_vertices as f64 / stats.rays.rays.max(1) as f64,
                 100.0 * stats.rays.lane_vertices as f64 / stats.rays.vertex_lanes.max(1) as f64
             ),

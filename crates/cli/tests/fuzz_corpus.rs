@@ -84,6 +84,9 @@ fn the_seeds_are_valid_inputs() {
     let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus");
     let ck = std::fs::read(corpus.join("checkpoint/seed-aov")).unwrap();
     penumbra::checkpoint::Checkpoint::decode(&ck, "seed-aov").unwrap();
+    let ck = std::fs::read(corpus.join("checkpoint/seed-guided")).unwrap();
+    let guided = penumbra::checkpoint::Checkpoint::decode(&ck, "seed-guided").unwrap();
+    assert!(guided.guide.is_some_and(|g| g.trained()), "seed-guided holds no trained guide");
     let part = std::fs::read(corpus.join("part/seed-part")).unwrap();
     let dir = tempfile_dir();
     std::fs::write(dir.join("p.exr"), &part[1..]).unwrap();

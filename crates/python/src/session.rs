@@ -96,17 +96,14 @@ pub fn render<'py>(
         guide: job.new_guide(),
     };
     if let Some(path) = &checkpoint {
-        if let Some(c) = Checkpoint::load_matching(path, &settings).map_err(anyhow_error)? {
+        if let Some(mut c) = Checkpoint::load_matching(path, &settings).map_err(anyhow_error)? {
             if c.film.layers() != layers || (c.film.width, c.film.height) != (job.width, job.height) {
                 return Err(error(format!("checkpoint '{}' holds other layers or another size", path.display())));
             }
-            if state.guide.is_some() && c.spp > 0 {
-                return Err(error(format!(
-                    "checkpoint '{}': resuming a render with guiding = true is not supported yet; delete it to start over",
-                    path.display()
-                )));
-            }
-            state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds, guide: None };
+            let guide = c
+                .resume_guide(state.guide.take())
+                .map_err(|e| error(format!("checkpoint '{}': {e}; delete it to start over", path.display())))?;
+            state = State { film: c.film, passes: c.passes, spp: c.spp, seconds: c.seconds, guide };
         }
     }
     let save = |st: &State| -> anyhow::Result<()> {
@@ -119,6 +116,7 @@ pub fn render<'py>(
             spp: st.spp,
             seconds: st.seconds,
             film: st.film.clone(),
+            guide: st.guide.clone(),
         };
         ck.save(path)
     };

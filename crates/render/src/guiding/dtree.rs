@@ -179,6 +179,98 @@ impl DTreeBuilder {
     }
 }
 
+/// Little-endian reading of a checkpoint's guide: each read checks the
+/// bytes are there, so damaged input is an error, never a panic.
+pub(crate) struct Bytes<'a> {
+    pub b: &'a [u8],
+    pub at: usize,
+}
+
+impl Bytes<'_> {
+    pub fn take(&mut self, n: usize) -> Result<&[u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or("the guide is truncated")?;
+        let s = &self.b[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    pub fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    pub fn u64(&mut self) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    pub fn f32(&mut self) -> Result<f32, String> {
+        Ok(f32::from_bits(self.u32()?))
+    }
+    pub fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_bits(self.u64()?))
+    }
+    /// A count of items of `size` bytes each that the remaining bytes can hold.
+    pub fn count(&mut self, size: usize) -> Result<usize, String> {
+        let n = self.u32()? as usize;
+        if n.saturating_mul(size) > self.b.len() - self.at {
+            return Err(format!("the guide claims {n} items, more than its bytes hold"));
+        }
+        Ok(n)
+    }
+}
+
+/// Writes quadtree nodes; reads them back checking that every child comes
+/// after its parent and within the tree (so descents end).
+fn put_nodes(out: &mut Vec<u8>, nodes: &[Node]) {
+    out.extend_from_slice(&(nodes.len() as u32).to_le_bytes());
+    for n in nodes {
+        for c in n.child {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+}
+
+fn get_nodes(r: &mut Bytes) -> Result<Vec<Node>, String> {
+    let n = r.count(16)?;
+    if n == 0 {
+        return Err("a quadtree without a root".into());
+    }
+    let mut nodes = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut node = Node::default();
+        for c in &mut node.child {
+            *c = r.u32()?;
+            if *c != 0 && (*c as usize <= i || *c as usize >= n) {
+                return Err(format!("quadtree node {i} has child {c} (of {n})"));
+            }
+        }
+        nodes.push(node);
+    }
+    Ok(nodes)
+}
+
+impl DTreeBuilder {
+    /// Appends the builder to a checkpoint's bytes.
+    pub fn encode(&self, out: &mut Vec<u8>) {
+        put_nodes(out, &self.nodes);
+        for s in self.sums.iter().flatten() {
+            out.extend_from_slice(&s.to_le_bytes());
+        }
+    }
+
+    pub(crate) fn decode(r: &mut Bytes) -> Result<DTreeBuilder, String> {
+        let nodes = get_nodes(r)?;
+        let mut sums = Vec::with_capacity(nodes.len());
+        for _ in 0..nodes.len() {
+            let mut s = [0.0; 4];
+            for v in &mut s {
+                *v = r.f64()?;
+                if !(v.is_finite() && *v >= 0.0) {
+                    return Err(format!("a quadtree sum of {v}"));
+                }
+            }
+            sums.push(s);
+        }
+        Ok(DTreeBuilder { nodes, sums })
+    }
+}
+
 /// A frozen quadtree: the density that guided directions are drawn from.
 #[derive(Debug, Clone)]
 pub struct DTree {
@@ -264,6 +356,32 @@ impl DTree {
     /// Nodes in the tree (for memory reports).
     pub fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// Appends the tree to a checkpoint's bytes.
+    pub fn encode(&self, out: &mut Vec<u8>) {
+        put_nodes(out, &self.nodes);
+        for p in self.prob.iter().flatten() {
+            out.extend_from_slice(&p.to_le_bytes());
+        }
+    }
+
+    pub(crate) fn decode(r: &mut Bytes) -> Result<DTree, String> {
+        let nodes = get_nodes(r)?;
+        let mut prob = Vec::with_capacity(nodes.len());
+        for _ in 0..nodes.len() {
+            let mut p = [0.0f32; 4];
+            for v in &mut p {
+                *v = r.f32()?;
+            }
+            // As `freeze` makes them: shares of a node, summing to 1.
+            let sum: f32 = p.iter().sum();
+            if !p.iter().all(|v| v.is_finite() && *v >= 0.0) || (sum - 1.0).abs() > 1e-3 {
+                return Err(format!("quadtree probabilities {p:?}"));
+            }
+            prob.push(p);
+        }
+        Ok(DTree { nodes, prob })
     }
 }
 

@@ -65,9 +65,11 @@ pub struct RayStats {
     /// Packets the stream integrator traced (closest-hit and shadow); zero
     /// for the one-path loop.
     pub packets: u64,
-    /// The lanes those packets offered (packets × lane width): the rays
-    /// above over these lanes is the lane occupancy.
+    /// The lanes those packets offered (packets × lane width).
     pub packet_lanes: u64,
+    /// The rays those packets held (closest-hit and shadow): over
+    /// `packet_lanes`, the lane occupancy.
+    pub packet_rays: u64,
     /// Path vertices the stream integrator shaded in lanes
     /// (`PathIntegrator::lane_vertices`); over `rays`, their share.
     pub lane_vertices: u64,
@@ -83,6 +85,7 @@ impl RayStats {
         self.shadow_rays += o.shadow_rays;
         self.packets += o.packets;
         self.packet_lanes += o.packet_lanes;
+        self.packet_rays += o.packet_rays;
         self.lane_vertices += o.lane_vertices;
         self.vertex_lanes += o.vertex_lanes;
     }

@@ -322,8 +322,12 @@ impl RenderJob {
         let pixels = self.tile_pixels(x0, y0, (w, h), active);
         let guided = train || guide.is_some_and(|g| g.trained());
         let mut records = Vec::new();
-        match (&self.integrator, self.stream && self.scene.ray_log.is_none() && !guided) {
-            (Integrator::Path(path), true) => stream::render(self, path, &pixels, samples, &mut tile),
+        // A pass that trains a guide runs one path at a time (its records
+        // are gathered per path); a guided pass that does not, in the stream.
+        match (&self.integrator, self.stream && self.scene.ray_log.is_none() && !train) {
+            (Integrator::Path(path), true) => {
+                stream::render(self, path, guide.filter(|g| g.trained()), &pixels, samples, &mut tile)
+            }
             _ => {
                 // The integrator's own output channels (the `aov` and `moment` integrators').
                 let mut ch = vec![0f32; self.integrator.channel_names().len()];

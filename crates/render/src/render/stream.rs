@@ -9,7 +9,8 @@
 //! vertex (emission, light sample, BSDF sample, Russian roulette): diffuse
 //! vertices lit by area lights on meshes in lanes
 //! ([`PathIntegrator::lane_vertices`]), every other one with the scalar
-//! [`PathIntegrator::vertex`], so every BSDF and light works), traces the
+//! [`PathIntegrator::vertex`], so every BSDF and light works; with a path
+//! guide, every vertex is the scalar [`PathIntegrator::vertex_guided`]), traces the
 //! light samples' shadow rays in packets
 //! ([`Accel::occluded_packet`]), and refills the slots of paths that ended.
 //!
@@ -27,6 +28,7 @@
 use super::{RenderJob, Tile, TilePixel};
 use crate::accel::Hit;
 use crate::geometry::Ray;
+use crate::guiding::Guide;
 use crate::integrator::path::{LaneBins, LaneOutcomes, PathIntegrator, PathState};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
@@ -62,11 +64,13 @@ type Sample = (Vec2, Spectrum);
 /// A placeholder ray.
 const EMPTY_RAY: Ray = Ray { o: Vec3::ZERO, d: Vec3::Z, t_max: 0.0 };
 
-/// Renders `samples` of each of `pixels` with `path` into `tile`, in
-/// packets of `job.packet_lanes` rays (0: the widest of [`LANE_WIDTHS`]).
+/// Renders `samples` of each of `pixels` with `path` (guided by `guide`,
+/// when given) into `tile`, in packets of `job.packet_lanes` rays (0: the
+/// widest of [`LANE_WIDTHS`]).
 pub(super) fn render(
     job: &RenderJob,
     path: &PathIntegrator,
+    guide: Option<&Guide>,
     pixels: &[TilePixel],
     samples: Range<u32>,
     tile: &mut Tile,
@@ -74,15 +78,22 @@ pub(super) fn render(
     let lanes = if job.packet_lanes == 0 { LANE_WIDTHS[0] } else { job.packet_lanes };
     match lanes {
         #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
-        16 => run::<crate::simd::F32x16>(job, path, pixels, samples, tile),
+        16 => run::<crate::simd::F32x16>(job, path, guide, pixels, samples, tile),
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
-        8 => run::<crate::simd::F32x8>(job, path, pixels, samples, tile),
-        1 => run::<f32>(job, path, pixels, samples, tile),
+        8 => run::<crate::simd::F32x8>(job, path, guide, pixels, samples, tile),
+        1 => run::<f32>(job, path, guide, pixels, samples, tile),
         n => panic!("packets of {n} rays: this build has {LANE_WIDTHS:?}"),
     }
 }
 
-fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], samples: Range<u32>, tile: &mut Tile) {
+fn run<F: Float>(
+    job: &RenderJob,
+    path: &PathIntegrator,
+    guide: Option<&Guide>,
+    pixels: &[TilePixel],
+    samples: Range<u32>,
+    tile: &mut Tile,
+) {
     let spp = samples.len();
     let total = pixels.len() * spp;
     let scene = &job.scene;
@@ -104,8 +115,9 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
     // Escaping rays that see a lone envmap are evaluated in lanes.
     let sky = scene.single_envmap().filter(|_| F::WIDTH > 1);
     let mut sky_slots: Vec<usize> = Vec::with_capacity(POOL);
-    // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`).
-    let vertex_lanes = F::WIDTH > 1;
+    // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`),
+    // which know no guide.
+    let vertex_lanes = F::WIDTH > 1 && guide.is_none();
     let env = scene.single_envmap();
     let mut bins = LaneBins::default();
     let mut lane_out = LaneOutcomes::default();
@@ -169,6 +181,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             scene.accel.intersect_packet::<F>(r, &scene.shapes, &scene.instances, h);
         }
         tile.stats.rays.rays += slots.len() as u64;
+        tile.stats.rays.packet_rays += slots.len() as u64;
         let packets = slots.len().div_ceil(F::WIDTH) as u64;
         tile.stats.rays.packets += packets;
         tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
@@ -248,7 +261,10 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
             let ray = slot.state.ray;
             let si = hits[i].map(|h| scene.interaction(&ray, &h));
             tile.scratch.reset();
-            let v = path.vertex(scene, &mut slot.state, si, &mut slot.rng, &tile.scratch);
+            let v = match guide {
+                Some(_) => path.vertex_guided(scene, &mut slot.state, si, &mut slot.rng, &tile.scratch, guide),
+                None => path.vertex(scene, &mut slot.state, si, &mut slot.rng, &tile.scratch),
+            };
             if let Some(r) = v.shadow {
                 shadow_slots.push(i);
                 shadow_rays.push(r);
@@ -260,6 +276,7 @@ fn run<F: Float>(job: &RenderJob, path: &PathIntegrator, pixels: &[TilePixel], s
         }
         // Shadow rays, then each verdict before the path's next vertex.
         tile.stats.rays.shadow_rays += shadow_rays.len() as u64;
+        tile.stats.rays.packet_rays += shadow_rays.len() as u64;
         let packets = shadow_rays.len().div_ceil(F::WIDTH) as u64;
         tile.stats.rays.packets += packets;
         tile.stats.rays.packet_lanes += packets * F::WIDTH as u64;
