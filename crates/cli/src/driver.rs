@@ -23,16 +23,75 @@ pub const DEFAULT_MAX_PASS_SPP: u32 = 16;
 /// each (0 counts as 1), except those that start within the first
 /// `uncapped` samples: a guide's training passes keep doubling, so that
 /// each learns from as many samples as all before it (Müller et al. 2017).
+///
+/// A part of a guided render (`--part`) first renders the guide's training
+/// passes over samples [0, `prelude`), as the whole render would: every
+/// part trains the same guide, and only the part with `keep_prelude` keeps
+/// those samples in its image. Its own share of the rest follows.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Schedule {
     pub samples: Range<u32>,
     pub max_pass_spp: u32,
     pub uncapped: u32,
+    pub prelude: u32,
+    pub keep_prelude: bool,
 }
 
 impl Schedule {
+    /// The schedule of `samples`, without a prelude.
+    pub fn new(samples: Range<u32>, max_pass_spp: u32, uncapped: u32) -> Schedule {
+        Schedule { samples, max_pass_spp, uncapped, prelude: 0, keep_prelude: true }
+    }
+
+    /// Where the training passes of a whole render of `spp` samples whose
+    /// first `uncapped` train a guide end: the end of the last pass that
+    /// starts below `uncapped`.
+    pub fn training_end(spp: u32, uncapped: u32) -> u32 {
+        let whole = Schedule::new(0..spp, 1, uncapped);
+        (0..).map_while(|p| whole.pass(p)).take_while(|r| r.start < uncapped).last().map_or(0, |r| r.end)
+    }
+
+    /// Part `index` of `count` of a guided render of `spp` samples whose
+    /// first `uncapped` train the guide: the training passes as a prelude
+    /// (kept by part 0), then the part's share of the samples after them.
+    pub fn guided_part(spp: u32, uncapped: u32, max_pass_spp: u32, part: crate::part::Part) -> Schedule {
+        let t = Schedule::training_end(spp, uncapped);
+        let share = part.samples(spp - t);
+        Schedule {
+            samples: t + share.start..t + share.end,
+            max_pass_spp,
+            uncapped: 0,
+            prelude: t,
+            keep_prelude: part.index == 0,
+        }
+    }
+
+    /// Passes of the prelude.
+    fn prelude_passes(&self) -> u32 {
+        let prelude = Schedule::new(0..self.prelude, 1, self.prelude);
+        (0..).map_while(|p| prelude.pass_in(p)).count() as u32
+    }
+
+    /// Whether pass `pass` is one of the prelude's (a guide's training pass
+    /// of a part).
+    pub fn in_prelude(&self, pass: u32) -> bool {
+        pass < self.prelude_passes()
+    }
+
     /// The sample indices of pass `pass`, or `None` once all are done.
     pub fn pass(&self, pass: u32) -> Option<Range<u32>> {
+        if self.prelude == 0 {
+            return self.pass_in(pass);
+        }
+        let n = self.prelude_passes();
+        if pass < n {
+            return Schedule::new(0..self.prelude, 1, self.prelude).pass_in(pass);
+        }
+        Schedule::new(self.samples.clone(), self.max_pass_spp, 0).pass_in(pass - n)
+    }
+
+    /// [`Self::pass`] without a prelude.
+    fn pass_in(&self, pass: u32) -> Option<Range<u32>> {
         let cap = self.max_pass_spp.max(1) as u64;
         let first = self.samples.start as u64;
         let size = |p: u32, start: u64| {
@@ -54,9 +113,9 @@ impl Schedule {
         (start < end).then_some(start as u32..end as u32)
     }
 
-    /// Samples per pixel once every pass is done.
+    /// Samples per pixel in the image once every pass is done.
     pub fn spp(&self) -> u32 {
-        self.samples.end - self.samples.start
+        self.samples.end - self.samples.start + if self.keep_prelude { self.prelude } else { 0 }
     }
 }
 
@@ -204,9 +263,15 @@ pub fn run(
         let t0 = Instant::now();
         let n = range.end - range.start;
         let active = active.as_deref();
-        let train = job.trains_guide(state.spp) && state.spp < schedule.uncapped;
+        let prelude = schedule.in_prelude(state.passes);
+        let train =
+            if schedule.prelude > 0 { prelude } else { job.trains_guide(state.spp) && state.spp < schedule.uncapped };
         let guide = state.guide.as_mut().map(|g| (g, train));
-        let r = pool.install(|| job.render_pass_guided(&mut state.film, range, active, guide, &tick, cancel));
+        // A prelude this part does not keep trains the guide on a film thrown away.
+        let mut scratch = (prelude && !schedule.keep_prelude)
+            .then(|| Film::with_layers(state.film.width, state.film.height, &state.film.layers()));
+        let film = scratch.as_mut().unwrap_or(&mut state.film);
+        let r = pool.install(|| job.render_pass_guided(film, range, active, guide, &tick, cancel));
         let Some(s) = r else {
             break Stop::Cancelled;
         };
@@ -214,7 +279,9 @@ pub fn run(
         stats.rays.add(&s.rays);
         stats.non_finite += s.non_finite;
         state.passes += 1;
-        state.spp += n;
+        if scratch.is_none() {
+            state.spp += n;
+        }
         state.seconds = base_seconds + start.elapsed().as_secs_f64();
         per_spp = Some(t0.elapsed().as_secs_f64() / n as f64);
         if let Some(f) = hooks.after_pass.as_mut() {
@@ -250,7 +317,7 @@ mod tests {
 
     #[test]
     fn schedule_doubles_up_to_the_cap_and_covers_the_range() {
-        let schedule = Schedule { samples: 3..40, max_pass_spp: 8, uncapped: 0 };
+        let schedule = Schedule::new(3..40, 8, 0);
         let passes: Vec<Range<u32>> = (0..).map_while(|p| schedule.pass(p)).collect();
         let sizes: Vec<u32> = passes.iter().map(|p| p.end - p.start).collect();
         assert_eq!(sizes, [1, 1, 2, 4, 8, 8, 8, 5]);
@@ -260,23 +327,44 @@ mod tests {
         }
         assert_eq!(passes.last().unwrap().end, 40);
         assert_eq!(schedule.spp(), 37);
-        assert_eq!(Schedule { samples: 0..1, max_pass_spp: 16, uncapped: 0 }.pass(1), None);
-        assert_eq!(Schedule { samples: 0..0, max_pass_spp: 16, uncapped: 0 }.pass(0), None);
+        assert_eq!(Schedule::new(0..1, 16, 0).pass(1), None);
+        assert_eq!(Schedule::new(0..0, 16, 0).pass(0), None);
         // A cap of 0 counts as 1.
-        let sizes: Vec<u32> = (0..)
-            .map_while(|p| Schedule { samples: 0..4, max_pass_spp: 0, uncapped: 0 }.pass(p))
-            .map(|r| r.len() as u32)
-            .collect();
+        let sizes: Vec<u32> = (0..).map_while(|p| Schedule::new(0..4, 0, 0).pass(p)).map(|r| r.len() as u32).collect();
         assert_eq!(sizes, [1, 1, 1, 1]);
     }
 
     #[test]
     fn training_passes_keep_doubling_past_the_cap() {
-        let schedule = Schedule { samples: 0..200, max_pass_spp: 8, uncapped: 50 };
+        let schedule = Schedule::new(0..200, 8, 50);
         let sizes: Vec<u32> = (0..).map_while(|p| schedule.pass(p)).map(|r| r.len() as u32).collect();
         // Passes starting below 50 double (the last one starts at 32); then 8 at a time.
         let mut expected = vec![1, 1, 2, 4, 8, 16, 32];
         expected.extend([8; 17]);
         assert_eq!(sizes, expected);
+    }
+
+    /// Parts of a guided render each run the whole render's training passes
+    /// first, then their own share of the samples after those.
+    #[test]
+    fn guided_parts_share_the_training_passes() {
+        // 6 of 40 samples train: the passes starting below 6 end at 8.
+        assert_eq!(Schedule::training_end(40, 6), 8);
+        assert_eq!(Schedule::training_end(40, 0), 0);
+        let whole = Schedule::new(0..40, 4, 6);
+        let training: Vec<Range<u32>> = (0..).map_while(|p| whole.pass(p)).take_while(|r| r.start < 6).collect();
+        let mut shares = Vec::new();
+        for i in 0..3 {
+            let s = Schedule::guided_part(40, 6, 4, crate::part::Part { index: i, count: 3 });
+            let passes: Vec<Range<u32>> = (0..).map_while(|p| s.pass(p)).collect();
+            assert_eq!(passes[..training.len()], training[..], "part {i}");
+            assert!((0..passes.len() as u32).all(|p| s.in_prelude(p) == (p < training.len() as u32)));
+            shares.extend(passes[training.len()..].iter().cloned());
+            assert_eq!(s.spp(), s.samples.len() as u32 + if i == 0 { 8 } else { 0 });
+        }
+        // The shares tile [8, 40) in order.
+        assert_eq!(shares.first().unwrap().start, 8);
+        assert_eq!(shares.last().unwrap().end, 40);
+        assert!(shares.windows(2).all(|w| w[0].end == w[1].start));
     }
 }

@@ -133,18 +133,17 @@ fn plan(a: &RenderArgs) -> Result<Plan<'_>> {
         job.filter = Filter::new(FilterKind::Box);
     }
     let spp = job.sampler.spp;
-    if part.is_some() && job.new_guide().is_some() {
-        bail!(
-            "--part cannot be combined with the path integrator's guiding = true yet: each part would train its own guide, \
-             and the merged image would not be the single-machine render"
-        );
-    }
-    let samples = part.map_or(0..spp, |p| p.samples(spp));
-    if samples.is_empty() {
+    let (cap, uncapped) = (a.max_pass_spp.max(1), job.guide_training_spp());
+    // With guiding, every part renders the training passes (see `Schedule`).
+    let schedule = match part {
+        Some(p) if job.new_guide().is_some() => Schedule::guided_part(spp, uncapped, cap, p),
+        Some(p) => Schedule::new(p.samples(spp), cap, uncapped),
+        None => Schedule::new(0..spp, cap, uncapped),
+    };
+    if schedule.spp() == 0 {
         bail!("--part {}: with {spp} spp this part has no samples; use at most {spp} parts", part.unwrap());
     }
     let settings = settings(a, &scene_bytes, &job, part, &layers);
-    let schedule = Schedule { samples, max_pass_spp: a.max_pass_spp.max(1), uncapped: job.guide_training_spp() };
     Ok(Plan { args: a, job, part, threads, layers, schedule, settings, command: command_line() })
 }
 

@@ -81,10 +81,10 @@ fn particle_tracer_survives_resume_and_parts() {
 
 /// Path guiding end to end: the guided image is the same for any thread
 /// count and pass cap (the guide learns from records in tile order, and
-/// its training passes double whatever `--max-pass-spp` says); resuming a
-/// guided render and `--part` are refused with a message, not rendered wrong.
+/// its training passes double whatever `--max-pass-spp` says); it resumes
+/// bitwise from a checkpoint, and its parts merge into the whole render.
 #[test]
-fn guided_path_is_deterministic_resumes_and_refuses_parts() {
+fn guided_path_is_deterministic_resumes_and_merges_parts() {
     let d = common::tmpdir("integrators", "guided");
     let args = ["--integrator", "path:max_depth=6,guiding=true", "--spp", "24"];
     let one = render(&scene("cbox_diffuse"), &d.join("one.exr"), &[&args[..], &["--threads", "1"]].concat());
@@ -102,16 +102,9 @@ fn guided_path_is_deterministic_resumes_and_refuses_parts() {
         assert!(v.iter().zip(scalar.ch(c)).all(|(a, b)| a.to_bits() == b.to_bits()), "{c}: stream and loop differ");
     }
     assert_ne!(one.ch("R"), plain.ch("R"), "guiding changed nothing");
-    let out = bin()
-        .arg("render")
-        .arg(scene("cbox_diffuse"))
-        .args(args)
-        .args(["--part", "0/2", "-o"])
-        .arg(d.join("part.exr"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--part cannot be combined"), "{out:?}");
+    // Parts each train the same guide on the whole render's training
+    // passes (kept by part 0 only): merged, they are the whole render.
+    resume_and_parts("cbox_diffuse", &args, &["R", "G", "B"]);
     // Stopped after every pass (--time 0 renders one) and resumed from the
     // checkpoint, guide and all, until done: bitwise the uninterrupted render.
     let ck = d.join("ck.bin");

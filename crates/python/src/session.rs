@@ -67,8 +67,7 @@ pub fn render<'py>(
         return Err(error("ptracer: aovs need per-pixel samples, which a particle tracer's splats are not"));
     }
     let pool = penumbra::thread_pool(threads).map_err(anyhow_error)?;
-    let schedule =
-        Schedule { samples: 0..job.sampler.spp, max_pass_spp: max_pass_spp.max(1), uncapped: job.guide_training_spp() };
+    let schedule = Schedule::new(0..job.sampler.spp, max_pass_spp.max(1), job.guide_training_spp());
     let bytes = scene.source_bytes();
     let mut settings = Settings::new(&RenderIdentity {
         scene_bytes: &bytes,
