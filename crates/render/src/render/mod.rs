@@ -85,6 +85,10 @@ struct TileResult {
     records: Vec<GuideRecord>,
 }
 
+/// Paths of a training pass that give the guide records: beyond this, only
+/// every k-th path does (each gives up to one 24-byte record per bounce).
+pub const MAX_TRAINING_PATHS: u64 = 1 << 20;
+
 impl RenderJob {
     /// Adds samples `samples` (sample indices) of every pixel to `film`.
     /// `progress` is called after each tile with the samples it added.
@@ -224,6 +228,14 @@ impl RenderJob {
         // exactly the contributions the full frame gives those pixels).
         let (left, top, right, bottom) = self.sample_ring();
         let (gw, gh) = (self.width + left + right, self.height + top + bottom);
+        // A training pass of more paths than MAX_TRAINING_PATHS records
+        // every k-th (by pixel and sample index), which bounds its records' memory.
+        let record_every = match train {
+            true => {
+                (gw as u64 * gh as u64 * samples.len() as u64).div_ceil(MAX_TRAINING_PATHS).clamp(1, u32::MAX as u64)
+            }
+            false => 0,
+        } as u32;
         let tiles_x = gw.div_ceil(TILE);
         let tiles_y = gh.div_ceil(TILE);
         let results: Option<Vec<TileResult>> = (0..tiles_x * tiles_y)
@@ -235,7 +247,7 @@ impl RenderJob {
                 let (tx, ty) = (t % tiles_x * TILE, t / tiles_x * TILE);
                 let size = (TILE.min(gw - tx), TILE.min(gh - ty));
                 let (x0, y0) = (tx as i32 - left as i32, ty as i32 - top as i32);
-                let r = self.render_tile(x0, y0, size, samples.clone(), &layers, active, guide, train);
+                let r = self.render_tile(x0, y0, size, samples.clone(), &layers, active, guide, record_every);
                 progress(r.stats.samples);
                 Some(r)
             })
@@ -295,7 +307,8 @@ impl RenderJob {
     /// start in the crop ring) into a film with the filter's margin. With
     /// `active`, only pixels marked there take samples (ring pixels follow
     /// the nearest image pixel). Path vertices are guided by `guide` and,
-    /// with `train`, give the guide's training records.
+    /// with `record_every` k > 0 (a training pass), every k-th path (by
+    /// pixel and sample index) gives the guide's training records.
     #[allow(clippy::too_many_arguments)]
     fn render_tile(
         &self,
@@ -306,7 +319,7 @@ impl RenderJob {
         layers: &FilmLayers,
         active: Option<&[bool]>,
         guide: Option<&Guide>,
-        train: bool,
+        record_every: u32,
     ) -> TileResult {
         let m = self.filter.margin().min(MAX_MARGIN);
         let mut tile = Tile {
@@ -320,6 +333,7 @@ impl RenderJob {
         };
         tile.aov_values = vec![0f32; tile.film.aov_channels()];
         let pixels = self.tile_pixels(x0, y0, (w, h), active);
+        let train = record_every > 0;
         let guided = train || guide.is_some_and(|g| g.trained());
         let mut records = Vec::new();
         // A pass that trains a guide runs one path at a time (its records
@@ -344,7 +358,9 @@ impl RenderJob {
                         let l = if ch.is_empty() {
                             match &self.integrator {
                                 Integrator::Path(path) if guided => {
-                                    let r = train.then_some(&mut records);
+                                    let (x, y) = p.global;
+                                    let index = y as u64 * self.full_size.0 as u64 + x as u64 + s as u64;
+                                    let r = (train && index % record_every as u64 == 0).then_some(&mut records);
                                     path.li_guided(scene, &ray, &mut rng, stats, scratch, guide, r)
                                 }
                                 i => i.li(scene, &ray, &mut rng, stats, scratch),
