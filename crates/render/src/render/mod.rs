@@ -360,7 +360,8 @@ impl RenderJob {
                                 Integrator::Path(path) if guided => {
                                     let (x, y) = p.global;
                                     let index = y as u64 * self.full_size.0 as u64 + x as u64 + s as u64;
-                                    let r = (train && index % record_every as u64 == 0).then_some(&mut records);
+                                    let r =
+                                        (train && index.is_multiple_of(record_every as u64)).then_some(&mut records);
                                     path.li_guided(scene, &ray, &mut rng, stats, scratch, guide, r)
                                 }
                                 i => i.li(scene, &ray, &mut rng, stats, scratch),
