@@ -11,7 +11,7 @@
 # Targets: xml xml_include obj ply serialized vol spd pfm image pbrt tensor gltf
 # (crates/scene/src/fuzzing.rs), checkpoint part (crates/cli/src/fuzzing.rs). A crash is written to
 # $CARGO_TARGET_DIR/fuzz-artifacts/TARGET/; fix it, and add the input to the
-# corpus as regression-NAME (merge keeps those) so that the replay test
+# corpus as regression-NAME (merge keeps those, and the seed-* files) so that the replay test
 # (crates/scene/tests/fuzz_corpus.rs) keeps checking it.
 # Needs a C++ compiler (libFuzzer is built from source by libfuzzer-sys).
 set -euo pipefail
@@ -48,8 +48,9 @@ merge)
     mkdir -p "$work"
     new=$(mktemp -d)
     "$(bin "$t")" -set_cover_merge=1 -rss_limit_mb=2048 -timeout=10 "$new" "fuzz/corpus/$t" "$work"
-    # Inputs that once crashed stay, whatever coverage they add.
-    find "fuzz/corpus/$t" -name 'regression-*' -exec cp {} "$new/" \;
+    # Inputs that once crashed stay, whatever coverage they add, and so do
+    # the hand-made seeds (tests read some of them by name).
+    find "fuzz/corpus/$t" \( -name 'regression-*' -o -name 'seed-*' \) -exec cp {} "$new/" \;
     rm -rf "fuzz/corpus/$t"
     mv "$new" "fuzz/corpus/$t"
     chmod 755 "fuzz/corpus/$t"

@@ -14,9 +14,15 @@ pub type Target = fn(&[u8]);
 /// The targets by name (directories of `fuzz/corpus/`), with their entry points.
 pub const TARGETS: &[(&str, Target)] = &[("checkpoint", checkpoint), ("part", part)];
 
-/// A checkpoint file (`--checkpoint`), decoded as a resumed render reads it.
+/// A checkpoint file (`--checkpoint`), decoded as a resumed render reads it:
+/// as given, and with a correct CRC-32 appended: a
+/// mutation almost never keeps the checksum right, so without the second
+/// the parser behind it (film, layers, the path guide) would go unexplored.
 pub fn checkpoint(data: &[u8]) {
     let _ = Checkpoint::decode(data, "fuzz.ckpt");
+    let mut fixed = data.to_vec();
+    fixed.extend_from_slice(&crc32fast::hash(data).to_le_bytes());
+    let _ = Checkpoint::decode(&fixed, "fuzz.ckpt");
 }
 
 /// A part EXR given to `penumbra merge`: the first byte chooses whether it
