@@ -275,9 +275,7 @@ pub fn run(
         let Some(s) = r else {
             break Stop::Cancelled;
         };
-        stats.samples += s.samples;
-        stats.rays.add(&s.rays);
-        stats.non_finite += s.non_finite;
+        stats.add(&s);
         state.passes += 1;
         if scratch.is_none() {
             state.spp += n;

@@ -459,6 +459,15 @@ fn print_summary(plan: &Plan, state: &State, run: &Run, complete: bool) {
         },
         crate::peak_memory_mb().map(|m| format!(", peak memory {m:.0} MB")).unwrap_or_default()
     );
+    if let Some(g) = &state.guide {
+        let (leaves, nodes) = g.size();
+        eprintln!(
+            "path guide: {leaves} spatial leaves, {nodes} quadtree nodes, {} KiB; learnt from {} records in {:.3} s this run",
+            g.memory() / 1024,
+            stats.guide_records,
+            stats.guide_seconds
+        );
+    }
     if extras.checkpoints > 0 {
         eprintln!(
             "{} checkpoints in {:.3} s ({:.2}% of this run)",

@@ -65,13 +65,20 @@ pub struct RenderStats {
     pub rays: RayStats,
     /// Samples dropped because their radiance or weight was NaN or infinite.
     pub non_finite: u64,
+    /// Path guiding: training records the guide learnt from.
+    pub guide_records: u64,
+    /// Path guiding: seconds the guide's updates took (after the passes' rendering).
+    pub guide_seconds: f64,
 }
 
 impl RenderStats {
-    fn add(&mut self, o: &RenderStats) {
+    /// Adds another pass's or thread's counts.
+    pub fn add(&mut self, o: &RenderStats) {
         self.samples += o.samples;
         self.rays.add(&o.rays);
         self.non_finite += o.non_finite;
+        self.guide_records += o.guide_records;
+        self.guide_seconds += o.guide_seconds;
     }
 }
 
@@ -193,11 +200,15 @@ impl RenderJob {
             Some((g, train)) => (Some(g), train),
             None => (None, false),
         };
-        let stats = self.render_pass_inner(film, samples, active, guide.as_deref(), train, progress, cancel)?;
+        let (mut stats, records) =
+            self.render_pass_inner(film, samples, active, guide.as_deref(), train, progress, cancel)?;
         if let (Some(g), true) = (guide, train) {
-            g.update(&stats.1);
+            let t = std::time::Instant::now();
+            g.update(&records);
+            stats.guide_records += records.len() as u64;
+            stats.guide_seconds += t.elapsed().as_secs_f64();
         }
-        Some(stats.0)
+        Some(stats)
     }
 
     #[allow(clippy::too_many_arguments)]
