@@ -228,6 +228,12 @@ impl Reader<'_> {
 mod tests {
     use super::*;
 
+    /// A checkpoint of `film` after 3 passes, 4 spp and 1.5 s (seed 9), unguided.
+    fn checkpoint_of(film: Film) -> Checkpoint {
+        let settings = Settings { entries: vec![("spp".into(), "8".into())] };
+        Checkpoint { version: VERSION.into(), settings, seed: 9, passes: 3, spp: 4, seconds: 1.5, film, guide: None }
+    }
+
     #[test]
     fn round_trips_and_detects_damage() {
         let layers = FilmLayers {
@@ -239,17 +245,7 @@ mod tests {
         film.acc[4] = [1.5, 0.1 + 0.2, -0.0, 7.25];
         film.aov[4 * 4 + 1] = 0.375;
         film.moments[5][6] = 1e-300;
-        let settings = Settings { entries: vec![("spp".into(), "8".into())] };
-        let ck = Checkpoint {
-            version: VERSION.into(),
-            settings,
-            seed: 9,
-            passes: 3,
-            spp: 4,
-            seconds: 1.5,
-            film,
-            guide: None,
-        };
+        let ck = checkpoint_of(film);
         let bytes = ck.encode();
         let back = Checkpoint::decode(&bytes, "x").unwrap();
         assert_eq!(back.film.acc, ck.film.acc);
@@ -270,17 +266,7 @@ mod tests {
     fn a_huge_resolution_is_refused_before_allocating() {
         let layers = FilmLayers { aovs: vec![AovKind::Albedo], variance: true, channels: Vec::new() };
         let film = Film::with_layers(2, 1, &layers);
-        let settings = Settings { entries: vec![("spp".into(), "8".into())] };
-        let ck = Checkpoint {
-            version: VERSION.into(),
-            settings,
-            seed: 9,
-            passes: 3,
-            spp: 4,
-            seconds: 1.5,
-            film,
-            guide: None,
-        };
+        let ck = checkpoint_of(film);
         let mut bytes = ck.encode();
         bytes.truncate(bytes.len() - 4);
         let at = bytes.windows(8).position(|w| w == [2, 0, 0, 0, 1, 0, 0, 0]).unwrap();
