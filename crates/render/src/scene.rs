@@ -6,7 +6,7 @@ use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
 use crate::light::{Light, LightSample, LightSampler, LightSelection};
-use crate::material::{LaneMaterial, Material, Scratch};
+use crate::material::{LaneMaterial, LaneSurface, Material, Scratch};
 use crate::math::{Spectrum, SHADOW_EPSILON};
 use crate::medium::Medium;
 use glam::{Vec2, Vec3};
@@ -112,7 +112,7 @@ pub struct Scene {
     /// textured radiance); hits on the others skip it.
     reads_uv: Vec<bool>,
     /// Per shape: [`Scene::lane_material`].
-    lane_material: Vec<Option<LaneMaterial>>,
+    lane_material: Vec<Option<LaneSurface>>,
     /// Per light: [`Scene::lane_light`].
     lane_lights: Vec<Option<LaneLight>>,
     /// The triangles of the mesh lights among `lane_lights`.
@@ -204,15 +204,15 @@ impl Scene {
         let light_sampler = LightSampler::Uniform { count: lights.len() };
         // Per material first, so that a table is copied once per material.
         let mut lane_tables = Vec::new();
-        let per_material: Vec<Option<LaneMaterial>> =
+        let per_material: Vec<Option<LaneSurface>> =
             materials.iter().map(|m| m.lane_material(&mut lane_tables)).collect();
         let lane_material = shapes
             .iter()
             .zip(&shape_info)
             .zip(&reads_uv)
             .map(|((shape, info), &uv)| {
-                let (flat, mesh) = match shape {
-                    Shape::Mesh(m) | Shape::CulledMesh(m) => (m.face_normals || m.mesh.normals.is_empty(), true),
+                let (known, mesh) = match shape {
+                    Shape::Mesh(_) | Shape::CulledMesh(_) => (true, true),
                     Shape::Sphere(_) | Shape::Disk(_) => (true, false),
                     _ => (false, false),
                 };
@@ -220,13 +220,13 @@ impl Scene {
                     .get(info.material as usize)
                     .copied()
                     .flatten()
-                    .filter(|_| flat && info.light.is_none());
+                    .filter(|_| known && info.light.is_none());
                 // Textures read the uv parameterisation, which lanes find on
                 // meshes only; anisotropic roughness its dp/du, which lanes
                 // find on spheres only.
-                m.filter(|m| match m {
+                m.filter(|s| match &s.material {
                     LaneMaterial::TexturedDiffuse => mesh,
-                    _ if m.anisotropic() => matches!(shape, Shape::Sphere(_)),
+                    m if m.anisotropic() => matches!(shape, Shape::Sphere(_)),
                     _ => !uv,
                 })
             })
@@ -351,11 +351,11 @@ impl Scene {
     }
 
     /// The material of shape `shape` when its hits can be shaded in lanes
-    /// (the `path` integrator's lane vertex): a mesh shaded with its face
-    /// normals, a sphere or a disk, not an emitter, whose material is a
+    /// (the `path` integrator's lane vertex): a mesh (flat or with vertex
+    /// normals), a sphere or a disk, not an emitter, whose material is a
     /// [`Material::lane_material`] (a textured one on meshes only).
     #[inline]
-    pub fn lane_material(&self, shape: u32) -> Option<LaneMaterial> {
+    pub fn lane_material(&self, shape: u32) -> Option<LaneSurface> {
         self.lane_material[shape as usize]
     }
 

@@ -21,12 +21,18 @@ fn bits(v: impl IntoIterator<Item = f32>) -> Vec<u32> {
 /// whether the scene's integrator is `path` (the others render one way),
 /// and how many vertices the packets of more than one lane shaded in lanes.
 fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64) {
+    let (is_path, lane_vertices, _) = check_counting(scene, defines, spp);
+    (is_path, lane_vertices)
+}
+
+/// [`check`], also returning the closest-hit rays those packets traced.
+fn check_counting(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64, u64) {
     let ov = Overrides { spp: Some(spp), ..Default::default() };
     let mut job = load_scene(scene, defines, &ov).unwrap_or_else(|e| panic!("{e}"));
     let layers = FilmLayers { aovs: AovKind::ALL.to_vec(), variance: true, ..Default::default() };
     let name = scene.file_name().unwrap().to_string_lossy();
     let is_path = matches!(job.integrator, penumbra_render::integrator::Integrator::Path(_));
-    let mut lane_vertices = 0;
+    let (mut lane_vertices, mut rays) = (0, 0);
     for range in [0..spp, 3..spp] {
         let render = |job: &penumbra_render::render::RenderJob| {
             let mut film = Film::with_layers(job.width, job.height, &layers);
@@ -41,6 +47,7 @@ fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64) {
             let (b, sb) = render(&job);
             if lanes > 1 {
                 lane_vertices += sb.rays.lane_vertices;
+                rays += sb.rays.rays;
             }
             let (a, sa, b, sb) = (&a, &sa, &b, &sb);
             let what = format!("{name}, samples {range:?}, packets of {lanes}");
@@ -64,7 +71,7 @@ fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64) {
             assert!(a.develop().iter().flatten().any(|&c| c > 0.0), "{what}: a black image proves little");
         }
     }
-    (is_path, lane_vertices)
+    (is_path, lane_vertices, rays)
 }
 
 #[test]
@@ -186,4 +193,99 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
     eprintln!("{lane_vertices} lane vertices");
     assert!(is_path);
     assert!(LANE_WIDTHS.len() == 1 || lane_vertices > 10_000, "{lane_vertices} lane vertices");
+}
+
+/// An open bowl (the half of a UV sphere below z = 0, the opening facing
+/// +z) as an OBJ with vertex normals (outwards) and texture coordinates:
+/// a smooth mesh whose inside is seen from below its normals.
+fn bowl_obj() -> String {
+    let (rings, segments) = (5, 12);
+    let mut obj = String::new();
+    for i in 0..=rings {
+        let theta = std::f32::consts::FRAC_PI_2 * (1.0 + i as f32 / rings as f32);
+        for j in 0..=segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            let n = [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()];
+            obj += &format!("v {} {} {}\nvn {} {} {}\n", n[0], n[1], n[2], n[0], n[1], n[2]);
+            obj += &format!("vt {} {}\n", j as f32 / segments as f32, i as f32 / rings as f32);
+        }
+    }
+    let at = |i: usize, j: usize| i * (segments + 1) + j + 1;
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+            obj += &format!("f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\nf {a}/{a}/{a} {c}/{c}/{c} {d}/{d}/{d}\n");
+        }
+    }
+    obj
+}
+
+/// Smooth meshes (vertex normals, so the shading normal is interpolated)
+/// and two-sided materials in lanes: bowls seen inside and out, each
+/// material of the lane kernels one-sided and in `twosided`, and a
+/// checkerboard-textured bowl, under an area light and an environment map.
+/// Bitwise the scalar vertex, and most hits shaded in lanes (without the
+/// smooth-mesh kinds, none of these would be).
+#[test]
+fn smooth_and_two_sided_meshes_are_bitwise_the_scalar_vertex_in_lanes() {
+    let env = root().join("tests/scenes/textures/sunsky.exr");
+    let materials = [
+        r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.5, 0.3"/></bsdf>"#,
+        r#"<bsdf type="conductor"><string name="material" value="Cu"/></bsdf>"#,
+        r#"<bsdf type="dielectric"><float name="int_ior" value="1.5"/></bsdf>"#,
+        r#"<bsdf type="roughconductor"><string name="material" value="Au"/><float name="alpha" value="0.25"/></bsdf>"#,
+        r#"<bsdf type="roughdielectric"><string name="distribution" value="beckmann"/><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/></bsdf>"#,
+        r#"<bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.7"/></bsdf>"#,
+        r#"<bsdf type="roughplastic"><float name="alpha" value="0.2"/><rgb name="diffuse_reflectance" value="0.3, 0.6, 0.2"/></bsdf>"#,
+    ];
+    let textured = r#"<bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+        <rgb name="color0" value="0.8, 0.7, 0.6"/><rgb name="color1" value="0.2, 0.3, 0.4"/>
+        <transform name="to_uv"><scale x="4" y="4"/></transform></texture></bsdf>"#
+        .to_string();
+    let mut bsdfs: Vec<String> = materials.iter().map(|m| m.to_string()).collect();
+    bsdfs.extend(materials.iter().map(|m| format!(r#"<bsdf type="twosided">{m}</bsdf>"#)));
+    bsdfs.push(textured);
+    let dir = std::env::temp_dir().join(format!("penumbra-lane-bowls-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("bowl.obj"), bowl_obj()).unwrap();
+    let mut shapes = String::new();
+    for (k, m) in bsdfs.iter().enumerate() {
+        // Three rows of five, tilted towards the camera, some turned away.
+        let (x, y) = ((k % 5) as f32 * 0.62 - 1.24, (k / 5) as f32 * 0.62 - 0.3);
+        let turn = if k % 3 == 2 { 150 } else { 25 };
+        shapes += &format!(
+            r#"<shape type="obj"><string name="filename" value="bowl.obj"/>
+            <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="-{turn}"/><translate x="{x}" y="{y}"/></transform>{m}</shape>
+"#
+        );
+    }
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="6"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 0.3, 4" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/></film>
+    </sensor>
+    <emitter type="envmap"><string name="filename" value="{}"/><float name="scale" value="0.5"/></emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="2.5" z="1"/></transform>
+        <emitter type="area"><rgb name="radiance" value="6, 6, 5"/></emitter>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="5"/><translate z="-1"/></transform>
+        <bsdf type="diffuse"/>
+    </shape>
+    {shapes}
+</scene>"#,
+        env.display()
+    );
+    let scene = dir.join("bowls.xml");
+    std::fs::write(&scene, xml).unwrap();
+    let (is_path, lane_vertices, rays) = check_counting(&scene, &[], 8);
+    std::fs::remove_dir_all(&dir).ok();
+    eprintln!("{lane_vertices} of {rays} hits shaded in lanes");
+    assert!(is_path);
+    assert!(LANE_WIDTHS.len() == 1 || lane_vertices * 2 > rays, "{lane_vertices} of {rays} hits in lanes");
 }

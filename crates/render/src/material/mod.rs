@@ -226,6 +226,17 @@ pub enum LaneMaterial {
     },
 }
 
+/// A [`LaneMaterial`] and whether it is wrapped in `twosided` (the same
+/// material on both sides: seen from below, it is shaded in a frame whose
+/// normal is negated, as [`Material::bsdf`] does).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaneSurface {
+    /// The material on either side.
+    pub material: LaneMaterial,
+    /// Whether it is two-sided.
+    pub two_sided: bool,
+}
+
 /// Constant roughnesses (α_u, α_v), as `Texture::eval_1` of a constant gives them.
 fn constant_alphas(r: &crate::bsdf::microfacet::Roughness) -> Option<(f32, f32)> {
     let one = |t: &Texture| t.constant().map(|c| (c.x + c.y + c.z) / 3.0);
@@ -323,9 +334,41 @@ impl Material {
     /// The material as the `path` integrator's lane vertex shades it: a
     /// plain `diffuse` (its reflectance constant or read from uv alone), `conductor`, `roughconductor`,
     /// `dielectric`, `roughdielectric`, `plastic` or `roughplastic` whose parameters are constants (no
-    /// texture, mask, bump, normal map or two-sided wrapper). A
+    /// texture, mask, bump or normal map), or `twosided` around one such
+    /// material of constant parameters on both sides. A
     /// `roughplastic`'s transmittance table is appended to `tables`.
-    pub fn lane_material(&self, tables: &mut Vec<[f32; TRANSMITTANCE_RES]>) -> Option<LaneMaterial> {
+    pub fn lane_material(&self, tables: &mut Vec<[f32; TRANSMITTANCE_RES]>) -> Option<LaneSurface> {
+        if let Material::TwoSided(front, back) = self {
+            let n = tables.len();
+            let (f, m) = (front.lane_material(tables), tables.len());
+            let b = back.lane_material(tables);
+            // A rough plastic's table is appended once per side: the sides
+            // are the same when their tables are.
+            let same = match (f, b) {
+                (Some(f), Some(b)) => {
+                    let untabled = |mut m: LaneMaterial| {
+                        if let LaneMaterial::RoughPlastic { table, .. } = &mut m {
+                            *table = 0;
+                        }
+                        m
+                    };
+                    !f.two_sided
+                        && !b.two_sided
+                        && f.material != LaneMaterial::TexturedDiffuse
+                        && untabled(f.material) == untabled(b.material)
+                        && tables[n..m] == tables[m..]
+                }
+                _ => false,
+            };
+            tables.truncate(if same { m } else { n });
+            return f.filter(|_| same).map(|f| LaneSurface { two_sided: true, ..f });
+        }
+        let material = self.lane_material_one_sided(tables)?;
+        Some(LaneSurface { material, two_sided: false })
+    }
+
+    /// [`Self::lane_material`] of a material that is not `twosided`.
+    fn lane_material_one_sided(&self, tables: &mut Vec<[f32; TRANSMITTANCE_RES]>) -> Option<LaneMaterial> {
         match self {
             Material::Diffuse(d) => match d.reflectance.constant() {
                 Some(c) => Some(LaneMaterial::Diffuse(c)),

@@ -1,9 +1,10 @@
 //! The `path` integrator's vertex in lanes for the commonest vertices: a
-//! hit on a flat-shaded mesh, a sphere or a disk with a plain `diffuse`,
+//! hit on a mesh (flat-shaded, or with vertex normals interpolated), a
+//! sphere or a disk with a plain `diffuse`,
 //! `conductor`, `dielectric`, `plastic`, `roughconductor` or
 //! `roughdielectric` (GGX or Beckmann; anisotropic ones on spheres, whose
-//! frame then follows the uv parameterisation) material of constant parameters
-//! ([`Scene::lane_material`]); the non-specular ones lit by an area light
+//! frame then follows the uv parameterisation) material of constant parameters,
+//! alone or in `twosided` ([`Scene::lane_material`]); the non-specular ones lit by an area light
 //! on a mesh or a sphere ([`Scene::lane_light`]) or by the scene's one
 //! environment map. A
 //! stream prepares such vertices of many paths into a [`LaneBatch`] per
@@ -58,7 +59,8 @@ pub struct LaneKind {
     /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk, 3: a flat-shaded
     /// mesh whose frame follows its texture coordinates (a textured
     /// material), 4: a sphere whose frame follows its uv parameterisation
-    /// (an anisotropic material).
+    /// (an anisotropic material), 5 and 6: 0 and 3 on a mesh with vertex
+    /// normals (the shading normal interpolated).
     shape: u8,
     /// 0: diffuse, 1: GGX rough conductor, 4: plastic, 5: GGX rough
     /// dielectric, 6 and 7: Beckmann rough conductor and dielectric, 8 and
@@ -72,7 +74,7 @@ pub struct LaneKind {
 
 impl LaneKind {
     /// How many kinds there are.
-    pub const COUNT: usize = 5 * 10 * 3;
+    pub const COUNT: usize = 7 * 10 * 3;
 
     /// A number in 0..[`Self::COUNT`], for bins.
     #[inline]
@@ -132,8 +134,12 @@ mod row {
     pub const U_BSDF: usize = 59;
     /// A rough material's roughness along v (`PARAM` holds it along u).
     pub const PARAM_V: usize = 61;
+    /// A smooth mesh's vertex normals at the corners (3 × 3 rows).
+    pub const NS: usize = 62;
+    /// 1 where the material is two-sided (every kind reads it).
+    pub const TWO_SIDED_BSDF: usize = 71;
     /// How many rows there are.
-    pub const COUNT: usize = 62;
+    pub const COUNT: usize = 72;
 }
 
 /// Up to [`LaneBatch::LANES`] prepared vertices of one [`LaneKind`], as
@@ -832,9 +838,12 @@ impl<'a, F: Float> LaneRoughPlastic<'a, F> {
 /// its normal is the geometric one) and the outgoing direction in it.
 struct LaneHit<F> {
     p: V3<F>,
+    /// The geometric normal (where rays leave from).
     n: V3<F>,
+    /// The shading frame: `fs`, `ft` and its normal `sn`.
     fs: V3<F>,
     ft: V3<F>,
+    sn: V3<F>,
     wo: V3<F>,
 }
 
@@ -842,13 +851,13 @@ impl<F: Float> LaneHit<F> {
     /// A world direction in the shading frame (`Frame::to_local`).
     #[inline(always)]
     fn to_local(&self, w: V3<F>) -> V3<F> {
-        V3::new(w.dot(self.fs), w.dot(self.ft), w.dot(self.n))
+        V3::new(w.dot(self.fs), w.dot(self.ft), w.dot(self.sn))
     }
 
     /// A shading-frame direction in the world (`Frame::to_world`).
     #[inline(always)]
     fn to_world(&self, w: V3<F>) -> V3<F> {
-        self.fs * w.x + self.ft * w.y + self.n * w.z
+        self.fs * w.x + self.ft * w.y + self.sn * w.z
     }
 }
 
@@ -878,7 +887,8 @@ impl PathIntegrator {
             return None;
         }
         // The kind first, then the rows of its batch.
-        let material = scene.lane_material(hit.shape)?;
+        let surface = scene.lane_material(hit.shape)?;
+        let material = surface.material;
         let bsdf = match material {
             LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse => 0,
             LaneMaterial::RoughConductor { beckmann: false, .. } => 1,
@@ -900,10 +910,12 @@ impl PathIntegrator {
         let shape_kind = match shape {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let textured = matches!(material, LaneMaterial::TexturedDiffuse);
-                if textured && !m.mesh.uvs.is_empty() {
-                    3
-                } else {
-                    0
+                let smooth = !m.face_normals && !m.mesh.normals.is_empty();
+                match (textured && !m.mesh.uvs.is_empty(), smooth) {
+                    (false, false) => 0,
+                    (true, false) => 3,
+                    (false, true) => 5,
+                    (true, true) => 6,
                 }
             }
             Shape::Sphere(_) if material.anisotropic() => 4,
@@ -972,6 +984,7 @@ impl PathIntegrator {
         b.set(row::B, hit.uv.x);
         b.set(row::B + 1, hit.uv.y);
         b.set3(row::BETA, st.beta);
+        b.set(row::TWO_SIDED_BSDF, if surface.two_sided { 1.0 } else { 0.0 });
         match material {
             LaneMaterial::Diffuse(r) => b.set3(row::MAT, r),
             LaneMaterial::TexturedDiffuse => {}
@@ -1042,7 +1055,7 @@ impl PathIntegrator {
                     // The hit's uv as Shape::interaction_with finds it (barycentric without texture coordinates).
                     let (b1, b2) = (hit.uv.x, hit.uv.y);
                     let mut tex = Vec2::new(b1, b2);
-                    if shape_kind == 3 {
+                    if shape_kind == 3 || shape_kind == 6 {
                         let (u, t) = (&m.mesh.uvs, m.mesh.indices[hit.index as usize]);
                         let uvs = [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]];
                         for (k, uv) in uvs.iter().enumerate() {
@@ -1053,6 +1066,12 @@ impl PathIntegrator {
                         tex = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
                     }
                     b.set3(row::MAT, reflectance.eval(&SurfaceInteraction::at_uv(tex)));
+                }
+                if shape_kind >= 5 {
+                    let (ns, t) = (&m.mesh.normals, m.mesh.indices[hit.index as usize]);
+                    for (k, &i) in t.iter().enumerate() {
+                        b.set3(row::NS + 3 * k, ns[i as usize]);
+                    }
                 }
             }
             Shape::Sphere(s) => {
@@ -1155,6 +1174,9 @@ impl PathIntegrator {
             (1, 0 | 1 | 4..) => lit!(1),
             (2, 0 | 1 | 4..) => lit!(2),
             (3, 0 | 1 | 4..) => lit!(3),
+            (5, 0 | 1 | 4..) => lit!(5),
+            // Textured meshes have diffuse materials only.
+            (6, _) => lit_b!(6, 0),
             // Anisotropic rough conductors, dielectrics and plastics only.
             (_, 1 | 5..) => {
                 let micro = |b| match b {
@@ -1177,6 +1199,7 @@ impl PathIntegrator {
             (0, b) => specular::<F, 0>(b == 3, v, out),
             (1, b) => specular::<F, 1>(b == 3, v, out),
             (2, b) => specular::<F, 2>(b == 3, v, out),
+            (5, b) => specular::<F, 5>(b == 3, v, out),
             (_, b) => specular::<F, 3>(b == 3, v, out),
         }
     }
@@ -1372,14 +1395,14 @@ fn hit<F: Float, const S: u8>(v: &LaneBatch) -> LaneHit<F> {
     let (zero, one) = (F::splat(0.0), F::splat(1.0));
     let wo = -gv(row::D).normalize();
     let (p, n, dpdu) = match S {
-        0 | 3 => {
+        0 | 3 | 5 | 6 => {
             let (p0, p1, p2) = (gv(row::GEO), gv(row::GEO + 3), gv(row::GEO + 6));
             let (b1, b2) = (g(row::B), g(row::B + 1));
             let b0 = one - b1 - b2;
             let p = p0 * b0 + p1 * b1 + p2 * b2;
             let (dp0, dp1) = (p1 - p0, p2 - p0);
             let n = dp0.cross(dp1).normalize();
-            if S == 0 {
+            if S == 0 || S == 5 {
                 (p, n, dp0)
             } else {
                 // dp/du from the texture coordinates; Mitsuba's arbitrary
@@ -1418,15 +1441,30 @@ fn hit<F: Float, const S: u8>(v: &LaneBatch) -> LaneHit<F> {
             (transform_xy0(c, x, y, true), gv(row::GEO + 12), transform_xy0(c, x, y, false))
         }
     };
-    // The shading frame (frame_from_dpdu, the shading normal being n).
-    let s = dpdu - n * n.dot(dpdu);
+    // The shading normal: a smooth mesh's vertex normals interpolated
+    // where they do not cancel (Shape::interaction_with), else n.
+    let sn = if S >= 5 {
+        let (b1, b2) = (g(row::B), g(row::B + 1));
+        let b0 = one - b1 - b2;
+        let s = gv(row::NS) * b0 + gv(row::NS + 3) * b1 + gv(row::NS + 6) * b2;
+        V3::select(s.dot(s).cmp_gt(zero), s.normalize(), n)
+    } else {
+        n
+    };
+    // The shading frame (frame_from_dpdu).
+    let s = dpdu - sn * sn.dot(dpdu);
     let len2 = s.dot(s);
     let s = s / len2.sqrt();
-    let (fs, ft) = frame_from_normal(n);
+    let (fs, ft) = frame_from_normal(sn);
     let dpdu_ok = len2.cmp_gt(zero) & finite(len2);
-    let (fs, ft) = (V3::select(dpdu_ok, s, fs), V3::select(dpdu_ok, n.cross(s), ft));
-    let mut h = LaneHit { p, n, fs, ft, wo };
+    let (fs, ft) = (V3::select(dpdu_ok, s, fs), V3::select(dpdu_ok, sn.cross(s), ft));
+    let mut h = LaneHit { p, n, fs, ft, sn, wo };
     h.wo = h.to_local(wo);
+    // Seen from below, a two-sided material is shaded in the frame whose
+    // normal is negated (Material::bsdf): wo's z and the normal flip, exactly.
+    let below = v.mask::<F>(row::TWO_SIDED_BSDF) & h.wo.z.cmp_lt(zero);
+    h.sn = V3::select(below, -h.sn, h.sn);
+    h.wo.z = F::select(below, -h.wo.z, h.wo.z);
     h
 }
 
