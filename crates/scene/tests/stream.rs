@@ -282,10 +282,21 @@ fn smooth_and_two_sided_meshes_are_bitwise_the_scalar_vertex_in_lanes() {
         env.display()
     );
     let scene = dir.join("bowls.xml");
-    std::fs::write(&scene, xml).unwrap();
+    std::fs::write(&scene, &xml).unwrap();
     let (is_path, lane_vertices, rays) = check_counting(&scene, &[], 8);
-    std::fs::remove_dir_all(&dir).ok();
     eprintln!("{lane_vertices} of {rays} hits shaded in lanes");
     assert!(is_path);
     assert!(LANE_WIDTHS.len() == 1 || lane_vertices * 2 > rays, "{lane_vertices} of {rays} hits in lanes");
+    // Guided: the passes after training shade their vertices in lanes with
+    // the guide (its density mixed into every MIS weight, its directions
+    // drawn where picked), bitwise `vertex_guided`.
+    let plain = r#"<integrator type="path"><integer name="max_depth" value="6"/></integrator>"#;
+    let guided = r#"<integrator type="path"><integer name="max_depth" value="6"/><boolean name="guiding" value="true"/><float name="guiding_budget" value="0.25"/></integrator>"#;
+    assert!(xml.contains(plain));
+    let scene = dir.join("bowls_guided.xml");
+    std::fs::write(&scene, xml.replace(plain, guided)).unwrap();
+    let (_, lane_vertices, rays) = check_counting(&scene, &[], 16);
+    std::fs::remove_dir_all(&dir).ok();
+    eprintln!("guided: {lane_vertices} of {rays} hits shaded in lanes");
+    assert!(LANE_WIDTHS.len() == 1 || lane_vertices * 3 > rays, "guided: {lane_vertices} of {rays} hits in lanes");
 }

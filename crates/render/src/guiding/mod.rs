@@ -181,6 +181,17 @@ impl Guide {
         &self.leaves[self.leaf_index(p)].sampling
     }
 
+    /// The number of the spatial leaf holding `p`, for [`Self::leaf`]
+    /// (`at(p)` is `leaf(leaf_of(p))`).
+    pub fn leaf_of(&self, p: Vec3) -> u32 {
+        self.leaf_index(p) as u32
+    }
+
+    /// The directional density of leaf `i` ([`Self::leaf_of`]).
+    pub fn leaf(&self, i: u32) -> &DTree {
+        &self.leaves[i as usize].sampling
+    }
+
     /// Ends a pass: its `records` (in tile order, each tile's in sample
     /// order) become the guide of the next pass. Space is split where a
     /// leaf got many records, and each leaf's quadtree refined where its

@@ -186,7 +186,8 @@ impl RenderJob {
     /// As [`render_pass_masked`](Self::render_pass_masked), with path
     /// guiding: vertices are guided by `guide` once it is trained, and
     /// with `train` the pass's records (in tile order) update it afterwards.
-    /// Guided passes run one path at a time (the stream has no guide yet).
+    /// Training passes run one path at a time (records are gathered per
+    /// path); the guided passes after them run in the stream, lanes and all.
     pub fn render_pass_guided(
         &self,
         film: &mut Film,

@@ -115,9 +115,10 @@ fn run<F: Float>(
     // Escaping rays that see a lone envmap are evaluated in lanes.
     let sky = scene.single_envmap().filter(|_| F::WIDTH > 1);
     let mut sky_slots: Vec<usize> = Vec::with_capacity(POOL);
-    // Diffuse vertices run in lanes (see `PathIntegrator::lane_vertex`),
-    // which know no guide.
-    let vertex_lanes = F::WIDTH > 1 && guide.is_none();
+    // Vertices run in lanes where they can (see `PathIntegrator::lane_vertex`),
+    // guided by a trained guide as `vertex_guided` is.
+    let vertex_lanes = F::WIDTH > 1;
+    let lane_guide = guide.filter(|g| g.trained());
     let env = scene.single_envmap();
     let mut bins = LaneBins::default();
     let mut lane_out = LaneOutcomes::default();
@@ -227,7 +228,7 @@ fn run<F: Float>(
         macro_rules! run_batch {
             ($at:expr) => {{
                 let b = bins.batch($at);
-                path.lane_vertices::<F>(env.map(|e| e.1), scene.lane_tables(), b, &mut lane_out);
+                path.lane_vertices::<F>(env.map(|e| e.1), scene.lane_tables(), lane_guide, b, &mut lane_out);
                 tile.stats.rays.lane_vertices += b.len() as u64;
                 tile.stats.rays.vertex_lanes += if b.is_empty() { 0 } else { F::WIDTH as u64 };
                 for l in 0..b.len() {
@@ -250,7 +251,8 @@ fn run<F: Float>(
             }
             let slot = &mut slots[i];
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                if let Some(at) = path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng, i, &mut bins) {
+                if let Some(at) = path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng, i, &mut bins, lane_guide)
+                {
                     ended.push(false);
                     if bins.batch(at).len() == F::WIDTH {
                         run_batch!(at);

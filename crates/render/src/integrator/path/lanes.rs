@@ -35,7 +35,10 @@
 //! (`Microfacet`, Beckmann's Newton steps per lane), the
 //! rough conductor's and dielectric's values, densities and samples, and
 //! plastic's (`Plastic`, its lobe chosen per lane); the next ray
-//! (`Scene::spawn_ray`).
+//! (`Scene::spawn_ray`). With a trained path guide, the vertex is
+//! `vertex_guided`'s: the direction the guide or the BSDF draws
+//! (`sample_guided`), the mixed density in every MIS weight; the guide's
+//! quadtree is walked per lane.
 
 use super::{PathIntegrator, PathState};
 use crate::accel::Hit;
@@ -43,9 +46,10 @@ use crate::bsdf::microfacet::{beckmann_lambda_lanes, beckmann_slope_x_lanes, bec
 use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
+use crate::guiding::{Guide, GuideDensity};
 use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
-use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
+use crate::math::{Frame, Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::distrib1d::alias_pick;
 use crate::sampling::SampleStream;
 use crate::scene::{LaneLight, Scene};
@@ -138,8 +142,19 @@ mod row {
     pub const NS: usize = 62;
     /// 1 where the material is two-sided (every kind reads it).
     pub const TWO_SIDED_BSDF: usize = 71;
+    /// With a path guide (lit kinds only): the spatial leaf's number
+    /// ([`Guide::leaf_of`], exact below 2^24), the fold's normal (3 rows)
+    /// and 1 where the density is folded ([`GuideDensity::fold`]).
+    pub const GUIDE_LEAF: usize = 72;
+    pub const GUIDE_FOLD: usize = 73;
+    pub const GUIDE_FOLDED: usize = 76;
+    /// 1 where the next direction is the guide's (else the BSDF's, its
+    /// `U_BSDF1` rescaled), that direction (world, 3 rows) and its density.
+    pub const GUIDE_PICK: usize = 77;
+    pub const GUIDE_D: usize = 78;
+    pub const GUIDE_PDF: usize = 81;
     /// How many rows there are.
-    pub const COUNT: usize = 72;
+    pub const COUNT: usize = 82;
 }
 
 /// Up to [`LaneBatch::LANES`] prepared vertices of one [`LaneKind`], as
@@ -869,9 +884,12 @@ impl PathIntegrator {
     /// [`Scene::lane_light`] or `env`, the scene's one environment map
     /// ([`Scene::single_envmap`]). Its light and BSDF random numbers are
     /// drawn here, as `vertex` draws them; `slot` is the caller's number for
-    /// the path ([`LaneBatch::slot`]). Returns the batch's position
+    /// the path ([`LaneBatch::slot`]). With `guide` (a trained path guide)
+    /// the vertex is [`Self::vertex_guided`]'s: the guide's density at the
+    /// hit and, where it is picked, its direction are found here, its
+    /// density at other directions per lane in the kernel. Returns the batch's position
     /// ([`LaneBins::batch`]); `None`, with `rng` as it was, otherwise: run
-    /// [`Self::vertex`].
+    /// [`Self::vertex`] (or `vertex_guided`).
     #[allow(clippy::too_many_arguments)]
     pub fn lane_vertex(
         &self,
@@ -882,6 +900,7 @@ impl PathIntegrator {
         rng: &mut SampleStream,
         slot: usize,
         bins: &mut LaneBins,
+        guide: Option<&Guide>,
     ) -> Option<usize> {
         if hit.instance != Hit::NOT_INSTANCED || st.depth + 1 >= self.term.max_depth {
             return None;
@@ -1123,10 +1142,45 @@ impl PathIntegrator {
                 Picked::None => unreachable!("a lit vertex has its light"),
             }
         }
-        b.set(row::U_BSDF1, rng.next_1d());
+        let u1 = rng.next_1d();
         let u = rng.next_2d();
         b.set(row::U_BSDF, u.x);
         b.set(row::U_BSDF + 1, u.y);
+        match guide.filter(|_| lit) {
+            None => b.set(row::U_BSDF1, u1),
+            Some(g) => {
+                // The guide's density as `vertex_guided` finds it: at the
+                // hit's point, folded onto wo's side where the BSDF only
+                // reflects, in the frame `Material::bsdf` leaves (a
+                // two-sided material's flipped below its normal).
+                let mut si = scene.interaction(&st.ray, hit);
+                if surface.two_sided && si.to_local(si.wo).z < 0.0 {
+                    let f = si.sh_frame;
+                    si.sh_frame = Frame { s: f.s, t: f.t, n: -f.n };
+                }
+                let wo = si.to_local(si.wo);
+                let reflects_only = !matches!(material, LaneMaterial::RoughDielectric { .. });
+                let side = Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 });
+                let leaf = g.leaf_of(si.p);
+                let density = GuideDensity { tree: g.leaf(leaf), fold: reflects_only.then(|| si.to_world(side)) };
+                b.set(row::GUIDE_LEAF, leaf as f32);
+                b.set3(row::GUIDE_FOLD, density.fold.unwrap_or(Vec3::ZERO));
+                b.set(row::GUIDE_FOLDED, if reflects_only { 1.0 } else { 0.0 });
+                // `sample_guided`: the BSDF's direction with probability α
+                // (its number rescaled), else the guide's.
+                let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
+                if u1 < alpha {
+                    b.set(row::U_BSDF1, u1 / alpha);
+                    b.set(row::GUIDE_PICK, 0.0);
+                } else {
+                    let (d, pdf) = density.sample(u);
+                    b.set(row::U_BSDF1, u1);
+                    b.set(row::GUIDE_PICK, 1.0);
+                    b.set3(row::GUIDE_D, d);
+                    b.set(row::GUIDE_PDF, pdf);
+                }
+            }
+        }
         let l = b.lane();
         b.slots[l] = slot as u32;
         b.len += 1;
@@ -1140,6 +1194,7 @@ impl PathIntegrator {
         &self,
         env: Option<&EnvMapLight>,
         tables: &[[f32; TRANSMITTANCE_RES]],
+        guide: Option<&Guide>,
         b: &mut LaneBatch,
         out: &mut LaneOutcomes,
     ) {
@@ -1152,9 +1207,9 @@ impl PathIntegrator {
         macro_rules! lit_b {
             ($s:literal, $b:literal) => {
                 match k.light {
-                    0 => self.lit::<F, $s, 0, $b>(None, tables, v, out),
-                    1 => self.lit::<F, $s, 1, $b>(env, tables, v, out),
-                    _ => self.lit::<F, $s, 2, $b>(None, tables, v, out),
+                    0 => self.lit::<F, $s, 0, $b>(None, tables, guide, v, out),
+                    1 => self.lit::<F, $s, 1, $b>(env, tables, guide, v, out),
+                    _ => self.lit::<F, $s, 2, $b>(None, tables, guide, v, out),
                 }
             };
         }
@@ -1185,15 +1240,15 @@ impl PathIntegrator {
                     _ => 3,
                 };
                 match (k.light, micro(k.bsdf)) {
-                    (0, 1) => self.lit::<F, 4, 0, 1>(None, tables, v, out),
-                    (1, 1) => self.lit::<F, 4, 1, 1>(env, tables, v, out),
-                    (_, 1) => self.lit::<F, 4, 2, 1>(None, tables, v, out),
-                    (0, 4) => self.lit::<F, 4, 0, 4>(None, tables, v, out),
-                    (1, 4) => self.lit::<F, 4, 1, 4>(env, tables, v, out),
-                    (_, 4) => self.lit::<F, 4, 2, 4>(None, tables, v, out),
-                    (0, _) => self.lit::<F, 4, 0, 3>(None, tables, v, out),
-                    (1, _) => self.lit::<F, 4, 1, 3>(env, tables, v, out),
-                    (_, _) => self.lit::<F, 4, 2, 3>(None, tables, v, out),
+                    (0, 1) => self.lit::<F, 4, 0, 1>(None, tables, guide, v, out),
+                    (1, 1) => self.lit::<F, 4, 1, 1>(env, tables, guide, v, out),
+                    (_, 1) => self.lit::<F, 4, 2, 1>(None, tables, guide, v, out),
+                    (0, 4) => self.lit::<F, 4, 0, 4>(None, tables, guide, v, out),
+                    (1, 4) => self.lit::<F, 4, 1, 4>(env, tables, guide, v, out),
+                    (_, 4) => self.lit::<F, 4, 2, 4>(None, tables, guide, v, out),
+                    (0, _) => self.lit::<F, 4, 0, 3>(None, tables, guide, v, out),
+                    (1, _) => self.lit::<F, 4, 1, 3>(env, tables, guide, v, out),
+                    (_, _) => self.lit::<F, 4, 2, 3>(None, tables, guide, v, out),
                 }
             }
             (0, b) => specular::<F, 0>(b == 3, v, out),
@@ -1214,6 +1269,7 @@ impl PathIntegrator {
         &self,
         env: Option<&EnvMapLight>,
         tables: &[[f32; TRANSMITTANCE_RES]],
+        guide: Option<&Guide>,
         v: &LaneBatch,
         out: &mut LaneOutcomes,
     ) {
@@ -1264,32 +1320,55 @@ impl PathIntegrator {
         });
         // The BSDF's value and density (Bsdf::eval_pdf), MIS-weighted.
         let wi_l = h.to_local(wi);
-        let (f, bsdf_pdf) = if B == 0 {
-            let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
-            let f = V3::select(front, gv(row::MAT) * F::splat(INV_PI), V3::splat(Vec3::ZERO));
-            (f, F::select(front, wi_l.z.max(zero) * F::splat(INV_PI), zero))
-        } else if B == 2 {
-            // Plastic::eval and Plastic::pdf.
-            let eta = g(row::PARAM);
-            let front = !h.wo.z.cmp_le(zero) & !wi_l.z.cmp_le(zero);
-            let f_i = fresnel_dielectric(h.wo.z, eta).0;
-            let f_o = fresnel_dielectric(wi_l.z, eta).0;
-            let f = gv(row::MAT) * (F::splat(INV_PI) / (eta * eta) * (one - f_i) * (one - f_o));
-            let pdf =
-                (one - plastic_specular_probability(f_i, g(row::MAT + 6))) * (wi_l.z.max(zero) * F::splat(INV_PI));
-            (V3::select(front, f, V3::splat(Vec3::ZERO)), F::select(front, pdf, zero))
-        } else if B == 3 {
-            let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
-            micro.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
-        } else if let Some((rp, t_o)) = &plastic {
-            rp.eval_pdf(h.wo, wi_l, *t_o)
-        } else {
-            let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
-            let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
-            micro.eval_pdf(h.wo, wi_l, eta, k, spec)
+        let eval_pdf = |wi_l: V3<F>| {
+            if B == 0 {
+                let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
+                let f = V3::select(front, gv(row::MAT) * F::splat(INV_PI), V3::splat(Vec3::ZERO));
+                (f, F::select(front, wi_l.z.max(zero) * F::splat(INV_PI), zero))
+            } else if B == 2 {
+                // Plastic::eval and Plastic::pdf.
+                let eta = g(row::PARAM);
+                let front = !h.wo.z.cmp_le(zero) & !wi_l.z.cmp_le(zero);
+                let f_i = fresnel_dielectric(h.wo.z, eta).0;
+                let f_o = fresnel_dielectric(wi_l.z, eta).0;
+                let f = gv(row::MAT) * (F::splat(INV_PI) / (eta * eta) * (one - f_i) * (one - f_o));
+                let pdf =
+                    (one - plastic_specular_probability(f_i, g(row::MAT + 6))) * (wi_l.z.max(zero) * F::splat(INV_PI));
+                (V3::select(front, f, V3::splat(Vec3::ZERO)), F::select(front, pdf, zero))
+            } else if B == 3 {
+                let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
+                micro.dielectric_eval_pdf(h.wo, wi_l, g(row::MAT + 6), gv(row::MAT), gv(row::MAT + 3))
+            } else if let Some((rp, t_o)) = &plastic {
+                rp.eval_pdf(h.wo, wi_l, *t_o)
+            } else {
+                let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
+                let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
+                micro.eval_pdf(h.wo, wi_l, eta, k, spec)
+            }
         };
+        let (f, bsdf_pdf) = eval_pdf(wi_l);
         let f = f * wi_l.z.abs();
         let contributes = sampled & f.ne_zero();
+        // With a guide, the density of the direction is the mix of the
+        // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
+        // per lane, where the sample contributes.
+        let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
+        let guide_pdf = |g: &Guide, d: V3<F>, need: u32| {
+            let d = d.to_lanes();
+            simd::gather::<F>(|l| {
+                if need >> l & 1 == 0 {
+                    return 0.0;
+                }
+                let at = |r: usize| v.rows[r][l];
+                let fold = Vec3::new(at(row::GUIDE_FOLD), at(row::GUIDE_FOLD + 1), at(row::GUIDE_FOLD + 2));
+                let folded = at(row::GUIDE_FOLDED) == 1.0;
+                GuideDensity { tree: g.leaf(at(row::GUIDE_LEAF) as u32), fold: folded.then_some(fold) }.pdf(d[l])
+            })
+        };
+        let bsdf_pdf = match guide {
+            Some(gd) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(gd, wi, contributes.bitmask()),
+            None => bsdf_pdf,
+        };
         let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
         let pending = gv(row::BETA).mul_elem(f).mul_elem(li) * (w / light_pdf);
         // Its shadow ray (Scene::shadow_ray).
@@ -1340,6 +1419,31 @@ impl PathIntegrator {
             let micro = Micro::new(g(row::PARAM), g(row::PARAM_V), v.kind.beckmann());
             let (eta, k, spec) = (gv(row::MAT), gv(row::MAT + 3), gv(row::MAT + 6));
             micro.sample(h.wo, u0, u1, eta, k, spec)
+        };
+        // With a guide (`sample_guided`): the guide's direction where it was
+        // picked; either way (a specular lobe aside) the value and the mixed
+        // density at the direction, and a failed sample ends the path.
+        let (wi_next, bsdf_pdf, weight, go, delta, eta_next) = match guide {
+            None => (wi_next, bsdf_pdf, weight, go, delta, eta_next),
+            Some(gd) => {
+                let pick = v.mask::<F>(row::GUIDE_PICK);
+                let specular = !pick & delta;
+                let wi = V3::select(pick, h.to_local(gv(row::GUIDE_D)), wi_next);
+                let (f, pdf_bsdf) = eval_pdf(wi);
+                let need = (!pick & !delta & go).bitmask();
+                let pdf_guide = F::select(pick, g(row::GUIDE_PDF), guide_pdf(gd, h.to_world(wi_next), need));
+                let pdf = F::splat(alpha) * pdf_bsdf + F::splat(1.0 - alpha) * pdf_guide;
+                let f = f * wi.z.abs();
+                let ok = !(pdf.cmp_ne(pdf) | pdf.cmp_le(zero)) & f.ne_zero();
+                (
+                    V3::select(specular, wi_next, wi),
+                    F::select(specular, bsdf_pdf * F::splat(alpha), pdf),
+                    V3::select(specular, weight / F::splat(alpha), f / pdf),
+                    (pick & ok) | (!pick & go & (delta | ok)),
+                    specular,
+                    F::select(pick, one, eta_next),
+                )
+            }
         };
         let wi_next = h.to_world(wi_next);
         out.shadow = contributes.bitmask();
