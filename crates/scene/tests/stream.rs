@@ -74,6 +74,32 @@ fn check_counting(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool
     (is_path, lane_vertices, rays)
 }
 
+/// The lane tests' scene around `body`: `path` (max_depth 6), a 48x32
+/// camera of fov `camera.0` at `camera.1` looking at `camera.2`, 8 spp, the
+/// environment map `env` at half strength and a down-facing rectangle light
+/// translated by `light` (attributes of `translate`).
+fn lit_scene(env: &Path, camera: (&str, &str, &str), light: &str, body: &str) -> String {
+    let (fov, origin, target) = camera;
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="6"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="{fov}"/>
+        <transform name="to_world"><lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/></film>
+    </sensor>
+    <emitter type="envmap"><string name="filename" value="{}"/><float name="scale" value="0.5"/></emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate {light}/></transform>
+        <emitter type="area"><rgb name="radiance" value="6, 6, 5"/></emitter>
+    </shape>
+    {body}
+</scene>"#,
+        env.display()
+    )
+}
+
 #[test]
 fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
     let mut scenes: Vec<_> = std::fs::read_dir(root().join("tests/scenes"))
@@ -149,21 +175,12 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
 "#
         );
     }
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="path"><integer name="max_depth" value="6"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="50"/>
-        <transform name="to_world"><lookat origin="0, 1.6, 4.5" target="0, 0.5, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/></film>
-    </sensor>
-    <emitter type="envmap"><string name="filename" value="{}"/><float name="scale" value="0.5"/></emitter>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="2.5"/></transform>
-        <emitter type="area"><rgb name="radiance" value="6, 6, 5"/></emitter>
-    </shape>
-    <shape type="sphere">
+    let xml = lit_scene(
+        &env,
+        ("50", "0, 1.6, 4.5", "0, 0.5, 0"),
+        r#"y="2.5""#,
+        &format!(
+            r#"<shape type="sphere">
         <point name="center" x="1.5" y="2.2" z="1"/><float name="radius" value="0.2"/>
         <emitter type="area"><rgb name="radiance" value="9, 7, 5"/></emitter>
     </shape>
@@ -180,9 +197,8 @@ fn every_lane_vertex_kind_is_bitwise_the_scalar_vertex() {
             </texture>
         </bsdf>
     </shape>
-    {shapes}
-</scene>"#,
-        env.display()
+    {shapes}"#
+        ),
     );
     let dir = std::env::temp_dir().join(format!("penumbra-lane-kinds-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -259,27 +275,17 @@ fn smooth_and_two_sided_meshes_are_bitwise_the_scalar_vertex_in_lanes() {
 "#
         );
     }
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="path"><integer name="max_depth" value="6"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="45"/>
-        <transform name="to_world"><lookat origin="0, 0.3, 4" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="32"/></film>
-    </sensor>
-    <emitter type="envmap"><string name="filename" value="{}"/><float name="scale" value="0.5"/></emitter>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="2.5" z="1"/></transform>
-        <emitter type="area"><rgb name="radiance" value="6, 6, 5"/></emitter>
-    </shape>
-    <shape type="rectangle">
+    let xml = lit_scene(
+        &env,
+        ("45", "0, 0.3, 4", "0, 0.3, 0"),
+        r#"y="2.5" z="1""#,
+        &format!(
+            r#"<shape type="rectangle">
         <transform name="to_world"><scale value="5"/><translate z="-1"/></transform>
         <bsdf type="diffuse"/>
     </shape>
-    {shapes}
-</scene>"#,
-        env.display()
+    {shapes}"#
+        ),
     );
     let scene = dir.join("bowls.xml");
     std::fs::write(&scene, &xml).unwrap();

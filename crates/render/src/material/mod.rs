@@ -119,6 +119,18 @@ pub enum Material {
     },
 }
 
+/// Mitsuba's `twosided`: seen from below, the back material is shaded in a
+/// frame whose normal is negated (local z ↦ −z). Flips `si.sh_frame` so and
+/// returns true where wo is below it.
+pub fn two_sided_frame(si: &mut SurfaceInteraction) -> bool {
+    let below = si.to_local(si.wo).z < 0.0;
+    if below {
+        let f = si.sh_frame;
+        si.sh_frame = Frame { s: f.s, t: f.t, n: -f.n };
+    }
+    below
+}
+
 /// Replaces `si.sh_frame` by the perturbed frame `rel` (given relative to
 /// it) and returns the terms Mitsuba's normal/bump-map wrappers add; `None`
 /// (frame unchanged) for a degenerate frame.
@@ -244,6 +256,12 @@ fn constant_alphas(r: &crate::bsdf::microfacet::Roughness) -> Option<(f32, f32)>
 }
 
 impl LaneMaterial {
+    /// Whether no lobe transmits (as [`crate::bsdf::Bsdf::reflects_only`]
+    /// of its BSDF): all but the dielectrics.
+    pub fn reflects_only(&self) -> bool {
+        !matches!(self, LaneMaterial::Dielectric { .. } | LaneMaterial::RoughDielectric { .. })
+    }
+
     /// Whether its roughness differs along u and v: its frame must follow
     /// the surface's uv parameterisation.
     pub fn anisotropic(&self) -> bool {
@@ -268,15 +286,7 @@ impl Material {
         loop {
             let kind = match m {
                 Material::TwoSided(front, back) => {
-                    // Mitsuba's twosided: seen from below, the back material in
-                    // a frame whose normal is negated (local z ↦ −z).
-                    if si.to_local(si.wo).z < 0.0 {
-                        let f = si.sh_frame;
-                        si.sh_frame = Frame { s: f.s, t: f.t, n: -f.n };
-                        m = back;
-                    } else {
-                        m = front;
-                    }
+                    m = if two_sided_frame(si) { back } else { front };
                     continue;
                 }
                 Material::Mask { opacity: o, inner } => {

@@ -48,8 +48,8 @@ use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::guiding::{Guide, GuideDensity};
 use crate::light::{EnvMapLight, LightSelection};
-use crate::material::{LaneMaterial, Material};
-use crate::math::{Frame, Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
+use crate::material::{two_sided_frame, LaneMaterial, Material};
+use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::distrib1d::alias_pick;
 use crate::sampling::SampleStream;
 use crate::scene::{LaneLight, Scene};
@@ -143,18 +143,17 @@ mod row {
     /// 1 where the material is two-sided (every kind reads it).
     pub const TWO_SIDED_BSDF: usize = 71;
     /// With a path guide (lit kinds only): the spatial leaf's number
-    /// ([`Guide::leaf_of`], exact below 2^24), the fold's normal (3 rows)
-    /// and 1 where the density is folded ([`GuideDensity::fold`]).
+    /// ([`Guide::leaf_of`], exact below 2^24) and the fold's unit normal
+    /// (3 rows; zero where the density is not folded, [`GuideDensity::fold`]).
     pub const GUIDE_LEAF: usize = 72;
     pub const GUIDE_FOLD: usize = 73;
-    pub const GUIDE_FOLDED: usize = 76;
     /// 1 where the next direction is the guide's (else the BSDF's, its
     /// `U_BSDF1` rescaled), that direction (world, 3 rows) and its density.
-    pub const GUIDE_PICK: usize = 77;
-    pub const GUIDE_D: usize = 78;
-    pub const GUIDE_PDF: usize = 81;
+    pub const GUIDE_PICK: usize = 76;
+    pub const GUIDE_D: usize = 77;
+    pub const GUIDE_PDF: usize = 80;
     /// How many rows there are.
-    pub const COUNT: usize = 82;
+    pub const COUNT: usize = 81;
 }
 
 /// Up to [`LaneBatch::LANES`] prepared vertices of one [`LaneKind`], as
@@ -1154,21 +1153,19 @@ impl PathIntegrator {
                 // reflects, in the frame `Material::bsdf` leaves (a
                 // two-sided material's flipped below its normal).
                 let mut si = scene.interaction(&st.ray, hit);
-                if surface.two_sided && si.to_local(si.wo).z < 0.0 {
-                    let f = si.sh_frame;
-                    si.sh_frame = Frame { s: f.s, t: f.t, n: -f.n };
+                if surface.two_sided {
+                    two_sided_frame(&mut si);
                 }
                 let wo = si.to_local(si.wo);
-                let reflects_only = !matches!(material, LaneMaterial::RoughDielectric { .. });
+                let reflects_only = material.reflects_only();
                 let side = Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 });
                 let leaf = g.leaf_of(si.p);
                 let density = GuideDensity { tree: g.leaf(leaf), fold: reflects_only.then(|| si.to_world(side)) };
                 b.set(row::GUIDE_LEAF, leaf as f32);
                 b.set3(row::GUIDE_FOLD, density.fold.unwrap_or(Vec3::ZERO));
-                b.set(row::GUIDE_FOLDED, if reflects_only { 1.0 } else { 0.0 });
                 // `sample_guided`: the BSDF's direction with probability α
                 // (its number rescaled), else the guide's.
-                let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
+                let alpha = self.guide_bsdf_fraction();
                 if u1 < alpha {
                     b.set(row::U_BSDF1, u1 / alpha);
                     b.set(row::GUIDE_PICK, 0.0);
@@ -1352,7 +1349,7 @@ impl PathIntegrator {
         // With a guide, the density of the direction is the mix of the
         // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
         // per lane, where the sample contributes.
-        let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
+        let alpha = self.guide_bsdf_fraction();
         let guide_pdf = |g: &Guide, d: V3<F>, need: u32| {
             let d = d.to_lanes();
             simd::gather::<F>(|l| {
@@ -1361,7 +1358,7 @@ impl PathIntegrator {
                 }
                 let at = |r: usize| v.rows[r][l];
                 let fold = Vec3::new(at(row::GUIDE_FOLD), at(row::GUIDE_FOLD + 1), at(row::GUIDE_FOLD + 2));
-                let folded = at(row::GUIDE_FOLDED) == 1.0;
+                let folded = fold != Vec3::ZERO;
                 GuideDensity { tree: g.leaf(at(row::GUIDE_LEAF) as u32), fold: folded.then_some(fold) }.pdf(d[l])
             })
         };

@@ -318,7 +318,7 @@ impl PathIntegrator {
         let bsdf = scene.bsdf(&mut si, scratch);
         let wo = si.to_local(si.wo);
         // The guide's density here, where a lobe is not delta.
-        let alpha = self.guiding.map_or(1.0, |g| g.bsdf_fraction);
+        let alpha = self.guide_bsdf_fraction();
         let guide = guide.filter(|g| g.trained() && bsdf.has_smooth()).map(|g| GuideDensity {
             tree: g.at(si.p),
             fold: bsdf.reflects_only().then(|| si.to_world(Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 }))),
@@ -399,6 +399,13 @@ impl PathIntegrator {
             return None;
         }
         Some(BsdfSample { wi, pdf, weight: f / pdf, delta: false, null: false, eta })
+    }
+
+    /// α: at a guided vertex, the probability of drawing from the BSDF
+    /// rather than the guide (1 without guiding).
+    #[inline]
+    fn guide_bsdf_fraction(&self) -> f32 {
+        self.guiding.map_or(1.0, |g| g.bsdf_fraction)
     }
 
     /// Russian roulette after a bounce: whether the path goes on (its
