@@ -89,6 +89,14 @@ fn write_notes(notes: &[String], out: &mut String) -> Result<()> {
     Ok(())
 }
 
+/// The `path` integrator's sampling parameters (`None` for the others).
+pub fn path_summary(job: &penumbra_render::render::RenderJob) -> Option<String> {
+    match &job.integrator {
+        penumbra_render::integrator::Integrator::Path(p) => Some(p.summary(job.scene.light_sampler().kind())),
+        _ => None,
+    }
+}
+
 /// Geometry, emitters and image of a built scene.
 fn describe_job(job: &penumbra_render::render::RenderJob, out: &mut String) -> Result<()> {
     let (mut triangles, mut meshes, mut analytic) = (0usize, 0usize, BTreeMap::<&str, usize>::new());
@@ -119,6 +127,9 @@ fn describe_job(job: &penumbra_render::render::RenderJob, out: &mut String) -> R
     }
     let by_kind: Vec<String> = lights.iter().map(|(k, n)| format!("{n} {k}")).collect();
     writeln!(out, "emitters: {} ({})", job.scene.lights.len(), by_kind.join(", "))?;
+    if let Some(s) = path_summary(job) {
+        writeln!(out, "path: {s}")?;
+    }
     let (w, h) = job.full_size;
     let crop = if (job.width, job.height) != (w, h) {
         format!(", crop {}x{} at ({}, {})", job.width, job.height, job.crop_offset.0, job.crop_offset.1)

@@ -258,6 +258,9 @@ impl Plan<'_> {
         put("settings", s.to_text());
         put("part", self.part.map_or("whole".into(), |p| p.to_string()));
         put("crop", s.get("crop").unwrap_or("full").to_string());
+        if let Some(p) = crate::info::path_summary(job) {
+            put("path", p);
+        }
         if let Some(e) = state.film.rel_error() {
             put("relErrorEstimate", format!("{e:.6e}"));
         }

@@ -218,3 +218,40 @@ fn guided_white_furnace_renders_one() {
 fn guided_emitting_sphere_radiance_is_le_over_one_minus_rho() {
     emitting_sphere_is_le_over_one_minus_rho(guided);
 }
+
+/// Resampled light selection reweights which light sample is traced, never
+/// the expectation: the furnaces above with 4 candidates a vertex (in the
+/// white furnace, drawn uniformly from the environment and resampled by
+/// f cos θ; inside the sphere, points of the emitter itself), and with a
+/// guide as well.
+fn resampled(mut j: RenderJob) -> RenderJob {
+    if let Integrator::Path(p) = &mut j.integrator {
+        p.light_candidates = 4;
+    }
+    j
+}
+
+#[test]
+fn resampled_white_furnace_renders_one() {
+    let spp = 256;
+    for (name, j) in [
+        (
+            "resampled",
+            resampled(job(white_sphere_in_constant_env(1.0), Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, spp)),
+        ),
+        (
+            "resampled and guided",
+            resampled(guided(job(white_sphere_in_constant_env(1.0), Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 40.0, spp))),
+        ),
+    ] {
+        let (_, mean, se) = mean_and_error(&j, spp);
+        assert!((mean - 1.0).abs() < 4.0 * se + 1e-4, "{name}: mean {mean} ± {se}");
+        assert!((mean - 1.0).abs() < 0.005, "{name}: mean {mean}");
+    }
+}
+
+#[test]
+fn resampled_emitting_sphere_radiance_is_le_over_one_minus_rho() {
+    emitting_sphere_is_le_over_one_minus_rho(resampled);
+    emitting_sphere_is_le_over_one_minus_rho(|j| resampled(guided(j)));
+}

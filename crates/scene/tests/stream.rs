@@ -27,7 +27,18 @@ fn check(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64) {
 
 /// [`check`], also returning the closest-hit rays those packets traced.
 fn check_counting(scene: &Path, defines: &[(String, String)], spp: u32) -> (bool, u64, u64) {
-    let ov = Overrides { spp: Some(spp), ..Default::default() };
+    check_integrator(scene, defines, spp, None)
+}
+
+/// [`check_counting`] with the scene's integrator replaced by `integrator`
+/// (as `--integrator`).
+fn check_integrator(
+    scene: &Path,
+    defines: &[(String, String)],
+    spp: u32,
+    integrator: Option<&str>,
+) -> (bool, u64, u64) {
+    let ov = Overrides { spp: Some(spp), integrator: integrator.map(str::to_string), ..Default::default() };
     let mut job = load_scene(scene, defines, &ov).unwrap_or_else(|e| panic!("{e}"));
     let layers = FilmLayers { aovs: AovKind::ALL.to_vec(), variance: true, ..Default::default() };
     let name = scene.file_name().unwrap().to_string_lossy();
@@ -129,6 +140,22 @@ fn stream_is_bitwise_the_scalar_loop_on_every_test_scene() {
     assert!(path_scenes >= 10);
     // Diffuse vertices (the Cornell boxes') run in lanes where packets are wider than 1.
     assert!(LANE_WIDTHS.len() == 1 || lane_scenes >= 3, "{lane_scenes} scenes had lane vertices");
+}
+
+/// Resampled light selection runs the scalar vertex inside the stream
+/// (lanes keep the specular vertices): bitwise the one-path loop, with
+/// each light selection and with a guide.
+#[test]
+fn resampled_light_selection_is_bitwise_the_scalar_loop() {
+    let scenes = root().join("tests/scenes");
+    for (scene, integrator) in [
+        ("many_lights.xml", "path:max_depth=4,light_candidates=4"),
+        ("many_lights.xml", "path:max_depth=4,light_candidates=3,light_selection=bvh,guiding=true"),
+        ("glass_caustic.xml", "path:max_depth=8,light_candidates=2,light_selection=power"),
+        ("point_light.xml", "path:max_depth=4,light_candidates=5"),
+    ] {
+        check_integrator(&scenes.join(scene), &[], 8, Some(integrator));
+    }
 }
 
 /// Every kind of lane vertex at once: spheres, rectangles (meshes) and

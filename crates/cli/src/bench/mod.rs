@@ -259,11 +259,14 @@ fn time_process(scene: &Path, defines: &[(String, String)], spp: u32, threads: u
 fn light_selection_table(pool: &rayon::ThreadPool) -> Result<()> {
     let reference = penumbra_scene::image_io::read_exr(Path::new(SELECTION_REF)).map_err(|e| anyhow!(e))?;
     println!("\nlight selection on {SELECTION_SCENE} (64x64, vs {SELECTION_REF}):");
-    println!("{:<10} {:>6} {:>9} {:>12} {:>16}", "strategy", "spp", "time s", "relMSE", "relMSE x time");
-    for strategy in ["uniform", "power", "bvh"] {
+    println!(
+        "{:<10} {:>10} {:>6} {:>9} {:>12} {:>16}",
+        "strategy", "candidates", "spp", "time s", "relMSE", "relMSE x time"
+    );
+    for (strategy, candidates) in ["uniform", "power", "bvh"].into_iter().flat_map(|s| [(s, 1), (s, 4), (s, 8)]) {
         let ov = Overrides {
             spp: Some(SELECTION_SPP),
-            integrator: Some(format!("path:light_selection={strategy}")),
+            integrator: Some(format!("path:light_selection={strategy},light_candidates={candidates}")),
             ..Default::default()
         };
         let job = match penumbra_scene::load_scene(Path::new(SELECTION_SCENE), &[], &ov) {
@@ -277,7 +280,11 @@ fn light_selection_table(pool: &rayon::ThreadPool) -> Result<()> {
         let img = penumbra_scene::image_io::RgbImage { width: job.width, height: job.height, pixels: film.develop() };
         let rel = crate::imgtool::diff(&img, &reference)?.rel_mse;
         let secs = elapsed.as_secs_f64();
-        println!("{strategy:<10} {:>6} {secs:>9.3} {rel:>12.4e} {:>16.4e}", job.sampler.spp, rel * secs);
+        println!(
+            "{strategy:<10} {candidates:>10} {:>6} {secs:>9.3} {rel:>12.4e} {:>16.4e}",
+            job.sampler.spp,
+            rel * secs
+        );
     }
     Ok(())
 }

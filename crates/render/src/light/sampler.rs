@@ -22,6 +22,17 @@ pub enum LightSelection {
     Bvh,
 }
 
+impl LightSelection {
+    /// Its name as the `light_selection` parameter spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSelection::Uniform => "uniform",
+            LightSelection::Power => "power",
+            LightSelection::Bvh => "bvh",
+        }
+    }
+}
+
 /// A [`LightSelection`] with the tables it needs, built for one scene's lights.
 #[derive(Debug, Clone)]
 pub enum LightSampler {

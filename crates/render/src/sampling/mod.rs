@@ -9,6 +9,7 @@ pub mod distrib1d;
 pub mod distrib2d;
 pub mod marginal2d;
 pub mod mis;
+pub mod reservoir;
 pub mod rng;
 pub mod sampler;
 pub mod sequences;

@@ -6,7 +6,7 @@ use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
     AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, Guiding, HemisphereSampling,
-    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator,
+    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator, MAX_LIGHT_CANDIDATES,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -172,9 +172,24 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
             hide_emitters: node.bool("hide_emitters", false)?,
             mis: node.bool("mis", true)?,
             guiding: guiding(node)?,
+            light_candidates: light_candidates(node)?,
         }),
         light_selection(node)?,
     ))
+}
+
+/// `light_candidates`: 1 to [`MAX_LIGHT_CANDIDATES`] (see `integrator::path`).
+fn light_candidates(node: &Node) -> Result<u32> {
+    let m = node.int("light_candidates", 1)?;
+    if !(1..=MAX_LIGHT_CANDIDATES as i64).contains(&m) {
+        return Err(LoadError::at(
+            node.loc_of("light_candidates"),
+            format!(
+                "light_candidates must be from 1 (the light sample as drawn) to {MAX_LIGHT_CANDIDATES}: each candidate costs a light sample and a BSDF evaluation"
+            ),
+        ));
+    }
+    Ok(m as u32)
 }
 
 /// `guiding`, `guiding_budget` and `guiding_bsdf_fraction` (see `integrator::path`).

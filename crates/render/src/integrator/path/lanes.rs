@@ -920,8 +920,9 @@ impl PathIntegrator {
             LaneMaterial::RoughPlastic { beckmann: true, .. } => 9,
         };
         let lit = bsdf != 2 && bsdf != 3;
-        // The light BVH's choice depends on the point, found in lanes.
-        if lit && scene.light_sampler().kind() == LightSelection::Bvh {
+        // The light BVH's choice depends on the point, found in lanes;
+        // resampling evaluates the BSDF per candidate.
+        if lit && (scene.light_sampler().kind() == LightSelection::Bvh || self.light_candidates > 1) {
             return None;
         }
         let shape = &scene.shapes[hit.shape as usize];

@@ -13,6 +13,7 @@
 //! | guiding       | boolean | false: path guiding ([`crate::guiding`]), learnt in the first passes |
 //! | guiding_budget | float  | 0.25: the share of the samples (under `--time`, of the time) whose passes train the guide (their samples are kept) |
 //! | guiding_bsdf_fraction | float | 0.5: at a guided vertex, the probability of drawing from the BSDF rather than the guide |
+//! | light_candidates | integer | 1: light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below); 1 to 64 |
 //!
 //! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
 //! draws its direction from the BSDF with probability α
@@ -23,6 +24,13 @@
 //! replaces the BSDF's in both MIS weights against light sampling, so
 //! every estimate stays unbiased: the mixture is positive wherever the
 //! BSDF's density is. A delta lobe drawn by the BSDF keeps its weight over α.
+//!
+//! **Resampled light selection.** With `light_candidates` M > 1, a vertex
+//! draws M light samples as it would draw one, picks one with probability
+//! proportional to its unshadowed contribution over its density, and traces
+//! only that one's shadow ray (resampled importance sampling, Talbot et al.
+//! 2005). Its MIS weights keep one candidate's density, as emitters hit by
+//! BSDF samples do. These vertices run the scalar code (in the stream too).
 
 mod lanes;
 
@@ -32,9 +40,11 @@ use super::{RayStats, Termination};
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::geometry::{Ray, SurfaceInteraction};
 use crate::guiding::{Guide, GuideDensity, GuideRecord};
+use crate::light::{LightSample, LightSelection};
 use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::mis::power_heuristic;
+use crate::sampling::reservoir::Reservoir;
 use crate::sampling::SampleStream;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -54,7 +64,13 @@ pub struct PathIntegrator {
     /// (`None`: off). The guide itself is the render's state, passed to
     /// [`Self::li_guided`] pass by pass.
     pub guiding: Option<Guiding>,
+    /// How many light samples a vertex draws to resample one from
+    /// (see the module notes); 1: the light sample as drawn.
+    pub light_candidates: u32,
 }
+
+/// The most `light_candidates` a scene may ask for.
+pub const MAX_LIGHT_CANDIDATES: u32 = 64;
 
 /// The `path` integrator's guiding parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -73,7 +89,13 @@ impl Default for Guiding {
 
 impl Default for PathIntegrator {
     fn default() -> Self {
-        PathIntegrator { term: Termination::default(), hide_emitters: false, mis: true, guiding: None }
+        PathIntegrator {
+            term: Termination::default(),
+            hide_emitters: false,
+            mis: true,
+            guiding: None,
+            light_candidates: 1,
+        }
     }
 }
 
@@ -174,6 +196,18 @@ pub struct Vertex {
     /// The non-delta direction drawn for the next segment, for the guide's
     /// training (`None` after a delta lobe, or when nothing was drawn).
     pub sampled: Option<Sampled>,
+}
+
+/// A light sample with the BSDF's side of it, as the vertex weighs it.
+#[derive(Debug, Clone, Copy)]
+struct LitSample {
+    ls: LightSample,
+    /// f cos θ towards the light.
+    f: Spectrum,
+    /// The BSDF's density of `ls.wi` (0 without MIS or for a delta light).
+    bsdf_pdf: f32,
+    /// The resampling factor (Σ w_i / M) / w_y (1 for a single candidate).
+    scale: f32,
 }
 
 impl Vertex {
@@ -328,21 +362,20 @@ impl PathIntegrator {
         let mut shadow = None;
         let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
         if bsdf.has_smooth() {
-            if let Some(ls) = scene.sample_light(si.p, si.n, u_sel, u_light) {
-                let wi = si.to_local(ls.wi);
-                let mis = self.mis && !ls.delta;
-                // With MIS, value and pdf in one BSDF dispatch.
-                let (f, bsdf_pdf) = if mis { bsdf.eval_pdf(wo, wi) } else { (bsdf.eval(wo, wi), 0.0) };
-                let f = f * wi.z.abs();
-                if f != Spectrum::ZERO {
-                    let bsdf_pdf = match guide {
-                        Some(g) => alpha * bsdf_pdf + (1.0 - alpha) * g.pdf(ls.wi),
-                        None => bsdf_pdf,
-                    };
-                    let w = if mis { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
-                    st.pending = st.beta * f * ls.li * (w / ls.pdf);
-                    shadow = Some(scene.shadow_ray(&si, ls.wi, ls.dist));
-                }
+            let lit = if self.light_candidates > 1 {
+                let u_pick = rng.next_1d();
+                self.resample_light(scene, &si, &bsdf, wo, (u_sel, u_light, u_pick))
+            } else {
+                scene.sample_light(si.p, si.n, u_sel, u_light).and_then(|ls| self.light_value(&si, &bsdf, wo, ls))
+            };
+            if let Some(LitSample { ls, f, bsdf_pdf, scale }) = lit {
+                let bsdf_pdf = match guide {
+                    Some(g) => alpha * bsdf_pdf + (1.0 - alpha) * g.pdf(ls.wi),
+                    None => bsdf_pdf,
+                };
+                let w = if self.mis && !ls.delta { power_heuristic(ls.pdf, bsdf_pdf) } else { 1.0 };
+                st.pending = st.beta * f * ls.li * (w / ls.pdf * scale);
+                shadow = Some(scene.shadow_ray(&si, ls.wi, ls.dist));
             }
         }
 
@@ -365,6 +398,57 @@ impl PathIntegrator {
         st.ray = scene.spawn_ray(&si, wi);
         st.depth += 1;
         Vertex { shadow, go_on: self.roulette(st, rng), sampled }
+    }
+
+    /// The BSDF's side of light sample `ls` at `si`: f cos θ and, with MIS,
+    /// the BSDF's density of its direction; `None` where f cos θ is zero.
+    #[inline(always)]
+    fn light_value(&self, si: &SurfaceInteraction, bsdf: &Bsdf, wo: Vec3, ls: LightSample) -> Option<LitSample> {
+        let wi = si.to_local(ls.wi);
+        // With MIS, value and pdf in one BSDF dispatch.
+        let (f, bsdf_pdf) = if self.mis && !ls.delta { bsdf.eval_pdf(wo, wi) } else { (bsdf.eval(wo, wi), 0.0) };
+        let f = f * wi.z.abs();
+        (f != Spectrum::ZERO).then_some(LitSample { ls, f, bsdf_pdf, scale: 1.0 })
+    }
+
+    /// Resampled importance sampling of the light (Talbot et al. 2005,
+    /// eq. 3): `light_candidates` = M candidates x_i drawn as
+    /// [`Scene::sample_light`] draws one (density p), one of them y picked
+    /// with probability ∝ w_i = p̂(x_i) / p(x_i), where the target p̂ is the
+    /// unshadowed contribution |f cos θ L_e| (the sum of its channels); the
+    /// estimate f(y) / p(y) is then scaled by (Σ w_i / M) / w_y.
+    ///
+    /// Unbiased for any candidates whose marginals are p (only linearity is
+    /// used), so they share the vertex's numbers: candidate i takes
+    /// (u_sel + i/M, u_light + i·(g₁, g₂)) mod 1, stratified in the light's
+    /// pick and spread by the R2 sequence's offsets (Roberts 2018) over its
+    /// point, and `u.2` picks among them. The MIS weight against BSDF
+    /// sampling keeps the density p of one candidate: both strategies use
+    /// the same function in their weights, so the weights still sum to 1.
+    fn resample_light(
+        &self,
+        scene: &Scene,
+        si: &SurfaceInteraction,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        u: (f32, glam::Vec2, f32),
+    ) -> Option<LitSample> {
+        const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
+        let (u_sel, u_light, u_pick) = u;
+        let m = self.light_candidates;
+        let mut r = Reservoir::new(u_pick);
+        for i in 0..m {
+            let u_i = (u_sel + i as f32 / m as f32).fract();
+            let u2_i = (u_light + i as f32 * R2).fract();
+            let Some(ls) = scene.sample_light(si.p, si.n, u_i, u2_i) else { continue };
+            let Some(c) = self.light_value(si, bsdf, wo, ls) else { continue };
+            let contribution = c.f * c.ls.li;
+            let target = contribution[0].abs() + contribution[1].abs() + contribution[2].abs();
+            r.add(c, target / c.ls.pdf);
+        }
+        let (mut c, w) = r.picked()?;
+        c.scale = r.weight_sum() / m as f32 / w;
+        Some(c)
     }
 
     /// The next direction drawn from the BSDF with probability `alpha`
@@ -399,6 +483,24 @@ impl PathIntegrator {
             return None;
         }
         Some(BsdfSample { wi, pdf, weight: f / pdf, delta: false, null: false, eta })
+    }
+
+    /// Its sampling parameters, as `penumbra info` and the EXR metadata
+    /// record them, with the scene's light selection `selection`.
+    pub fn summary(&self, selection: LightSelection) -> String {
+        let guiding = match self.guiding {
+            Some(g) => format!("guiding=true (budget {}, bsdf_fraction {})", g.budget, g.bsdf_fraction),
+            None => "guiding=false".into(),
+        };
+        let depth = |d: u32| if d == u32::MAX { "-1".to_string() } else { d.to_string() };
+        format!(
+            "max_depth={}, rr_depth={}, mis={}, light_selection={}, light_candidates={}, {guiding}",
+            depth(self.term.max_depth),
+            self.term.rr_depth,
+            self.mis,
+            selection.name(),
+            self.light_candidates
+        )
     }
 
     /// α: at a guided vertex, the probability of drawing from the BSDF
