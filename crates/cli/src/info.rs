@@ -92,7 +92,9 @@ fn write_notes(notes: &[String], out: &mut String) -> Result<()> {
 /// The `path` integrator's sampling parameters (`None` for the others).
 pub fn path_summary(job: &penumbra_render::render::RenderJob) -> Option<String> {
     match &job.integrator {
-        penumbra_render::integrator::Integrator::Path(p) => Some(p.summary(job.scene.light_sampler().kind())),
+        penumbra_render::integrator::Integrator::Path(p) => {
+            Some(p.summary(job.scene.lights.len(), job.scene.light_sampler().kind()))
+        }
         _ => None,
     }
 }

@@ -89,3 +89,29 @@ fn estimators_agree_on_hidden_emitters() {
     let brute = render_with_variance(&scene, 1024, 16, Some("bruteforce:sampling=bsdf"), 2);
     assert_agree("hidden_emitters bruteforce", &brute, &path, RESOLUTION);
 }
+
+#[test]
+fn light_candidates_outside_one_to_sixty_four_are_refused() {
+    let scene = root().join("tests/scenes/many_lights.xml");
+    for m in ["0", "65", "-3"] {
+        let ov =
+            penumbra_scene::Overrides { integrator: Some(format!("path:light_candidates={m}")), ..Default::default() };
+        let err = penumbra_scene::load_scene(&scene, &[], &ov).err().unwrap_or_else(|| panic!("{m} was accepted"));
+        assert!(err.to_string().contains("light_candidates must be from 1"), "{m}: {err}");
+    }
+    let ov = penumbra_scene::Overrides { integrator: Some("path:light_candidates=64".into()), ..Default::default() };
+    assert!(penumbra_scene::load_scene(&scene, &[], &ov).is_ok());
+}
+
+#[test]
+fn light_candidates_default_to_four_from_eight_lights_on() {
+    use penumbra_render::integrator::{Integrator, DEFAULT_LIGHT_CANDIDATES};
+    for (scene, expected) in
+        [("many_lights.xml", DEFAULT_LIGHT_CANDIDATES), ("spot_light.xml", 1), ("cbox_diffuse.xml", 1)]
+    {
+        let job = penumbra_scene::load_scene(&root().join("tests/scenes").join(scene), &[], &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let Integrator::Path(p) = &job.integrator else { panic!("{scene}: not path") };
+        assert_eq!(p.light_candidates_for(job.scene.lights.len()), expected, "{scene}");
+    }
+}

@@ -372,6 +372,8 @@ fn compare_resampled(name: &str, max_depth: u32, spp: u32, options: &str) {
 
 #[test]
 fn resampled_many_lights_match_mitsuba() {
+    // Its default is 4 candidates (`many_lights_match_mitsuba`).
+    compare_resampled("many_lights", 4, 128, "light_candidates=1");
     compare_resampled("many_lights", 4, 128, "light_candidates=8");
     compare_resampled("many_lights", 4, 128, "light_candidates=4,light_selection=bvh");
     compare_resampled("many_lights", 4, 128, "light_candidates=3,light_selection=power,guiding=true");

@@ -14,6 +14,7 @@ use std::process::Command;
 const SCENES: &[(&str, &[(&str, &str)])] = &[
     ("scenes/cornell-box.xml", &[("res", "128")]),
     ("tests/scenes/envmap_sun.xml", &[("res", "128")]),
+    ("tests/scenes/many_lights.xml", &[("res", "128")]),
     ("scenes/material-showcase.xml", &[("width", "192"), ("height", "80")]),
     ("scenes/door-ajar.xml", &[]),
     ("scenes/glass-caustic.xml", &[]),

@@ -178,9 +178,10 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
     ))
 }
 
-/// `light_candidates`: 1 to [`MAX_LIGHT_CANDIDATES`] (see `integrator::path`).
+/// `light_candidates`: 1 to [`MAX_LIGHT_CANDIDATES`], or 0 (automatic)
+/// where it is not given (see `integrator::path`).
 fn light_candidates(node: &Node) -> Result<u32> {
-    let m = node.int("light_candidates", 1)?;
+    let Some(m) = node.get_int("light_candidates")? else { return Ok(0) };
     if !(1..=MAX_LIGHT_CANDIDATES as i64).contains(&m) {
         return Err(LoadError::at(
             node.loc_of("light_candidates"),

@@ -922,7 +922,10 @@ impl PathIntegrator {
         let lit = bsdf != 2 && bsdf != 3;
         // The light BVH's choice depends on the point, found in lanes;
         // resampling evaluates the BSDF per candidate.
-        if lit && (scene.light_sampler().kind() == LightSelection::Bvh || self.light_candidates > 1) {
+        if lit
+            && (scene.light_sampler().kind() == LightSelection::Bvh
+                || self.light_candidates_for(scene.lights.len()) > 1)
+        {
             return None;
         }
         let shape = &scene.shapes[hit.shape as usize];
