@@ -326,10 +326,16 @@ fn sggx_in_a_heterogeneous_medium_matches_mitsuba() {
 // α = 0.3, so most directions at guided vertices come from the guide.
 
 fn compare_guided(name: &str, max_depth: u32, spp: u32) {
+    compare_path(name, max_depth, spp, "guiding=true,guiding_bsdf_fraction=0.3");
+}
+
+/// `name` rendered by `path` with `max_depth` and `options` (in 8 batches
+/// of `spp` each) against its Mitsuba reference.
+fn compare_path(name: &str, max_depth: u32, spp: u32, options: &str) {
     let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-    let integrator = format!("path:max_depth={max_depth},guiding=true,guiding_bsdf_fraction=0.3");
+    let integrator = format!("path:max_depth={max_depth},{options}");
     let ours = render_with_variance(&scene, spp, 8, Some(&integrator), 3);
-    assert_agree(&format!("{name} (guided)"), &ours, &reference(name), 0.02);
+    assert_agree(&format!("{name} ({options})"), &ours, &reference(name), 0.02);
 }
 
 #[test]
@@ -363,37 +369,30 @@ fn guided_envmap_sun_matches_mitsuba() {
 // maps and glossy BSDFs (whose value is in the resampling's target), and
 // with a guide as well.
 
-fn compare_resampled(name: &str, max_depth: u32, spp: u32, options: &str) {
-    let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-    let integrator = format!("path:max_depth={max_depth},{options}");
-    let ours = render_with_variance(&scene, spp, 8, Some(&integrator), 3);
-    assert_agree(&format!("{name} ({options})"), &ours, &reference(name), 0.02);
-}
-
 #[test]
 fn resampled_many_lights_match_mitsuba() {
     // Its default is 4 candidates (`many_lights_match_mitsuba`).
-    compare_resampled("many_lights", 4, 128, "light_candidates=1");
-    compare_resampled("many_lights", 4, 128, "light_candidates=8");
-    compare_resampled("many_lights", 4, 128, "light_candidates=4,light_selection=bvh");
-    compare_resampled("many_lights", 4, 128, "light_candidates=3,light_selection=power,guiding=true");
+    compare_path("many_lights", 4, 128, "light_candidates=1");
+    compare_path("many_lights", 4, 128, "light_candidates=8");
+    compare_path("many_lights", 4, 128, "light_candidates=4,light_selection=bvh");
+    compare_path("many_lights", 4, 128, "light_candidates=3,light_selection=power,guiding=true");
 }
 
 #[test]
 fn resampled_point_and_spot_lights_match_mitsuba() {
-    compare_resampled("point_light", 4, 128, "light_candidates=4");
+    compare_path("point_light", 4, 128, "light_candidates=4");
     // Where the spot is blocked, its unshadowed target wins most picks and
     // the rare unblocked pick of the fill light carries a large weight:
     // heavy tails, which batches of 128 samples resolve too roughly for
     // their spread to estimate the error.
-    compare_resampled("spot_light", 3, 512, "light_candidates=4");
-    compare_resampled("direct_light", 2, 128, "light_candidates=4");
+    compare_path("spot_light", 3, 512, "light_candidates=4");
+    compare_path("direct_light", 2, 128, "light_candidates=4");
 }
 
 #[test]
 fn resampled_rough_spheres_and_cbox_match_mitsuba() {
-    compare_resampled("rough_spheres", 8, 256, "light_candidates=4");
-    compare_resampled("cbox_diffuse", 8, 256, "light_candidates=2");
+    compare_path("rough_spheres", 8, 256, "light_candidates=4");
+    compare_path("cbox_diffuse", 8, 256, "light_candidates=2");
 }
 
 /// BSDFs whose density is not a closed form of their sampling: a guided
