@@ -15,7 +15,7 @@
 //! ```
 
 /// The largest f32 below 1: rescaling keeps the number in [0, 1).
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// One pick among weighted candidates, made with one uniform number.
 #[derive(Debug, Clone, Copy)]

@@ -152,8 +152,39 @@ mod row {
     pub const GUIDE_PICK: usize = 76;
     pub const GUIDE_D: usize = 77;
     pub const GUIDE_PDF: usize = 80;
+    /// With resampled light selection: the number that picks among the
+    /// candidates (their rows are [`cand_row`]'s).
+    pub const U_PICK: usize = 81;
     /// How many rows there are.
-    pub const COUNT: usize = 81;
+    pub const COUNT: usize = 82;
+}
+
+/// The most light candidates a lane vertex resamples from (more run the
+/// scalar vertex): a batch keeps [`cand_row::COUNT`] rows per candidate.
+pub const MAX_LANE_CANDIDATES: u32 = 8;
+
+/// The rows of one light candidate in [`LaneBatch`]'s candidate block
+/// (resampled light selection), as [`row`]'s for one light.
+mod cand_row {
+    /// 0: an area light on a mesh, 1: on a sphere, 2: none (the selection
+    /// found no light).
+    pub const KIND: usize = 0;
+    /// A mesh light's picked triangle's corners (3 × 3 rows); a sphere
+    /// light's centre, then (radius, 1 / area, 1 if its normals are flipped).
+    pub const GEO: usize = 1;
+    /// A mesh light's area density.
+    pub const AREA_PDF: usize = 10;
+    /// The light's selection probability.
+    pub const PMF: usize = 11;
+    /// Its radiance (3 rows).
+    pub const LI: usize = 12;
+    /// 1 where it emits from both sides.
+    pub const TWO_SIDED: usize = 15;
+    /// The candidate's numbers (on a mesh, the first rescaled by the
+    /// triangle's pick).
+    pub const U: usize = 16;
+    /// How many rows a candidate takes.
+    pub const COUNT: usize = 18;
 }
 
 /// Up to [`LaneBatch::LANES`] prepared vertices of one [`LaneKind`], as
@@ -165,9 +196,14 @@ mod row {
 pub struct LaneBatch {
     kind: LaneKind,
     len: usize,
+    /// The light candidates of every lane (1: no resampling).
+    candidates: u32,
     /// The caller's number for each lane's path.
     slots: [u32; LaneBatch::LANES],
     rows: [[f32; LaneBatch::LANES]; row::COUNT],
+    /// With resampled light selection, [`cand_row::COUNT`] rows per
+    /// candidate (empty until a batch first needs them).
+    cands: Vec<[f32; LaneBatch::LANES]>,
 }
 
 impl LaneBatch {
@@ -175,7 +211,14 @@ impl LaneBatch {
     pub const LANES: usize = 16;
 
     fn new(kind: LaneKind) -> LaneBatch {
-        LaneBatch { kind, len: 0, slots: [0; Self::LANES], rows: [[0.0; Self::LANES]; row::COUNT] }
+        LaneBatch {
+            kind,
+            len: 0,
+            candidates: 1,
+            slots: [0; Self::LANES],
+            rows: [[0.0; Self::LANES]; row::COUNT],
+            cands: Vec::new(),
+        }
     }
 
     /// Vertices in the batch.
@@ -224,6 +267,33 @@ impl LaneBatch {
         (self.rows[r][l], self.rows[r + 1][l], self.rows[r + 2][l]) = (v.x, v.y, v.z);
     }
 
+    /// Row `r` of candidate `c` for the lane being added.
+    #[inline(always)]
+    fn set_cand(&mut self, c: usize, r: usize, x: f32) {
+        let l = self.lane();
+        self.cands[c * cand_row::COUNT + r][l] = x;
+    }
+
+    /// Rows `r..r + 3` of candidate `c` for the lane being added.
+    #[inline(always)]
+    fn set_cand3(&mut self, c: usize, r: usize, v: Vec3) {
+        self.set_cand(c, r, v.x);
+        self.set_cand(c, r + 1, v.y);
+        self.set_cand(c, r + 2, v.z);
+    }
+
+    /// Row `r` of candidate `c` in lanes.
+    #[inline(always)]
+    fn cand<F: Float>(&self, c: usize, r: usize) -> F {
+        F::load(&self.cands[c * cand_row::COUNT + r])
+    }
+
+    /// Rows `r..r + 3` of candidate `c` in lanes.
+    #[inline(always)]
+    fn cand3<F: Float>(&self, c: usize, r: usize) -> V3<F> {
+        V3::new(self.cand(c, r), self.cand(c, r + 1), self.cand(c, r + 2))
+    }
+
     /// Row `r` in lanes.
     #[inline(always)]
     fn get<F: Float>(&self, r: usize) -> F {
@@ -246,7 +316,8 @@ impl LaneBatch {
     /// on valid inputs.
     fn pad(&mut self, width: usize) {
         let last = self.len - 1;
-        for r in &mut self.rows {
+        let cands = if self.candidates > 1 { self.candidates as usize * cand_row::COUNT } else { 0 };
+        for r in self.rows.iter_mut().chain(self.cands[..cands].iter_mut()) {
             let x = r[last];
             r[self.len..width].fill(x);
         }
@@ -479,6 +550,56 @@ fn area_to_solid_angle<F: Float>(pdf_area: F, p_ref: V3<F>, p: V3<F>, n: V3<F>) 
     let dist2 = d.dot(d);
     let cos = (n.dot(d) / dist2.sqrt()).abs();
     (pdf_area * dist2 / cos, dist2.cmp_ne(zero) & cos.cmp_ne(zero))
+}
+
+/// `AreaLight::sample_li` in lanes, on a mesh light's triangle (corners
+/// `geo`, area density `area_pdf`, `Shape::sample_point` and
+/// `area_to_solid_angle`) or, where `sphere`, a sphere light (`geo[0]` its
+/// centre, `geo[1]` as [`sphere_sample`]'s `r`), with the light's numbers
+/// `u` and selection probability `pmf`: (direction, distance, density,
+/// whether there is a sample). `kinds` says whether any lane is on a
+/// triangle and whether any is on a sphere: only those are computed.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn area_light_sample<F: Float>(
+    p: V3<F>,
+    geo: [V3<F>; 3],
+    area_pdf: F,
+    u: (F, F),
+    pmf: F,
+    two_sided: F::Mask,
+    sphere: F::Mask,
+    kinds: (bool, bool),
+) -> (V3<F>, F, F, F::Mask) {
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
+    let on_tri = kinds.0.then(|| {
+        let [q0, q1, q2] = geo;
+        let su = u.0.sqrt();
+        let (lb1, lb2) = (one - su, u.1 * su);
+        let lp = q0 * (one - lb1 - lb2) + q1 * lb1 + q2 * lb2;
+        let ln = (q1 - q0).cross(q2 - q0).normalize();
+        let (pdf, ok) = area_to_solid_angle(area_pdf, p, lp, ln);
+        (lp, ln, pdf, ok)
+    });
+    let on_sphere = kinds.1.then(|| sphere_sample(geo[0], geo[1], p, u.0, u.1));
+    let (lp, ln, pdf, ok) = match (on_tri, on_sphere) {
+        (Some(t), Some(s)) => (
+            V3::select(sphere, s.0, t.0),
+            V3::select(sphere, s.1, t.1),
+            F::select(sphere, s.2, t.2),
+            (sphere & s.3) | (!sphere & t.3),
+        ),
+        (Some(t), None) => t,
+        (None, Some(s)) => s,
+        (None, None) => (V3::splat(Vec3::ZERO), V3::splat(Vec3::ZERO), zero, F::Mask::splat(false)),
+    };
+    let d = lp - p;
+    let dist = d.length();
+    let wi = d / dist;
+    let n_wi = ln.dot(wi);
+    let facing = !(n_wi.cmp_ge(zero) & !(two_sided & n_wi.cmp_gt(zero)));
+    let sampled = ok & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
+    (wi, dist, pdf * pmf, sampled)
 }
 
 /// `Shape::sample_direction` on a sphere in lanes: `Sphere::sample_cone`
@@ -920,12 +1041,9 @@ impl PathIntegrator {
             LaneMaterial::RoughPlastic { beckmann: true, .. } => 9,
         };
         let lit = bsdf != 2 && bsdf != 3;
-        // The light BVH's choice depends on the point, found in lanes;
-        // resampling evaluates the BSDF per candidate.
-        if lit
-            && (scene.light_sampler().kind() == LightSelection::Bvh
-                || self.light_candidates_for(scene.lights.len()) > 1)
-        {
+        let m = if lit { self.light_candidates_for(scene.lights.len()) } else { 1 };
+        // The light BVH's choice depends on the point, found in lanes.
+        if lit && (scene.light_sampler().kind() == LightSelection::Bvh || m > MAX_LANE_CANDIDATES) {
             return None;
         }
         let shape = &scene.shapes[hit.shape as usize];
@@ -956,6 +1074,9 @@ impl PathIntegrator {
         // The light: its kind and what its rows need.
         enum Picked<'a> {
             None,
+            /// Resampled from `m` candidates (picked below, into the batch's
+            /// candidate rows).
+            Candidates,
             Env,
             Sphere(Vec3, Vec3),
             Tri(&'a [Vec3; 3], f32, f32),
@@ -963,11 +1084,15 @@ impl PathIntegrator {
         // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
         let dim = rng.dim();
         let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
+        let u_pick = if lit && m > 1 { rng.next_1d() } else { 0.0 };
         // A block, not a closure: LLVM kept the closure out of line and
         // returned its tuple through memory.
         let light = 'pick: {
             if !lit {
                 break 'pick Some((Picked::None, 0.0, Spectrum::ZERO, false));
+            }
+            if m > 1 {
+                break 'pick Some((Picked::Candidates, 0.0, Spectrum::ZERO, false));
             }
             // Uniform and power selection ignore the receiver.
             let Some((i, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel) else { break 'pick None };
@@ -1118,7 +1243,54 @@ impl PathIntegrator {
             }
             _ => unreachable!("the shape kind was found above"),
         }
-        if lit {
+        b.candidates = 1;
+        if let (Picked::Candidates, ..) = light {
+            // `resample_light`'s candidates, picked as `sample_light` picks
+            // each; a light that has no lane kernel sends the vertex back.
+            b.candidates = m;
+            let need = m as usize * cand_row::COUNT;
+            if b.cands.len() < need {
+                b.cands.resize(need, [0.0; LaneBatch::LANES]);
+            }
+            b.set(row::U_PICK, u_pick);
+            for i in 0..m {
+                let (u_i, u2_i) = super::candidate_numbers(u_sel, u_light, i, m);
+                let c = i as usize;
+                let Some((k, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_i) else {
+                    b.set_cand(c, cand_row::KIND, 2.0);
+                    continue;
+                };
+                let Some(&light) = scene.lane_light(k) else {
+                    rng.rewind(dim);
+                    return None;
+                };
+                b.set_cand(c, cand_row::PMF, pmf);
+                match light {
+                    LaneLight::Sphere { center, params, li, two_sided } => {
+                        b.set_cand(c, cand_row::KIND, 1.0);
+                        b.set_cand3(c, cand_row::GEO, center);
+                        b.set_cand3(c, cand_row::GEO + 3, params);
+                        b.set_cand3(c, cand_row::LI, li);
+                        b.set_cand(c, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+                        b.set_cand(c, cand_row::U, u2_i.x);
+                    }
+                    LaneLight::Mesh { first, count, area_pdf, li, two_sided } => {
+                        let tris = scene.lane_light_tris(first, count);
+                        let (t, ux) = alias_pick(u2_i.x, tris.len(), |b| (tris[b].keep, tris[b].other));
+                        let [q0, q1, q2] = tris[t].p;
+                        b.set_cand(c, cand_row::KIND, 0.0);
+                        b.set_cand3(c, cand_row::GEO, q0);
+                        b.set_cand3(c, cand_row::GEO + 3, q1);
+                        b.set_cand3(c, cand_row::GEO + 6, q2);
+                        b.set_cand(c, cand_row::AREA_PDF, area_pdf);
+                        b.set_cand3(c, cand_row::LI, li);
+                        b.set_cand(c, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+                        b.set_cand(c, cand_row::U, ux);
+                    }
+                }
+                b.set_cand(c, cand_row::U + 1, u2_i.y);
+            }
+        } else if lit {
             let (picked, pmf, li, two_sided) = light;
             b.set(row::PMF, pmf);
             b.set3(row::LI, li);
@@ -1142,7 +1314,7 @@ impl PathIntegrator {
                     b.set(row::U_LIGHT, ux);
                     b.set(row::U_LIGHT + 1, u_light.y);
                 }
-                Picked::None => unreachable!("a lit vertex has its light"),
+                Picked::None | Picked::Candidates => unreachable!("a lit vertex has its light"),
             }
         }
         let u1 = rng.next_1d();
@@ -1280,38 +1452,6 @@ impl PathIntegrator {
         let h = hit::<F, S>(v);
         let (p, n) = (h.p, h.n);
 
-        // The light sample, its selection included: (direction, distance,
-        // density, radiance, whether there is one).
-        let (wi, dist, light_pdf, li, sampled) = if L == 1 {
-            let env = env.expect("an environment vertex without the environment");
-            let (x, cos_t, pdf_row) = env.sample_cell_lanes(g(row::U_LIGHT), g(row::U_LIGHT + 1));
-            let (wi, pdf) = env.sample_direction(x, cos_t, pdf_row);
-            let li = env.eval_lanes(wi.x, wi.y, wi.z);
-            (wi, F::splat(f32::INFINITY), pdf * g(row::PMF), V3::gather(|l| li[l]), F::Mask::splat(true))
-        } else {
-            // The point, its normal and solid-angle density (Shape::sample_direction).
-            let (lp, ln, pdf, ok) = if L == 0 {
-                // Shape::sample_point on the picked triangle, area_to_solid_angle.
-                let (q0, q1, q2) = (gv(row::LIGHT_TRI), gv(row::LIGHT_TRI + 3), gv(row::LIGHT_TRI + 6));
-                let su = g(row::U_LIGHT).sqrt();
-                let (lb1, lb2) = (one - su, g(row::U_LIGHT + 1) * su);
-                let lp = q0 * (one - lb1 - lb2) + q1 * lb1 + q2 * lb2;
-                let ln = (q1 - q0).cross(q2 - q0).normalize();
-                let (pdf, ok) = area_to_solid_angle(g(row::AREA_PDF), p, lp, ln);
-                (lp, ln, pdf, ok)
-            } else {
-                sphere_sample(gv(row::LIGHT_TRI), gv(row::LIGHT_TRI + 3), p, g(row::U_LIGHT), g(row::U_LIGHT + 1))
-            };
-            // AreaLight::sample_li.
-            let d = lp - p;
-            let dist = d.length();
-            let wi = d / dist;
-            let n_wi = ln.dot(wi);
-            let two_sided = v.mask::<F>(row::TWO_SIDED);
-            let facing = !(n_wi.cmp_ge(zero) & !(two_sided & n_wi.cmp_gt(zero)));
-            let sampled = ok & dist.cmp_ne(zero) & pdf.cmp_gt(zero) & finite(pdf) & facing;
-            (wi, dist, pdf * g(row::PMF), gv(row::LI), sampled)
-        };
         // A rough plastic's material and its transmittance at wo, shared by
         // its evaluation and its sample.
         let plastic = (B == 4).then(|| {
@@ -1320,7 +1460,6 @@ impl PathIntegrator {
             (rp, t_o)
         });
         // The BSDF's value and density (Bsdf::eval_pdf), MIS-weighted.
-        let wi_l = h.to_local(wi);
         let eval_pdf = |wi_l: V3<F>| {
             if B == 0 {
                 let front = h.wo.z.cmp_gt(zero) & wi_l.z.cmp_gt(zero);
@@ -1347,8 +1486,86 @@ impl PathIntegrator {
                 micro.eval_pdf(h.wo, wi_l, eta, k, spec)
             }
         };
-        let (f, bsdf_pdf) = eval_pdf(wi_l);
-        let f = f * wi_l.z.abs();
+        // `light_value`: f cos θ towards the world direction `wi`, and the BSDF's density.
+        let value = |wi: V3<F>| {
+            let wi_l = h.to_local(wi);
+            let (f, bsdf_pdf) = eval_pdf(wi_l);
+            (f * wi_l.z.abs(), bsdf_pdf)
+        };
+
+        // The light sample, its selection included: (direction, distance,
+        // density, radiance, whether there is one), f cos θ and the BSDF's
+        // density there, and the estimate's scale (resampling's Σw / M / w_y).
+        let (wi, dist, light_pdf, li, sampled, f, bsdf_pdf, scale) = if L == 1 {
+            let env = env.expect("an environment vertex without the environment");
+            let (x, cos_t, pdf_row) = env.sample_cell_lanes(g(row::U_LIGHT), g(row::U_LIGHT + 1));
+            let (wi, pdf) = env.sample_direction(x, cos_t, pdf_row);
+            let li = env.eval_lanes(wi.x, wi.y, wi.z);
+            let (f, bsdf_pdf) = value(wi);
+            let li = V3::gather(|l| li[l]);
+            (wi, F::splat(f32::INFINITY), pdf * g(row::PMF), li, F::Mask::splat(true), f, bsdf_pdf, one)
+        } else if v.candidates > 1 {
+            // `resample_light`: each candidate offered to a reservoir per lane
+            // (`Reservoir::add`'s operations), the pick's values kept.
+            const ONE_MINUS_EPS: f32 = crate::sampling::reservoir::ONE_MINUS_EPSILON;
+            let m = v.candidates as usize;
+            let mut u = g(row::U_PICK);
+            let (mut sum, mut w_y) = (zero, zero);
+            let mut picked = F::Mask::splat(false);
+            let v0 = V3::splat(Vec3::ZERO);
+            let (mut y_wi, mut y_dist, mut y_pdf, mut y_li, mut y_f, mut y_bsdf_pdf) = (v0, zero, zero, v0, v0, zero);
+            for c in 0..m {
+                let kind = v.cand::<F>(c, cand_row::KIND);
+                let (tri, sphere) = (kind.cmp_eq(zero), kind.cmp_eq(one));
+                let geo = [v.cand3(c, cand_row::GEO), v.cand3(c, cand_row::GEO + 3), v.cand3(c, cand_row::GEO + 6)];
+                let (wi, dist, pdf, sampled) = area_light_sample(
+                    p,
+                    geo,
+                    v.cand(c, cand_row::AREA_PDF),
+                    (v.cand(c, cand_row::U), v.cand(c, cand_row::U + 1)),
+                    v.cand(c, cand_row::PMF),
+                    v.cand::<F>(c, cand_row::TWO_SIDED).cmp_eq(one),
+                    sphere,
+                    (tri.any(), sphere.any()),
+                );
+                let li = v.cand3::<F>(c, cand_row::LI);
+                let (f, bsdf_pdf) = value(wi);
+                let contribution = f.mul_elem(li);
+                let target = contribution.x.abs() + contribution.y.abs() + contribution.z.abs();
+                let w = target / pdf;
+                let offered = (tri | sphere) & sampled & f.ne_zero() & w.cmp_gt(zero) & finite(w);
+                let s = sum + w;
+                let q = w / s;
+                let take = offered & u.cmp_lt(q);
+                let u_next = F::select(take, u / q, (u - q) / (one - q)).min(F::splat(ONE_MINUS_EPS));
+                u = F::select(offered, u_next, u);
+                sum = F::select(offered, s, sum);
+                w_y = F::select(take, w, w_y);
+                y_wi = V3::select(take, wi, y_wi);
+                y_dist = F::select(take, dist, y_dist);
+                y_pdf = F::select(take, pdf, y_pdf);
+                y_li = V3::select(take, li, y_li);
+                y_f = V3::select(take, f, y_f);
+                y_bsdf_pdf = F::select(take, bsdf_pdf, y_bsdf_pdf);
+                picked = picked | take;
+            }
+            let scale = sum / F::splat(m as f32) / w_y;
+            (y_wi, y_dist, y_pdf, y_li, picked, y_f, y_bsdf_pdf, scale)
+        } else {
+            let geo = [gv(row::LIGHT_TRI), gv(row::LIGHT_TRI + 3), gv(row::LIGHT_TRI + 6)];
+            let (wi, dist, pdf, sampled) = area_light_sample(
+                p,
+                geo,
+                g(row::AREA_PDF),
+                (g(row::U_LIGHT), g(row::U_LIGHT + 1)),
+                g(row::PMF),
+                v.mask::<F>(row::TWO_SIDED),
+                F::Mask::splat(L == 2),
+                (L == 0, L == 2),
+            );
+            let (f, bsdf_pdf) = value(wi);
+            (wi, dist, pdf, gv(row::LI), sampled, f, bsdf_pdf, one)
+        };
         let contributes = sampled & f.ne_zero();
         // With a guide, the density of the direction is the mix of the
         // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
@@ -1371,7 +1588,8 @@ impl PathIntegrator {
             None => bsdf_pdf,
         };
         let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
-        let pending = gv(row::BETA).mul_elem(f).mul_elem(li) * (w / light_pdf);
+        // Without resampling the scale is 1, which leaves the product's bits as they are.
+        let pending = gv(row::BETA).mul_elem(f).mul_elem(li) * (w / light_pdf * scale);
         // Its shadow ray (Scene::shadow_ray).
         let o = offset_origin(p, n, wi);
         let (shadow_d, shadow_t) = if L != 1 {

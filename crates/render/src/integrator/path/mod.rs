@@ -30,11 +30,13 @@
 //! proportional to its unshadowed contribution over its density, and traces
 //! only that one's shadow ray (resampled importance sampling, Talbot et al.
 //! 2005). Its MIS weights keep one candidate's density, as emitters hit by
-//! BSDF samples do. These vertices run the scalar code (in the stream too).
+//! BSDF samples do. In the stream, vertices whose candidates are all area
+//! lights on meshes or spheres run in lanes (up to
+//! [`MAX_LANE_CANDIDATES`] candidates); the others run the scalar code.
 
 mod lanes;
 
-pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes};
+pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes, MAX_LANE_CANDIDATES};
 
 use super::{RayStats, Termination};
 use crate::bsdf::{Bsdf, BsdfSample};
@@ -222,6 +224,15 @@ struct LitSample {
 
 impl Vertex {
     const DONE: Vertex = Vertex { shadow: None, go_on: false, sampled: None };
+}
+
+/// Candidate `i` of `m`'s numbers (see [`PathIntegrator::resample_light`]):
+/// the light's pick stratified, (u_sel + i/M) mod 1, and its point spread
+/// by the R2 sequence's offsets (Roberts 2018), (u_light + i·(g₁, g₂)) mod 1.
+#[inline(always)]
+fn candidate_numbers(u_sel: f32, u_light: glam::Vec2, i: u32, m: u32) -> (f32, glam::Vec2) {
+    const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
+    ((u_sel + i as f32 / m as f32).fract(), (u_light + i as f32 * R2).fract())
 }
 
 impl PathIntegrator {
@@ -445,12 +456,10 @@ impl PathIntegrator {
         m: u32,
         u: (f32, glam::Vec2, f32),
     ) -> Option<LitSample> {
-        const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
         let (u_sel, u_light, u_pick) = u;
         let mut r = Reservoir::new(u_pick);
         for i in 0..m {
-            let u_i = (u_sel + i as f32 / m as f32).fract();
-            let u2_i = (u_light + i as f32 * R2).fract();
+            let (u_i, u2_i) = candidate_numbers(u_sel, u_light, i, m);
             let Some(ls) = scene.sample_light(si.p, si.n, u_i, u2_i) else { continue };
             let Some(c) = self.light_value(si, bsdf, wo, ls) else { continue };
             let contribution = c.f * c.ls.li;
