@@ -216,11 +216,7 @@ impl Scene {
                     Shape::Sphere(_) | Shape::Disk(_) => (true, false),
                     _ => (false, false),
                 };
-                let m = per_material
-                    .get(info.material as usize)
-                    .copied()
-                    .flatten()
-                    .filter(|_| known && info.light.is_none());
+                let m = per_material.get(info.material as usize).copied().flatten().filter(|_| known);
                 // Textures read the uv parameterisation, which lanes find on
                 // meshes only; anisotropic roughness its dp/du, which lanes
                 // find on spheres only.
@@ -352,7 +348,7 @@ impl Scene {
 
     /// The material of shape `shape` when its hits can be shaded in lanes
     /// (the `path` integrator's lane vertex): a mesh (flat or with vertex
-    /// normals), a sphere or a disk, not an emitter, whose material is a
+    /// normals), a sphere or a disk, an emitter or not, whose material is a
     /// [`Material::lane_material`] (a textured one on meshes only).
     #[inline]
     pub fn lane_material(&self, shape: u32) -> Option<LaneSurface> {

@@ -251,7 +251,8 @@ fn run<F: Float>(
             }
             let slot = &mut slots[i];
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                if let Some(at) = path.lane_vertex(scene, env, &slot.state, h, &mut slot.rng, i, &mut bins, lane_guide)
+                if let Some(at) =
+                    path.lane_vertex(scene, env, &mut slot.state, h, &mut slot.rng, i, &mut bins, lane_guide)
                 {
                     ended.push(false);
                     if bins.batch(at).len() == F::WIDTH {

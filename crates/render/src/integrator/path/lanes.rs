@@ -1,12 +1,17 @@
 //! The `path` integrator's vertex in lanes for the commonest vertices: a
 //! hit on a mesh (flat-shaded, or with vertex normals interpolated), a
-//! sphere or a disk with a plain `diffuse`,
+//! sphere or a disk (an emitter's too: its emission is added as the vertex
+//! is prepared, as `vertex` adds it) with a plain `diffuse`,
 //! `conductor`, `dielectric`, `plastic`, `roughconductor` or
 //! `roughdielectric` (GGX or Beckmann; anisotropic ones on spheres, whose
 //! frame then follows the uv parameterisation) material of constant parameters,
 //! alone or in `twosided` ([`Scene::lane_material`]); the non-specular ones lit by an area light
 //! on a mesh or a sphere ([`Scene::lane_light`]) or by the scene's one
-//! environment map. A
+//! environment map, or resampled from up to [`MAX_LANE_CANDIDATES`] light
+//! candidates that are all such area lights (`resample_light`: each
+//! candidate's light and triangle picked in the preparation, the
+//! candidates, the reservoir and the pick's scale in lanes, triangles and
+//! spheres mixed in a batch). A
 //! stream prepares such vertices of many paths into a [`LaneBatch`] per
 //! [`LaneKind`] (shape, material and light; structure of arrays, so the
 //! kernel loads each field as one vector), runs a batch once it holds
@@ -160,7 +165,7 @@ mod row {
 }
 
 /// The most light candidates a lane vertex resamples from (more run the
-/// scalar vertex): a batch keeps [`cand_row::COUNT`] rows per candidate.
+/// scalar vertex): a batch keeps 18 rows of 16 lanes per candidate.
 pub const MAX_LANE_CANDIDATES: u32 = 8;
 
 /// The rows of one light candidate in [`LaneBatch`]'s candidate block
@@ -1008,14 +1013,15 @@ impl PathIntegrator {
     /// the vertex is [`Self::vertex_guided`]'s: the guide's density at the
     /// hit and, where it is picked, its direction are found here, its
     /// density at other directions per lane in the kernel. Returns the batch's position
-    /// ([`LaneBins::batch`]); `None`, with `rng` as it was, otherwise: run
-    /// [`Self::vertex`] (or `vertex_guided`).
+    /// ([`LaneBins::batch`]), with an emitter's emission at the hit added to
+    /// `st` as `vertex` adds it; `None`, with `st` and `rng` as they were,
+    /// otherwise: run [`Self::vertex`] (or `vertex_guided`).
     #[allow(clippy::too_many_arguments)]
     pub fn lane_vertex(
         &self,
         scene: &Scene,
         env: Option<(usize, &EnvMapLight)>,
-        st: &PathState,
+        st: &mut PathState,
         hit: &Hit,
         rng: &mut SampleStream,
         slot: usize,
@@ -1027,6 +1033,13 @@ impl PathIntegrator {
         }
         // The kind first, then the rows of its batch.
         let surface = scene.lane_material(hit.shape)?;
+        // An emitter's emission is added here (after the last way back to
+        // `vertex`, below), one path at a time; hidden from the camera, it is
+        // `vertex`'s.
+        let emitter = scene.shape_info[hit.shape as usize].light.is_some();
+        if emitter && st.depth == 0 && self.hide_emitters {
+            return None;
+        }
         let material = surface.material;
         let bsdf = match material {
             LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse => 0,
@@ -1353,6 +1366,9 @@ impl PathIntegrator {
                     b.set(row::GUIDE_PDF, pdf);
                 }
             }
+        }
+        if emitter {
+            self.add_emitted(scene, st, &scene.interaction(&st.ray, hit));
         }
         let l = b.lane();
         b.slots[l] = slot as u32;

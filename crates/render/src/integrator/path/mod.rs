@@ -356,17 +356,7 @@ impl PathIntegrator {
             return Vertex { shadow: None, go_on: true, sampled: None };
         }
 
-        // Emission at the hit, MIS-weighted against light sampling at the previous vertex.
-        let le = scene.emitted(&si);
-        if le != Spectrum::ZERO {
-            let w = if st.prev_delta {
-                1.0
-            } else {
-                self.bsdf_weight(st.prev_bsdf_pdf, scene.light_pdf(st.prev_p, st.prev_n, &si))
-            };
-            st.l += st.beta * le * w;
-        }
-
+        self.add_emitted(scene, st, &si);
         if st.depth + 1 >= self.term.max_depth {
             return Vertex::DONE;
         }
@@ -580,6 +570,21 @@ impl PathIntegrator {
     pub fn add_mis_miss(&self, st: &mut PathState, le: Spectrum, env_pdf: f32) {
         if le != Spectrum::ZERO {
             st.l += st.beta * le * self.bsdf_weight(st.prev_bsdf_pdf, env_pdf);
+        }
+    }
+
+    /// Emission at the hit `si` added to the path's radiance,
+    /// MIS-weighted against light sampling at the previous vertex.
+    #[inline]
+    fn add_emitted(&self, scene: &Scene, st: &mut PathState, si: &SurfaceInteraction) {
+        let le = scene.emitted(si);
+        if le != Spectrum::ZERO {
+            let w = if st.prev_delta {
+                1.0
+            } else {
+                self.bsdf_weight(st.prev_bsdf_pdf, scene.light_pdf(st.prev_p, st.prev_n, si))
+            };
+            st.l += st.beta * le * w;
         }
     }
 
