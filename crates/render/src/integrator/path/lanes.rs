@@ -208,7 +208,7 @@ pub struct LaneBatch {
     rows: [[f32; LaneBatch::LANES]; row::COUNT],
     /// With resampled light selection, [`cand_row::COUNT`] rows per
     /// candidate (empty until a batch first needs them).
-    cands: Vec<[f32; LaneBatch::LANES]>,
+    cands: Vec<[[f32; LaneBatch::LANES]; cand_row::COUNT]>,
 }
 
 impl LaneBatch {
@@ -276,7 +276,7 @@ impl LaneBatch {
     #[inline(always)]
     fn set_cand(&mut self, c: usize, r: usize, x: f32) {
         let l = self.lane();
-        self.cands[c * cand_row::COUNT + r][l] = x;
+        self.cands[c][r][l] = x;
     }
 
     /// Rows `r..r + 3` of candidate `c` for the lane being added.
@@ -290,7 +290,7 @@ impl LaneBatch {
     /// Row `r` of candidate `c` in lanes.
     #[inline(always)]
     fn cand<F: Float>(&self, c: usize, r: usize) -> F {
-        F::load(&self.cands[c * cand_row::COUNT + r])
+        F::load(&self.cands[c][r])
     }
 
     /// Rows `r..r + 3` of candidate `c` in lanes.
@@ -321,8 +321,8 @@ impl LaneBatch {
     /// on valid inputs.
     fn pad(&mut self, width: usize) {
         let last = self.len - 1;
-        let cands = if self.candidates > 1 { self.candidates as usize * cand_row::COUNT } else { 0 };
-        for r in self.rows.iter_mut().chain(self.cands[..cands].iter_mut()) {
+        let cands = if self.candidates > 1 { self.candidates as usize } else { 0 };
+        for r in self.rows.iter_mut().chain(self.cands[..cands].iter_mut().flatten()) {
             let x = r[last];
             r[self.len..width].fill(x);
         }
@@ -641,14 +641,19 @@ fn sphere_sample<F: Float>(c: V3<F>, r: V3<F>, p_ref: V3<F>, u0: F, u1: F) -> (V
     let nd = fs * -w.x + ft * -w.y + nc * -w.z;
     let cone_p = c + nd * radius;
     let cone_pdf = one / (F::splat(2.0 * PI) * one_minus_cos_max);
-    // The area (sample_uniform_sphere).
-    let z = one - two * u0;
-    let rr = (one - z * z).max(zero).sqrt();
-    let (s, co) = sin_cos(F::splat(2.0 * PI) * u1);
-    let dir = V3::new(rr * co, rr * s, z);
-    let area_p = c + dir * radius;
-    let area_n = V3::select(flip, -dir, dir);
-    let (area_pdf, area_ok) = area_to_solid_angle(inv_area, p_ref, area_p, area_n);
+    // The area (sample_uniform_sphere), where a lane is inside.
+    let (area_p, area_n, area_pdf, area_ok) = if outside.all() {
+        (V3::splat(Vec3::ZERO), V3::splat(Vec3::ZERO), zero, F::Mask::splat(false))
+    } else {
+        let z = one - two * u0;
+        let rr = (one - z * z).max(zero).sqrt();
+        let (s, co) = sin_cos(F::splat(2.0 * PI) * u1);
+        let dir = V3::new(rr * co, rr * s, z);
+        let area_p = c + dir * radius;
+        let area_n = V3::select(flip, -dir, dir);
+        let (area_pdf, area_ok) = area_to_solid_angle(inv_area, p_ref, area_p, area_n);
+        (area_p, area_n, area_pdf, area_ok)
+    };
     let p = V3::select(outside, cone_p, area_p);
     let n = V3::select(outside, V3::select(flip, -nd, nd), area_n);
     (p, n, F::select(outside, cone_pdf, area_pdf), outside | area_ok)
@@ -1261,9 +1266,8 @@ impl PathIntegrator {
             // `resample_light`'s candidates, picked as `sample_light` picks
             // each; a light that has no lane kernel sends the vertex back.
             b.candidates = m;
-            let need = m as usize * cand_row::COUNT;
-            if b.cands.len() < need {
-                b.cands.resize(need, [0.0; LaneBatch::LANES]);
+            if b.cands.len() < m as usize {
+                b.cands.resize(m as usize, [[0.0; LaneBatch::LANES]; cand_row::COUNT]);
             }
             b.set(row::U_PICK, u_pick);
             for i in 0..m {
