@@ -23,8 +23,9 @@
 //! axis picked per lane); reached by one ray, with the single-ray
 //! [`intersect4`]. Either way a ray's hit in a block is the nearest, the
 //! lowest lane among equal distances, as for a single ray. A sphere
-//! reached by several active rays is tested against all of them at once
-//! (`sphere_hit`, [`Sphere::intersect`] per lane). Other leaves are tested
+//! or disk reached by several active rays is tested against all of them at
+//! once (`sphere_hit`, `disk_hit`: [`Sphere::intersect`] and
+//! [`Disk::intersect`] per lane). Other leaves are tested
 //! one active ray at a time with the single-ray code:
 //! [`Shape::intersect_analytic`] for analytic shapes, and
 //! [`Instance::intersect`] / [`Instance::occluded`] for instances, which so
@@ -49,7 +50,7 @@ use super::bvh::{dequantize, prim_hit, search_limit, Accel, Hit, Primitive, OTHE
 use super::instance::Instance;
 use super::tri4::{intersect4, RayLanes};
 use crate::geometry::triangle::RayShear;
-use crate::geometry::{Ray, Shape, Sphere};
+use crate::geometry::{Disk, Ray, Shape, Sphere};
 use crate::simd::{Float, Mask, V3};
 use glam::{Vec2, Vec4};
 use std::mem::MaybeUninit;
@@ -125,6 +126,30 @@ fn sphere_hit<F: Float>(lanes: &Lanes<F>, s: &Sphere, t_max: F) -> (u32, F) {
     let t = F::select(t0.cmp_gt(zero), t0, t1);
     let hit = !disc.cmp_lt(zero) & t.cmp_gt(zero) & t.cmp_lt(t_max);
     (hit.bitmask(), t)
+}
+
+/// [`Disk::intersect`] of every ray of a packet, each lane performing the
+/// scalar test's operations: glam's `transform_point3` and
+/// `transform_vector3` (column products summed in column order, then the
+/// translation; no fused multiply-add), `t = -o.z / d.z`, the hit point
+/// `o + t d`. The mask of lanes hit with 0 < t < `t_max` inside the unit
+/// disk, their distances and local (x, y) (the hit's uv).
+#[inline(always)]
+fn disk_hit<F: Float>(lanes: &Lanes<F>, disk: &Disk, t_max: F) -> (u32, F, F, F) {
+    let m = disk.object_from_world();
+    let (cx, cy, cz, cw) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    let column_sum = |c: usize, v: &[F; 3]| {
+        let res = F::splat(cx[c]) * v[0];
+        let res = F::splat(cy[c]) * v[1] + res;
+        F::splat(cz[c]) * v[2] + res
+    };
+    let o: [F; 3] = std::array::from_fn(|c| F::splat(cw[c]) + column_sum(c, &lanes.o));
+    let d: [F; 3] = std::array::from_fn(|c| column_sum(c, &lanes.d));
+    let t = -o[2] / d[2];
+    let zero = F::splat(0.0);
+    let (px, py) = (o[0] + t * d[0], o[1] + t * d[1]);
+    let inside = (px * px + py * py).cmp_le(F::splat(1.0));
+    ((t.cmp_gt(zero) & t.cmp_lt(t_max) & inside).bitmask(), t, px, py)
 }
 
 /// The single-ray triangle-test constants of one ray.
@@ -424,28 +449,32 @@ impl Accel {
             } else {
                 let first = cur.child as usize;
                 for prim in &self.prims[first..first + (cur.info & !OTHER) as usize] {
-                    let sphere = match *prim {
-                        Primitive::Shape(shape) => match &shapes[shape as usize] {
-                            Shape::Sphere(s) => Some((shape, s)),
-                            _ => None,
-                        },
-                        _ => None,
-                    };
-                    if let Some((shape, s)) = sphere {
-                        if (cur.mask & alive).count_ones() >= LANE_TRIANGLES {
-                            // A sphere against all rays at once.
-                            let (mask, t) = sphere_hit(&lanes, s, F::from_array(t_max));
+                    if let Primitive::Shape(shape) = *prim {
+                        // A sphere or a disk against all rays at once.
+                        let lanes_hit = if (cur.mask & alive).count_ones() >= LANE_TRIANGLES {
+                            match &shapes[shape as usize] {
+                                Shape::Sphere(s) => {
+                                    let (mask, t) = sphere_hit(&lanes, s, F::from_array(t_max));
+                                    Some((mask, t, zero, zero))
+                                }
+                                Shape::Disk(d) => Some(disk_hit(&lanes, d, F::from_array(t_max))),
+                                _ => None,
+                            }
+                        } else {
+                            None
+                        };
+                        if let Some((mask, t, u, v)) = lanes_hit {
                             let mut mask = mask & cur.mask & alive;
                             hit |= mask;
                             if ANY {
                                 alive &= !mask;
                                 continue;
                             }
-                            let t = t.to_array();
+                            let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
                             while mask != 0 {
                                 let r = mask.trailing_zeros() as usize;
                                 mask &= mask - 1;
-                                let uv = Vec2::ZERO;
+                                let uv = Vec2::new(u.as_ref()[r], v.as_ref()[r]);
                                 record!(r, Hit { t: t.as_ref()[r], uv, shape, index: 0, instance: Hit::NOT_INSTANCED });
                             }
                             continue;
@@ -622,6 +651,15 @@ pub(crate) mod tests {
             Shape::sphere(Vec3::new(8.0, 2.0, 1.0), 0.8, false),
             disk(Vec3::new(3.0, 3.0, 0.5)),
             disk(Vec3::new(4.0, 3.5, 0.5)),
+            // A disk turned and stretched, every matrix entry in its test.
+            Shape::disk(
+                glam::Mat4::from_scale_rotation_translation(
+                    Vec3::new(2.5, 1.5, 1.0),
+                    glam::Quat::from_euler(glam::EulerRot::XYZ, 0.7, -0.4, 1.1),
+                    Vec3::new(5.0, 4.0, 6.0),
+                ),
+                true,
+            ),
         ]
     }
 

@@ -29,6 +29,12 @@ impl Disk {
         Disk { world_from_object, object_from_world: world_from_object.inverse(), n, area: PI * c.length() }
     }
 
+    /// The inverse of `to_world`, into which [`Self::intersect`] takes rays
+    /// (the packet traversal repeats its operations per lane).
+    pub fn object_from_world(&self) -> &Mat4 {
+        &self.object_from_world
+    }
+
     /// World-space area: π·|X × Y|, X and Y the transformed local axes.
     pub fn area(&self) -> f32 {
         self.area
