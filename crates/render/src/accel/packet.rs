@@ -12,7 +12,7 @@
 //! popped, it keeps the rays whose entry distance is still <= their closest
 //! hit, the single-ray rule applied per ray. Children are visited front to
 //! back by the entry distance of the lowest ray that enters them. A
-//! subtree that at most [`FEW_RAYS`] rays still enter is handed to the
+//! subtree that at most `FEW_RAYS` (4) rays still enter is handed to the
 //! single-ray kernel a ray at a time ([`Accel::intersect`]'s walk, started
 //! at that subtree with the ray's closest hit so far as its `t_max`), which
 //! tests its boxes for one ray eight at a time instead of eight boxes one
