@@ -15,7 +15,7 @@
 
 use crate::geometry::SurfaceInteraction;
 use crate::math::{safe_sqrt, PI};
-use crate::simd::{Float, Mask as _};
+use crate::simd::{Float, Mask as _, V3};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
@@ -181,6 +181,25 @@ pub(crate) fn beckmann_lambda_lanes<F: Float>(a: F) -> F {
 /// The a = 1/(α tan θ) from which the Beckmann G1 is 1.0 in f32.
 pub(crate) const BECKMANN_G1_ONE: f64 = 4.0;
 
+/// [`Microfacet::smith_g1`] in lanes, for the roughnesses `au`, `av` as
+/// `Microfacet::alphas` floors them: its early returns become selects, so
+/// every lane is bitwise the scalar value.
+#[inline(always)]
+pub(crate) fn smith_g1_lanes<F: Float>(au: F, av: F, beckmann: bool, v: V3<F>, m: V3<F>) -> F {
+    let (zero, one) = (F::splat(0.0), F::splat(1.0));
+    let (ax, ay) = (au * v.x, av * v.y);
+    let xy = ax * ax + ay * ay;
+    let t = xy / (v.z * v.z);
+    let g = if beckmann {
+        let a = one / t.sqrt();
+        F::select(a.cmp_ge(F::splat(BECKMANN_G1_ONE as f32)), one, one / (one + beckmann_lambda_lanes(a)))
+    } else {
+        F::splat(2.0) / (one + (one + t).sqrt())
+    };
+    let g = F::select(xy.cmp_eq(zero), one, g);
+    F::select((v.dot(m) * v.z).cmp_le(zero), zero, g)
+}
+
 /// Mitsuba's rational fit of the Beckmann G1 (kept for comparison only).
 pub fn beckmann_g1_fit(a: f32) -> f32 {
     if a >= 1.6 {
@@ -198,7 +217,7 @@ impl Microfacet {
 
     /// Roughness values clamped to Mitsuba's minimum of 1e-4.
     #[inline]
-    fn alphas(&self) -> (f32, f32) {
+    pub(crate) fn alphas(&self) -> (f32, f32) {
         (self.alpha_u.max(1e-4), self.alpha_v.max(1e-4))
     }
 

@@ -6,12 +6,13 @@
 //! ρ/(1 − ρ F_int) instead).
 
 use super::fresnel::fresnel_dielectric;
-use super::microfacet::{reflect_m, refract_m, Microfacet};
+use super::microfacet::{reflect_m, refract_m, smith_g1_lanes, Microfacet, MicrofacetType};
 use super::BsdfSample;
 use super::{BsdfModel, BsdfParams};
 use crate::geometry::SurfaceInteraction;
 use crate::math::{Spectrum, INV_PI};
 use crate::sampling::warp;
+use crate::simd::{Float as _, Widest, V3};
 use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
@@ -105,28 +106,79 @@ fn visible_normal_grid(distr: &Microfacet, wi: Vec3, nodes: &(Vec<f64>, Vec<f64>
 /// m ~ D_wi of (1 − F) G1(wt, m) for the refracted wt, by quadrature over
 /// the sampler's unit square.
 fn eval_transmittance(distr: &Microfacet, wi: Vec3, eta: f32, nodes: &(Vec<f64>, Vec<f64>)) -> f64 {
-    let mut acc = 0.0;
+    let mut sum = G1Sum::new(distr);
     for (m, weight) in visible_normal_grid(distr, wi, nodes) {
         let (f, cos_t, _, eta_ti) = fresnel_dielectric(wi.dot(m), eta);
         let wt = refract_m(wi, m, cos_t, eta_ti);
         if wt.z * wi.z < 0.0 {
-            acc += weight * (distr.smith_g1(wt, m) * (1.0 - f)) as f64;
+            sum.add(wt, m, 1.0 - f, weight);
         }
     }
-    acc
+    sum.total()
 }
 
 /// Mitsuba's `eval_reflectance`: as [`eval_transmittance`] for the
 /// reflected direction, F G1(wr, m).
 fn eval_reflectance(distr: &Microfacet, wi: Vec3, eta: f32, nodes: &(Vec<f64>, Vec<f64>)) -> f64 {
-    let mut acc = 0.0;
+    let mut sum = G1Sum::new(distr);
     for (m, weight) in visible_normal_grid(distr, wi, nodes) {
         let wr = reflect_m(wi, m);
         if wr.z > 0.0 && wi.z > 0.0 {
-            acc += weight * (distr.smith_g1(wr, m) * fresnel_dielectric(wi.dot(m), eta).0) as f64;
+            sum.add(wr, m, fresnel_dielectric(wi.dot(m), eta).0, weight);
         }
     }
-    acc
+    sum.total()
+}
+
+/// Σ `weight · (G1(v, m) · factor)` over the terms added, in their order
+/// (an f64 sum of f32 products), with G1 evaluated in the widest lanes a
+/// lane group at a time: bitwise `Microfacet::smith_g1` term by term, and
+/// most of the tables' cost.
+struct G1Sum {
+    au: f32,
+    av: f32,
+    beckmann: bool,
+    /// The pending terms: v, m, factor, weight.
+    terms: [(Vec3, Vec3, f32, f64); 16],
+    len: usize,
+    acc: f64,
+}
+
+impl G1Sum {
+    fn new(distr: &Microfacet) -> Self {
+        let (au, av) = distr.alphas();
+        let beckmann = distr.kind == MicrofacetType::Beckmann;
+        G1Sum { au, av, beckmann, terms: [(Vec3::ZERO, Vec3::ZERO, 0.0, 0.0); 16], len: 0, acc: 0.0 }
+    }
+
+    #[inline]
+    fn add(&mut self, v: Vec3, m: Vec3, factor: f32, weight: f64) {
+        self.terms[self.len] = (v, m, factor, weight);
+        self.len += 1;
+        if self.len == Widest::WIDTH {
+            self.flush();
+        }
+    }
+
+    fn flush(&mut self) {
+        // Lanes past `len` repeat the last term and are not summed.
+        let terms = &self.terms[..self.len];
+        let at = |l: usize| &terms[l.min(terms.len() - 1)];
+        let (v, m) = (V3::gather(|l| at(l).0), V3::gather(|l| at(l).1));
+        let (au, av) = (Widest::splat(self.au), Widest::splat(self.av));
+        let g = smith_g1_lanes::<Widest>(au, av, self.beckmann, v, m).to_array();
+        for (&(_, _, factor, weight), &g) in terms.iter().zip(g.as_ref()) {
+            self.acc += weight * (g * factor) as f64;
+        }
+        self.len = 0;
+    }
+
+    fn total(mut self) -> f64 {
+        if self.len > 0 {
+            self.flush();
+        }
+        self.acc
+    }
 }
 
 impl RoughPlasticTables {

@@ -93,6 +93,18 @@ impl LightSampler {
         }
     }
 
+    /// Whether [`Self::sample`]'s pick does not depend on its number: there
+    /// is at most one light to pick (the light BVH aside), so a caller may
+    /// skip drawing it.
+    #[inline]
+    pub fn picks_without_number(&self) -> bool {
+        match self {
+            LightSampler::Uniform { count } => *count <= 1,
+            LightSampler::Power(d) => d.len() <= 1,
+            LightSampler::Bvh(_) => false,
+        }
+    }
+
     /// Probability that `sample` picks light `i` for a receiver at (`p`, `n`),
     /// bit-identical to the probability `sample` returns with it.
     #[inline]

@@ -6,7 +6,9 @@
 //! first rays of a packet are consecutive samples of one pixel and nearly
 //! identical. Each round traces the closest hit of every live path's ray
 //! in packets of up to 16 ([`Accel::intersect_packet`]), runs each path's
-//! vertex (emission, light sample, BSDF sample, Russian roulette): diffuse
+//! vertex (emission, light sample, BSDF sample, Russian roulette; a last
+//! vertex on a shape that emits nothing ends its path at once,
+//! [`PathIntegrator::ends_dark`]): diffuse
 //! vertices lit by area lights on meshes in lanes
 //! ([`PathIntegrator::lane_vertices`]), every other one with the scalar
 //! [`PathIntegrator::vertex`], so every BSDF and light works; with a path
@@ -61,6 +63,26 @@ struct Slot {
 /// radiance: what the film's splat takes ([`RenderJob::add_pixel_samples`]).
 type Sample = (Vec2, Spectrum);
 
+/// A thread's stream buffers, kept from tile to tile (allocated per tile
+/// and pass, they cost page faults and copies of growing batches); each is
+/// empty between tiles (`hits` is overwritten before it is read).
+#[derive(Default)]
+struct Buffers {
+    slots: Vec<Slot>,
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    /// Shadow rays and the slots they belong to, side by side.
+    shadow_slots: Vec<usize>,
+    shadow_rays: Vec<Ray>,
+    ended: Vec<bool>,
+    sky_slots: Vec<usize>,
+    bins: LaneBins,
+}
+
+thread_local! {
+    static BUFFERS: std::cell::RefCell<Buffers> = std::cell::RefCell::new(Buffers::default());
+}
+
 /// A placeholder ray.
 const EMPTY_RAY: Ray = Ray { o: Vec3::ZERO, d: Vec3::Z, t_max: 0.0 };
 
@@ -101,26 +123,28 @@ fn run<F: Float>(
     // The camera rays, kept only for the AOVs.
     let aovs = tile.has_aovs();
     let mut camera_rays: Vec<Ray> = Vec::with_capacity(if aovs { total } else { 0 });
-    let mut slots: Vec<Slot> = Vec::with_capacity(POOL);
-    let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
-    let mut hits: Vec<Option<Hit>> = vec![None; POOL];
-    // Shadow rays and the slots they belong to, side by side.
-    let mut shadow_slots: Vec<usize> = Vec::with_capacity(POOL);
-    let mut shadow_rays: Vec<Ray> = Vec::with_capacity(POOL);
-    let mut ended: Vec<bool> = Vec::with_capacity(POOL);
+    let Buffers {
+        mut slots,
+        mut rays,
+        mut hits,
+        mut shadow_slots,
+        mut shadow_rays,
+        mut ended,
+        mut sky_slots,
+        mut bins,
+    } = BUFFERS.with(|b| b.take());
+    hits.resize(POOL, None);
     // Pinhole camera rays are made a lane group at a time.
     let camera_lanes = job.camera.has_pinhole_lanes() && F::WIDTH > 1;
     // Whether camera rays start paths (`PathIntegrator::start`: max_depth > 0).
     let starts_paths = path.start(&EMPTY_RAY).is_some();
     // Escaping rays that see a lone envmap are evaluated in lanes.
     let sky = scene.single_envmap().filter(|_| F::WIDTH > 1);
-    let mut sky_slots: Vec<usize> = Vec::with_capacity(POOL);
     // Vertices run in lanes where they can (see `PathIntegrator::lane_vertex`),
     // guided by a trained guide as `vertex_guided` is.
     let vertex_lanes = F::WIDTH > 1;
     let lane_guide = guide.filter(|g| g.trained());
     let env = scene.single_envmap();
-    let mut bins = LaneBins::default();
     let mut lane_out = LaneOutcomes::default();
     let mut next = 0;
     loop {
@@ -250,6 +274,10 @@ fn run<F: Float>(
                 continue;
             }
             let slot = &mut slots[i];
+            if hits[i].as_ref().is_some_and(|h| path.ends_dark(scene, &slot.state, h)) {
+                ended.push(true);
+                continue;
+            }
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
                 if let Some(at) =
                     path.lane_vertex(scene, env, &mut slot.state, h, &mut slot.rng, i, &mut bins, lane_guide)
@@ -274,7 +302,8 @@ fn run<F: Float>(
             }
             ended.push(!v.go_on);
         }
-        for at in 0..bins.count() {
+        // (Without lanes no batch is ever filled: the test lets a scalar build drop the lane kernels.)
+        for at in 0..if vertex_lanes { bins.count() } else { 0 } {
             run_batch!(at);
         }
         // Shadow rays, then each verdict before the path's next vertex.
@@ -301,6 +330,8 @@ fn run<F: Float>(
             keep
         });
     }
+    // Every slot has retired and every batch has run: the buffers go back empty.
+    BUFFERS.with(|b| b.replace(Buffers { slots, rays, hits, shadow_slots, shadow_rays, ended, sky_slots, bins }));
     // Splat in canonical order, a pixel's samples at a time where no AOVs need the rays.
     if aovs {
         for (k, (&(u, l), ray)) in results.iter().zip(&camera_rays).enumerate() {

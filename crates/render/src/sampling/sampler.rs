@@ -176,6 +176,29 @@ impl SampleStream {
         self.next_1d_general()
     }
 
+    /// Moves past the value [`Self::next_1d`] would give without computing
+    /// it, for a caller that would not read it: the stream is left as
+    /// `next_1d` leaves it.
+    #[inline]
+    pub fn skip_1d(&mut self) {
+        if let SamplerKind::Independent = self.sampler.kind {
+            self.dim += 1;
+        } else {
+            self.next_1d_general();
+        }
+    }
+
+    /// [`Self::skip_1d`] for [`Self::next_2d`].
+    #[inline]
+    pub fn skip_2d(&mut self) {
+        if let SamplerKind::Independent = self.sampler.kind {
+            // `independent_2d`: one hash, one dimension.
+            self.dim += 1;
+        } else {
+            self.next_2d_general();
+        }
+    }
+
     /// [`Self::next_1d`] for every sampler.
     #[inline(never)]
     fn next_1d_general(&mut self) -> f32 {
@@ -412,6 +435,51 @@ mod tests {
             let k = (u.y * 4.0) as usize * 4 + (u.x * 4.0) as usize;
             assert!(!hit[k]);
             hit[k] = true;
+        }
+    }
+
+    /// Skipping a number leaves the stream where drawing it does, for every
+    /// kind and every mix of 1D and 2D draws: the numbers after a skip are
+    /// bitwise those after the draw.
+    #[test]
+    fn skips_leave_the_stream_where_draws_do() {
+        let kinds =
+            [SamplerKind::Independent, SamplerKind::Stratified, SamplerKind::Sobol].into_iter().chain(NEW_KINDS);
+        for kind in kinds {
+            let s = Sampler::new(kind, 11, 16);
+            for (pixel, i) in [((0, 0), 0), ((5, 9), 3), ((2, 7), 15), ((1, 1), 21)] {
+                // Draw pattern by bit: 1 a 2D number, 0 a 1D one; each
+                // position is skipped in turn.
+                for pattern in [0b0000_0000u32, 0b0110_1101, 0b1111_1111, 0b1001_0010] {
+                    let draw = |st: &mut SampleStream, k: u32, skip: bool| -> Vec<f32> {
+                        match (pattern >> k & 1 == 1, skip) {
+                            (true, false) => st.next_2d().to_array().to_vec(),
+                            (false, false) => vec![st.next_1d()],
+                            (true, true) => {
+                                st.skip_2d();
+                                vec![]
+                            }
+                            (false, true) => {
+                                st.skip_1d();
+                                vec![]
+                            }
+                        }
+                    };
+                    let mut full = s.stream(pixel, i);
+                    let all: Vec<Vec<f32>> = (0..8).map(|k| draw(&mut full, k, false)).collect();
+                    for skipped in 0..8 {
+                        let mut st = s.stream(pixel, i);
+                        for k in 0..8 {
+                            let v = draw(&mut st, k, k == skipped);
+                            if k != skipped {
+                                let same = v.iter().zip(&all[k as usize]).all(|(a, b)| a.to_bits() == b.to_bits());
+                                assert!(same, "{kind:?} pattern {pattern:b}: draw {k} after skipping {skipped}");
+                            }
+                        }
+                        assert_eq!(st.dim(), full.dim(), "{kind:?}");
+                    }
+                }
+            }
         }
     }
 

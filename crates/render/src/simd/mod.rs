@@ -53,6 +53,22 @@ pub use avx512::{F32x16, I32x16, M32x16};
 pub use funcs::{acos, atan, atan2, cos, erf, erfinv, exp, ln, sin, sin_cos, SIN_COS_MAX};
 pub use vec3::V3;
 
+/// The widest lane type this build has (for batch work with no scalar
+/// order to keep, such as tables: any instance gives the same bits).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+pub type Widest = F32x16;
+/// The widest lane type this build has (for batch work with no scalar
+/// order to keep, such as tables: any instance gives the same bits).
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f"), target_feature = "avx2", target_feature = "fma"))]
+pub type Widest = F32x8;
+/// The widest lane type this build has (for batch work with no scalar
+/// order to keep, such as tables: any instance gives the same bits).
+#[cfg(not(all(
+    target_arch = "x86_64",
+    any(target_feature = "avx512f", all(target_feature = "avx2", target_feature = "fma"))
+)))]
+pub type Widest = f32;
+
 use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 

@@ -47,7 +47,7 @@
 
 use super::{PathIntegrator, PathState};
 use crate::accel::Hit;
-use crate::bsdf::microfacet::{beckmann_lambda_lanes, beckmann_slope_x_lanes, beckmann_slope_y_lanes, BECKMANN_G1_ONE};
+use crate::bsdf::microfacet::{beckmann_slope_x_lanes, beckmann_slope_y_lanes, smith_g1_lanes};
 use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
@@ -545,6 +545,20 @@ fn fresnel_dielectric<F: Float>(cos_i: F, eta: F) -> (F, F, F, F) {
     (r, F::select(outside, -ct, ct), eta_it, eta_ti)
 }
 
+/// A number drawn but never read: the stream moves past it (0 stands in).
+#[inline(always)]
+fn skipped_1d(rng: &mut SampleStream) -> f32 {
+    rng.skip_1d();
+    0.0
+}
+
+/// [`skipped_1d`] for a 2D number.
+#[inline(always)]
+fn skipped_2d(rng: &mut SampleStream) -> Vec2 {
+    rng.skip_2d();
+    Vec2::ZERO
+}
+
 /// `mulsign`: `v` times the sign of `s` (−1 where s < 0, else 1).
 #[inline(always)]
 fn mulsign<F: Float>(v: V3<F>, s: F) -> V3<F> {
@@ -730,18 +744,7 @@ impl<F: Float> Micro<F> {
     /// `Microfacet::smith_g1`.
     #[inline(always)]
     fn g1(&self, v: V3<F>, m: V3<F>) -> F {
-        let (zero, one) = (F::splat(0.0), F::splat(1.0));
-        let (ax, ay) = (self.au * v.x, self.av * v.y);
-        let xy = ax * ax + ay * ay;
-        let t = xy / (v.z * v.z);
-        let g = if self.beckmann {
-            let a = one / t.sqrt();
-            F::select(a.cmp_ge(F::splat(BECKMANN_G1_ONE as f32)), one, one / (one + beckmann_lambda_lanes(a)))
-        } else {
-            F::splat(2.0) / (one + (one + t).sqrt())
-        };
-        let g = F::select(xy.cmp_eq(zero), one, g);
-        F::select((v.dot(m) * v.z).cmp_le(zero), zero, g)
+        smith_g1_lanes(self.au, self.av, self.beckmann, v, m)
     }
 
     /// `RoughConductor::eval` and `pdf`: (f, density).
@@ -1114,9 +1117,13 @@ impl PathIntegrator {
             Sphere(Vec3, Vec3),
             Tri(&'a [Vec3; 3], f32, f32),
         }
-        // Specular BSDFs sample no light, but `vertex` draws its numbers all the same.
+        // The numbers `vertex` draws, in its order; those this vertex never
+        // reads are skipped, not computed (specular BSDFs sample no light, and
+        // a lone light is picked without a number).
         let dim = rng.dim();
-        let (u_sel, u_light) = (rng.next_1d(), rng.next_2d());
+        let reads_sel = lit && (m > 1 || !scene.light_sampler().picks_without_number());
+        let u_sel = if reads_sel { rng.next_1d() } else { skipped_1d(rng) };
+        let u_light = if lit { rng.next_2d() } else { skipped_2d(rng) };
         let u_pick = if lit && m > 1 { rng.next_1d() } else { 0.0 };
         // A block, not a closure: LLVM kept the closure out of line and
         // returned its tuple through memory.
@@ -1349,8 +1356,20 @@ impl PathIntegrator {
                 Picked::None | Picked::Candidates => unreachable!("a lit vertex has its light"),
             }
         }
-        let u1 = rng.next_1d();
-        let u = rng.next_2d();
+        // The BSDF's numbers: diffuse and rough conductors sample with the 2D
+        // one alone, smooth dielectrics with the 1D one alone, smooth
+        // conductors with neither; a guided vertex reads both.
+        let guided = lit && guide.is_some();
+        let (reads_u1, reads_u) = match material {
+            LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse | LaneMaterial::RoughConductor { .. } => {
+                (false, true)
+            }
+            LaneMaterial::Conductor { .. } => (false, false),
+            LaneMaterial::Dielectric { .. } => (true, false),
+            _ => (true, true),
+        };
+        let u1 = if reads_u1 || guided { rng.next_1d() } else { skipped_1d(rng) };
+        let u = if reads_u || guided { rng.next_2d() } else { skipped_2d(rng) };
         b.set(row::U_BSDF, u.x);
         b.set(row::U_BSDF + 1, u.y);
         match guide.filter(|_| lit) {

@@ -39,6 +39,7 @@ mod lanes;
 pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes, MAX_LANE_CANDIDATES};
 
 use super::{RayStats, Termination};
+use crate::accel::Hit;
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::geometry::{Ray, SurfaceInteraction};
 use crate::guiding::{Guide, GuideDensity, GuideRecord};
@@ -551,6 +552,17 @@ impl PathIntegrator {
     #[inline]
     pub fn delta_miss_seen(&self, st: &PathState) -> bool {
         st.prev_delta && !(st.depth == 0 && self.hide_emitters)
+    }
+
+    /// Whether the vertex at `hit` adds nothing and ends the path, so that a
+    /// stream may end it without [`Self::vertex`]: the last vertex (depth + 1
+    /// = `max_depth`, where `vertex` adds only emission) on a shape that
+    /// emits nothing, outside instances.
+    #[inline]
+    pub fn ends_dark(&self, scene: &Scene, st: &PathState, hit: &Hit) -> bool {
+        st.depth + 1 >= self.term.max_depth
+            && hit.instance == Hit::NOT_INSTANCED
+            && scene.shape_info[hit.shape as usize].light.is_none()
     }
 
     /// The escape of a path for which [`Self::delta_miss_seen`] holds, with
