@@ -6,15 +6,17 @@
 //! first rays of a packet are consecutive samples of one pixel and nearly
 //! identical. Each round traces the closest hit of every live path's ray
 //! in packets of up to 16 ([`Accel::intersect_packet`]), runs each path's
-//! vertex (emission, light sample, BSDF sample, Russian roulette; a last
-//! vertex on a shape that emits nothing ends its path at once,
-//! [`PathIntegrator::ends_dark`]): diffuse
-//! vertices lit by area lights on meshes in lanes
-//! ([`PathIntegrator::lane_vertices`]), every other one with the scalar
-//! [`PathIntegrator::vertex`], so every BSDF and light works; with a path
-//! guide, every vertex is the scalar [`PathIntegrator::vertex_guided`]), traces the
-//! light samples' shadow rays in packets
-//! ([`Accel::occluded_packet`]), and refills the slots of paths that ended.
+//! vertex (emission, light sample, BSDF sample, Russian roulette) and
+//! traces the light samples' shadow rays in packets
+//! ([`Accel::occluded_packet`]), then refills the slots of paths that
+//! ended. Vertices whose shape, material and light have lane kernels run in
+//! lanes ([`PathIntegrator::lane_vertex`] gathers them into batches,
+//! [`PathIntegrator::lane_vertices`] runs a batch), guided ones too once the
+//! guide is trained; escapes into a lone environment map are evaluated in
+//! lanes; a last vertex on a shape that emits nothing ends its path at once
+//! ([`PathIntegrator::ends_dark`]); every other vertex runs the scalar
+//! [`PathIntegrator::vertex`] (or `vertex_guided`), so every BSDF and light
+//! works.
 //!
 //! **Bitwise the scalar loop.** A path's vertices run the same code in the
 //! same order with its own random stream, a pure function of (seed, pixel,
