@@ -258,33 +258,17 @@ impl LaneBatch {
         self.len & (Self::LANES - 1)
     }
 
-    /// Row `r` of the lane being added.
+    /// Row `r` of lane `l` (the lane being added, [`Self::lane`], found
+    /// once per vertex: found per row, it was loaded again after every store).
     #[inline(always)]
-    fn set(&mut self, r: usize, x: f32) {
-        let l = self.lane();
-        self.rows[r][l] = x;
+    fn set(&mut self, l: usize, r: usize, x: f32) {
+        put(&mut self.rows, l, r, x);
     }
 
-    /// Rows `r..r + 3` of the lane being added.
+    /// Rows `r..r + 3` of lane `l`.
     #[inline(always)]
-    fn set3(&mut self, r: usize, v: Vec3) {
-        let l = self.lane();
-        (self.rows[r][l], self.rows[r + 1][l], self.rows[r + 2][l]) = (v.x, v.y, v.z);
-    }
-
-    /// Row `r` of candidate `c` for the lane being added.
-    #[inline(always)]
-    fn set_cand(&mut self, c: usize, r: usize, x: f32) {
-        let l = self.lane();
-        self.cands[c][r][l] = x;
-    }
-
-    /// Rows `r..r + 3` of candidate `c` for the lane being added.
-    #[inline(always)]
-    fn set_cand3(&mut self, c: usize, r: usize, v: Vec3) {
-        self.set_cand(c, r, v.x);
-        self.set_cand(c, r + 1, v.y);
-        self.set_cand(c, r + 2, v.z);
+    fn set3(&mut self, l: usize, r: usize, v: Vec3) {
+        put3(&mut self.rows, l, r, v);
     }
 
     /// Row `r` of candidate `c` in lanes.
@@ -342,6 +326,18 @@ impl LaneBatch {
         let cands = if self.candidates > 1 { self.candidates as usize } else { 0 };
         self.cands[..cands].iter_mut().flatten().for_each(pad);
     }
+}
+
+/// Row `r` of lane `l` in `rows` (a batch's, or one candidate's).
+#[inline(always)]
+fn put(rows: &mut [[f32; LaneBatch::LANES]], l: usize, r: usize, x: f32) {
+    rows[r][l] = x;
+}
+
+/// Rows `r..r + 3` of lane `l` in `rows`.
+#[inline(always)]
+fn put3(rows: &mut [[f32; LaneBatch::LANES]], l: usize, r: usize, v: Vec3) {
+    (rows[r][l], rows[r + 1][l], rows[r + 2][l]) = (v.x, v.y, v.z);
 }
 
 /// The open [`LaneBatch`]es of a stream, one per kind met so far.
@@ -1167,30 +1163,32 @@ impl PathIntegrator {
         };
         let at = bins.of(LaneKind { shape: shape_kind, bsdf, light: light_kind });
         let b = &mut bins.batches[at];
-        b.set3(row::D, st.ray.d);
-        b.set(row::B, hit.uv.x);
-        b.set(row::B + 1, hit.uv.y);
-        b.set3(row::BETA, st.beta);
-        b.set(row::TWO_SIDED_BSDF, if surface.two_sided { 1.0 } else { 0.0 });
+        // The lane, found once (its rows are written below).
+        let l = b.lane();
+        b.set3(l, row::D, st.ray.d);
+        b.set(l, row::B, hit.uv.x);
+        b.set(l, row::B + 1, hit.uv.y);
+        b.set3(l, row::BETA, st.beta);
+        b.set(l, row::TWO_SIDED_BSDF, if surface.two_sided { 1.0 } else { 0.0 });
         match material {
-            LaneMaterial::Diffuse(r) => b.set3(row::MAT, r),
+            LaneMaterial::Diffuse(r) => b.set3(l, row::MAT, r),
             LaneMaterial::TexturedDiffuse => {}
             LaneMaterial::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance, .. } => {
-                b.set3(row::MAT, eta);
-                b.set3(row::MAT + 3, k);
-                b.set3(row::MAT + 6, specular_reflectance);
-                b.set(row::PARAM, alpha_u);
-                b.set(row::PARAM_V, alpha_v);
+                b.set3(l, row::MAT, eta);
+                b.set3(l, row::MAT + 3, k);
+                b.set3(l, row::MAT + 6, specular_reflectance);
+                b.set(l, row::PARAM, alpha_u);
+                b.set(l, row::PARAM_V, alpha_v);
             }
             LaneMaterial::Conductor { eta, k, specular_reflectance } => {
-                b.set3(row::MAT, eta);
-                b.set3(row::MAT + 3, k);
-                b.set3(row::MAT + 6, specular_reflectance);
+                b.set3(l, row::MAT, eta);
+                b.set3(l, row::MAT + 3, k);
+                b.set3(l, row::MAT + 6, specular_reflectance);
             }
             LaneMaterial::Dielectric { eta, specular_reflectance, specular_transmittance } => {
-                b.set3(row::MAT, specular_reflectance);
-                b.set3(row::MAT + 3, specular_transmittance);
-                b.set(row::PARAM, eta);
+                b.set3(l, row::MAT, specular_reflectance);
+                b.set3(l, row::MAT + 3, specular_transmittance);
+                b.set(l, row::PARAM, eta);
             }
             LaneMaterial::RoughDielectric {
                 alpha_u,
@@ -1200,17 +1198,17 @@ impl PathIntegrator {
                 specular_transmittance,
                 ..
             } => {
-                b.set3(row::MAT, specular_reflectance);
-                b.set3(row::MAT + 3, specular_transmittance);
-                b.set(row::MAT + 6, eta);
-                b.set(row::PARAM, alpha_u);
-                b.set(row::PARAM_V, alpha_v);
+                b.set3(l, row::MAT, specular_reflectance);
+                b.set3(l, row::MAT + 3, specular_transmittance);
+                b.set(l, row::MAT + 6, eta);
+                b.set(l, row::PARAM, alpha_u);
+                b.set(l, row::PARAM_V, alpha_v);
             }
             LaneMaterial::Plastic { eta, diffuse, specular_reflectance, specular_sampling_weight } => {
-                b.set3(row::MAT, diffuse);
-                b.set3(row::MAT + 3, specular_reflectance);
-                b.set(row::MAT + 6, specular_sampling_weight);
-                b.set(row::PARAM, eta);
+                b.set3(l, row::MAT, diffuse);
+                b.set3(l, row::MAT + 3, specular_reflectance);
+                b.set(l, row::MAT + 6, specular_sampling_weight);
+                b.set(l, row::PARAM, eta);
             }
             LaneMaterial::RoughPlastic {
                 alpha_u,
@@ -1222,22 +1220,22 @@ impl PathIntegrator {
                 table,
                 ..
             } => {
-                b.set3(row::MAT, diffuse);
-                b.set3(row::MAT + 3, specular_reflectance);
-                b.set(row::MAT + 6, specular_sampling_weight);
-                b.set(row::MAT + 7, eta);
+                b.set3(l, row::MAT, diffuse);
+                b.set3(l, row::MAT + 3, specular_reflectance);
+                b.set(l, row::MAT + 6, specular_sampling_weight);
+                b.set(l, row::MAT + 7, eta);
                 // Exact: there are far fewer than 2^24 tables.
-                b.set(row::MAT + 8, table as f32);
-                b.set(row::PARAM, alpha_u);
-                b.set(row::PARAM_V, alpha_v);
+                b.set(l, row::MAT + 8, table as f32);
+                b.set(l, row::PARAM, alpha_u);
+                b.set(l, row::PARAM_V, alpha_v);
             }
         }
         match shape {
             Shape::Mesh(m) | Shape::CulledMesh(m) => {
                 let [p0, p1, p2] = m.vertices(hit.index as usize);
-                b.set3(row::GEO, p0);
-                b.set3(row::GEO + 3, p1);
-                b.set3(row::GEO + 6, p2);
+                b.set3(l, row::GEO, p0);
+                b.set3(l, row::GEO + 3, p1);
+                b.set3(l, row::GEO + 6, p2);
                 if let Some(reflectance) = reflectance {
                     // The hit's uv as Shape::interaction_with finds it (barycentric without texture coordinates).
                     let (b1, b2) = (hit.uv.x, hit.uv.y);
@@ -1246,40 +1244,40 @@ impl PathIntegrator {
                         let (u, t) = (&m.mesh.uvs, m.mesh.indices[hit.index as usize]);
                         let uvs = [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]];
                         for (k, uv) in uvs.iter().enumerate() {
-                            b.set(row::UVS + 2 * k, uv.x);
-                            b.set(row::UVS + 2 * k + 1, uv.y);
+                            b.set(l, row::UVS + 2 * k, uv.x);
+                            b.set(l, row::UVS + 2 * k + 1, uv.y);
                         }
                         let b0 = 1.0 - b1 - b2;
                         tex = b0 * uvs[0] + b1 * uvs[1] + b2 * uvs[2];
                     }
-                    b.set3(row::MAT, reflectance.eval(&SurfaceInteraction::at_uv(tex)));
+                    b.set3(l, row::MAT, reflectance.eval(&SurfaceInteraction::at_uv(tex)));
                 }
                 if shape_kind >= 5 {
                     let (ns, t) = (&m.mesh.normals, m.mesh.indices[hit.index as usize]);
                     for (k, &i) in t.iter().enumerate() {
-                        b.set3(row::NS + 3 * k, ns[i as usize]);
+                        b.set3(l, row::NS + 3 * k, ns[i as usize]);
                     }
                 }
             }
             Shape::Sphere(s) => {
-                b.set3(row::GEO, s.center);
-                b.set3(row::GEO + 3, s.rot.z_axis);
-                b.set3(row::GEO + 6, st.ray.o);
-                b.set(row::RADIUS, s.radius);
-                b.set(row::B, hit.t);
-                b.set(row::FLIP, if s.flip { 1.0 } else { 0.0 });
+                b.set3(l, row::GEO, s.center);
+                b.set3(l, row::GEO + 3, s.rot.z_axis);
+                b.set3(l, row::GEO + 6, st.ray.o);
+                b.set(l, row::RADIUS, s.radius);
+                b.set(l, row::B, hit.t);
+                b.set(l, row::FLIP, if s.flip { 1.0 } else { 0.0 });
                 if shape_kind == 4 {
-                    b.set3(row::GEO + 9, s.rot.x_axis);
-                    b.set3(row::GEO + 12, s.rot.y_axis);
+                    b.set3(l, row::GEO + 9, s.rot.x_axis);
+                    b.set3(l, row::GEO + 12, s.rot.y_axis);
                 }
             }
             Shape::Disk(d) => {
                 let m = &d.world_from_object;
-                b.set3(row::GEO, m.x_axis.truncate());
-                b.set3(row::GEO + 3, m.y_axis.truncate());
-                b.set3(row::GEO + 6, m.z_axis.truncate());
-                b.set3(row::GEO + 9, m.w_axis.truncate());
-                b.set3(row::GEO + 12, d.n);
+                b.set3(l, row::GEO, m.x_axis.truncate());
+                b.set3(l, row::GEO + 3, m.y_axis.truncate());
+                b.set3(l, row::GEO + 6, m.z_axis.truncate());
+                b.set3(l, row::GEO + 9, m.w_axis.truncate());
+                b.set3(l, row::GEO + 12, d.n);
             }
             _ => unreachable!("the shape kind was found above"),
         }
@@ -1291,67 +1289,68 @@ impl PathIntegrator {
             if b.cands.len() < m as usize {
                 b.cands.resize(m as usize, [[0.0; LaneBatch::LANES]; cand_row::COUNT]);
             }
-            b.set(row::U_PICK, u_pick);
+            b.set(l, row::U_PICK, u_pick);
             for i in 0..m {
                 let (u_i, u2_i) = super::candidate_numbers(u_sel, u_light, i, m);
                 let c = i as usize;
+                let cand = &mut b.cands[c];
                 let Some((k, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_i) else {
-                    b.set_cand(c, cand_row::KIND, 2.0);
+                    put(cand, l, cand_row::KIND, 2.0);
                     continue;
                 };
                 let Some(&light) = scene.lane_light(k) else {
                     rng.rewind(dim);
                     return None;
                 };
-                b.set_cand(c, cand_row::PMF, pmf);
+                put(cand, l, cand_row::PMF, pmf);
                 match light {
                     LaneLight::Sphere { center, params, li, two_sided } => {
-                        b.set_cand(c, cand_row::KIND, 1.0);
-                        b.set_cand3(c, cand_row::GEO, center);
-                        b.set_cand3(c, cand_row::GEO + 3, params);
-                        b.set_cand3(c, cand_row::LI, li);
-                        b.set_cand(c, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
-                        b.set_cand(c, cand_row::U, u2_i.x);
+                        put(cand, l, cand_row::KIND, 1.0);
+                        put3(cand, l, cand_row::GEO, center);
+                        put3(cand, l, cand_row::GEO + 3, params);
+                        put3(cand, l, cand_row::LI, li);
+                        put(cand, l, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+                        put(cand, l, cand_row::U, u2_i.x);
                     }
                     LaneLight::Mesh { first, count, area_pdf, li, two_sided } => {
                         let tris = scene.lane_light_tris(first, count);
                         let (t, ux) = alias_pick(u2_i.x, tris.len(), |b| (tris[b].keep, tris[b].other));
                         let [q0, q1, q2] = tris[t].p;
-                        b.set_cand(c, cand_row::KIND, 0.0);
-                        b.set_cand3(c, cand_row::GEO, q0);
-                        b.set_cand3(c, cand_row::GEO + 3, q1);
-                        b.set_cand3(c, cand_row::GEO + 6, q2);
-                        b.set_cand(c, cand_row::AREA_PDF, area_pdf);
-                        b.set_cand3(c, cand_row::LI, li);
-                        b.set_cand(c, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
-                        b.set_cand(c, cand_row::U, ux);
+                        put(cand, l, cand_row::KIND, 0.0);
+                        put3(cand, l, cand_row::GEO, q0);
+                        put3(cand, l, cand_row::GEO + 3, q1);
+                        put3(cand, l, cand_row::GEO + 6, q2);
+                        put(cand, l, cand_row::AREA_PDF, area_pdf);
+                        put3(cand, l, cand_row::LI, li);
+                        put(cand, l, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+                        put(cand, l, cand_row::U, ux);
                     }
                 }
-                b.set_cand(c, cand_row::U + 1, u2_i.y);
+                put(cand, l, cand_row::U + 1, u2_i.y);
             }
         } else if lit {
             let (picked, pmf, li, two_sided) = light;
-            b.set(row::PMF, pmf);
-            b.set3(row::LI, li);
-            b.set(row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+            b.set(l, row::PMF, pmf);
+            b.set3(l, row::LI, li);
+            b.set(l, row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
             match picked {
                 Picked::Env => {
-                    b.set(row::U_LIGHT, u_light.x);
-                    b.set(row::U_LIGHT + 1, u_light.y);
+                    b.set(l, row::U_LIGHT, u_light.x);
+                    b.set(l, row::U_LIGHT + 1, u_light.y);
                 }
                 Picked::Sphere(center, params) => {
-                    b.set3(row::LIGHT_TRI, center);
-                    b.set3(row::LIGHT_TRI + 3, params);
-                    b.set(row::U_LIGHT, u_light.x);
-                    b.set(row::U_LIGHT + 1, u_light.y);
+                    b.set3(l, row::LIGHT_TRI, center);
+                    b.set3(l, row::LIGHT_TRI + 3, params);
+                    b.set(l, row::U_LIGHT, u_light.x);
+                    b.set(l, row::U_LIGHT + 1, u_light.y);
                 }
                 Picked::Tri(&[q0, q1, q2], ux, area_pdf) => {
-                    b.set3(row::LIGHT_TRI, q0);
-                    b.set3(row::LIGHT_TRI + 3, q1);
-                    b.set3(row::LIGHT_TRI + 6, q2);
-                    b.set(row::AREA_PDF, area_pdf);
-                    b.set(row::U_LIGHT, ux);
-                    b.set(row::U_LIGHT + 1, u_light.y);
+                    b.set3(l, row::LIGHT_TRI, q0);
+                    b.set3(l, row::LIGHT_TRI + 3, q1);
+                    b.set3(l, row::LIGHT_TRI + 6, q2);
+                    b.set(l, row::AREA_PDF, area_pdf);
+                    b.set(l, row::U_LIGHT, ux);
+                    b.set(l, row::U_LIGHT + 1, u_light.y);
                 }
                 Picked::None | Picked::Candidates => unreachable!("a lit vertex has its light"),
             }
@@ -1370,10 +1369,10 @@ impl PathIntegrator {
         };
         let u1 = if reads_u1 || guided { rng.next_1d() } else { skipped_1d(rng) };
         let u = if reads_u || guided { rng.next_2d() } else { skipped_2d(rng) };
-        b.set(row::U_BSDF, u.x);
-        b.set(row::U_BSDF + 1, u.y);
+        b.set(l, row::U_BSDF, u.x);
+        b.set(l, row::U_BSDF + 1, u.y);
         match guide.filter(|_| lit) {
-            None => b.set(row::U_BSDF1, u1),
+            None => b.set(l, row::U_BSDF1, u1),
             Some(g) => {
                 // The guide's density as `vertex_guided` finds it: at the
                 // hit's point, folded onto wo's side where the BSDF only
@@ -1388,27 +1387,26 @@ impl PathIntegrator {
                 let side = Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 });
                 let leaf = g.leaf_of(si.p);
                 let density = GuideDensity { tree: g.leaf(leaf), fold: reflects_only.then(|| si.to_world(side)) };
-                b.set(row::GUIDE_LEAF, leaf as f32);
-                b.set3(row::GUIDE_FOLD, density.fold.unwrap_or(Vec3::ZERO));
+                b.set(l, row::GUIDE_LEAF, leaf as f32);
+                b.set3(l, row::GUIDE_FOLD, density.fold.unwrap_or(Vec3::ZERO));
                 // `sample_guided`: the BSDF's direction with probability α
                 // (its number rescaled), else the guide's.
                 let alpha = self.guide_bsdf_fraction();
                 if u1 < alpha {
-                    b.set(row::U_BSDF1, u1 / alpha);
-                    b.set(row::GUIDE_PICK, 0.0);
+                    b.set(l, row::U_BSDF1, u1 / alpha);
+                    b.set(l, row::GUIDE_PICK, 0.0);
                 } else {
                     let (d, pdf) = density.sample(u);
-                    b.set(row::U_BSDF1, u1);
-                    b.set(row::GUIDE_PICK, 1.0);
-                    b.set3(row::GUIDE_D, d);
-                    b.set(row::GUIDE_PDF, pdf);
+                    b.set(l, row::U_BSDF1, u1);
+                    b.set(l, row::GUIDE_PICK, 1.0);
+                    b.set3(l, row::GUIDE_D, d);
+                    b.set(l, row::GUIDE_PDF, pdf);
                 }
             }
         }
         if emitter {
             self.add_emitted(scene, st, &scene.interaction(&st.ray, hit));
         }
-        let l = b.lane();
         b.slots[l] = slot as u32;
         b.len += 1;
         Some(at)
