@@ -34,20 +34,30 @@ pub struct Lexer<'a> {
     text: &'a [u8],
     pos: usize,
     line: u32,
-    line_start: usize,
+    /// A position on the current line (its start after a newline) and its
+    /// column: the next token's column is counted on from there. Counted
+    /// from the line's start, a file with all its numbers on one line took
+    /// time in the square of that line's length.
+    col_pos: usize,
+    col: u32,
     file: Arc<PathBuf>,
 }
 
 impl<'a> Lexer<'a> {
     /// A lexer over `text`, the contents of `file`.
     pub fn new(text: &'a str, file: Arc<PathBuf>) -> Self {
-        Lexer { text: text.as_bytes(), pos: 0, line: 1, line_start: 0, file }
+        Lexer { text: text.as_bytes(), pos: 0, line: 1, col_pos: 0, col: 1, file }
     }
 
-    fn loc(&self, pos: usize) -> FileLoc {
-        // Columns count characters, not bytes.
-        let col = String::from_utf8_lossy(&self.text[self.line_start..pos]).chars().count() as u32 + 1;
-        FileLoc::new(self.file.clone(), self.line, col)
+    /// Where `pos` (on the current line, at or after the last position
+    /// asked for) is. Columns count characters, not bytes: the bytes that
+    /// do not continue a UTF-8 sequence.
+    fn loc(&mut self, pos: usize) -> FileLoc {
+        debug_assert!(self.col_pos <= pos);
+        let chars = self.text[self.col_pos..pos].iter().filter(|&&b| (b as i8) >= -0x40).count();
+        self.col += chars as u32;
+        self.col_pos = pos;
+        FileLoc::new(self.file.clone(), self.line, self.col)
     }
 
     /// The next token, `None` at the end of the file.
@@ -58,7 +68,7 @@ impl<'a> Lexer<'a> {
                 b'\n' => {
                     self.pos += 1;
                     self.line += 1;
-                    self.line_start = self.pos;
+                    (self.col_pos, self.col) = (self.pos, 1);
                 }
                 b' ' | b'\t' | b'\r' => self.pos += 1,
                 b'#' => {
@@ -150,6 +160,57 @@ mod tests {
             v.push((t.tok, t.loc.line, t.loc.col));
         }
         Ok(v)
+    }
+
+    /// Columns count characters on each line as counting from the line's
+    /// start does: multi-byte characters in strings, words and comments,
+    /// CRLF line ends, an escape error after them.
+    #[test]
+    fn columns_count_characters_from_the_line_start() {
+        let text = "Shape \"sphère\" [ 1 2 ] # ç\r\n\t\"ü\" wörd [\n  \"é\" x\n";
+        let mut v = Vec::new();
+        let mut l = Lexer::new(text, Arc::new(PathBuf::from("t.pbrt")));
+        while let Some(t) = l.next_token().unwrap() {
+            v.push((t.loc.line, t.loc.col));
+        }
+        // Each token's position found by counting from the start of its line.
+        let mut expect = Vec::new();
+        for (n, line) in text.split('\n').enumerate() {
+            let mut in_word = false;
+            let mut in_str = false;
+            for (col, c) in line.chars().enumerate() {
+                if line.chars().take(col).any(|c| c == '#') && !in_str {
+                    break;
+                }
+                let starts = match c {
+                    '"' if !in_str => {
+                        in_str = true;
+                        true
+                    }
+                    '"' => {
+                        in_str = false;
+                        false
+                    }
+                    _ if in_str => false,
+                    '[' | ']' => {
+                        in_word = false;
+                        true
+                    }
+                    ' ' | '\t' | '\r' | '#' => {
+                        in_word = false;
+                        false
+                    }
+                    _ => !std::mem::replace(&mut in_word, true),
+                };
+                if starts {
+                    expect.push((n as u32 + 1, col as u32 + 1));
+                }
+            }
+        }
+        assert_eq!(v, expect);
+        assert_eq!(v.len(), 11);
+        let err = lex("\"é\" \"ü\\q\"").unwrap_err();
+        assert_eq!((err.loc.as_ref().unwrap().line, err.loc.as_ref().unwrap().col), (1, 7), "{err}");
     }
 
     #[test]
