@@ -14,7 +14,8 @@
 //! moments (`film::MOMENTS` = 8 f64 per pixel), a u8 that is 1 when the path
 //! guide follows and the guide ([`Guide::encode`]), and a CRC-32 of
 //! everything before it. Formats 1 (no layers), 2 (7 moments, no Σ w³), 3
-//! (no integrator channels) and 4 (no guide) are refused with a message.
+//! (no integrator channels), 4 (no guide) and 5 (a guide without its
+//! pixel estimate and mean records) are refused with a message.
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
@@ -27,7 +28,7 @@ use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
-const FORMAT: u32 = 5;
+const FORMAT: u32 = 6;
 
 /// A render's state after `passes` whole passes.
 #[derive(Debug, Clone)]

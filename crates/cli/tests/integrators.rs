@@ -102,6 +102,14 @@ fn guided_path_is_deterministic_resumes_and_merges_parts() {
         assert!(v.iter().zip(scalar.ch(c)).all(|(a, b)| a.to_bits() == b.to_bits()), "{c}: stream and loop differ");
     }
     assert_ne!(one.ch("R"), plain.ch("R"), "guiding changed nothing");
+    // After training, roulette goes by each path's expected share of its
+    // pixel (guiding_roulette, on by default), not by throughput.
+    let by_throughput = render(
+        &scene("cbox_diffuse"),
+        &d.join("by-throughput.exr"),
+        &["--integrator", "path:max_depth=6,guiding=true,guiding_roulette=false", "--spp", "24"],
+    );
+    assert_ne!(one.ch("R"), by_throughput.ch("R"), "roulette by expected contribution changed nothing");
     // Parts each train the same guide on the whole render's training
     // passes (kept by part 0 only): merged, they are the whole render.
     resume_and_parts("cbox_diffuse", &args, &["R", "G", "B"]);

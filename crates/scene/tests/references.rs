@@ -343,6 +343,13 @@ fn guided_cbox_diffuse_matches_mitsuba() {
     compare_guided("cbox_diffuse", 8, 256);
 }
 
+/// With guiding's roulette by expected contribution off: by throughput, as
+/// without guiding (the other guided tests have it on, the default).
+#[test]
+fn guided_cbox_diffuse_with_roulette_by_throughput_matches_mitsuba() {
+    compare_path("cbox_diffuse", 8, 256, "guiding=true,guiding_bsdf_fraction=0.3,guiding_roulette=false");
+}
+
 #[test]
 fn guided_glass_caustic_matches_mitsuba() {
     compare_guided("glass_caustic", 16, 512);

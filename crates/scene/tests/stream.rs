@@ -162,7 +162,7 @@ fn resampled_light_selection_is_bitwise_the_scalar_loop() {
         eprintln!("{scene} {integrator}: {lane_vertices} of {rays} hits shaded in lanes");
         if LANE_WIDTHS.len() > 1 && scene == "many_lights.xml" {
             // Its materials are all diffuse: lit vertices or none in lanes.
-            // (Emitters hit, escapes and a guide's training passes stay scalar.)
+            // (Emitters hit and escapes stay scalar.)
             let share = lane_vertices as f64 / rays as f64;
             assert!(if in_lanes { share > 0.25 } else { share < 0.05 }, "{scene} {integrator}: {share} in lanes");
         }
@@ -192,7 +192,6 @@ fn resampled_lane_vertices_are_bitwise_the_scalar_vertex() {
         let (is_path, lane_vertices, rays) = check_integrator(&scene, &[], 8, Some(integrator));
         eprintln!("{integrator}: {lane_vertices} of {rays} hits shaded in lanes");
         assert!(is_path);
-        // (The guide's training passes stay scalar.)
         assert!(LANE_WIDTHS.len() == 1 || lane_vertices * 3 > rays, "{integrator}: {lane_vertices} of {rays}");
     }
     std::fs::remove_dir_all(&dir).ok();

@@ -141,7 +141,14 @@ impl DTreeBuilder {
                 }
             })
             .collect();
-        DTree { nodes: self.nodes.clone(), prob }
+        DTree { nodes: self.nodes.clone(), prob, flux: 0.0 }
+    }
+
+    /// [`Self::freeze`], knowing that `records` records were added: the
+    /// tree also estimates incident radiance ([`DTree::radiance`]).
+    pub fn freeze_counted(&self, records: u64) -> DTree {
+        let flux = if records > 0 { (self.total() / records as f64) as f32 } else { 0.0 };
+        DTree { flux: if flux.is_finite() { flux } else { 0.0 }, ..self.freeze() }
     }
 
     /// An empty builder whose structure refines this one's by its records
@@ -277,6 +284,9 @@ pub struct DTree {
     nodes: Vec<Node>,
     /// Per node, each quadrant's probability given the node (they sum to 1).
     prob: Vec<[f32; 4]>,
+    /// The mean of the records it was built from, Φ ≈ ∫ L_i dω over the
+    /// sphere (0: unknown), so that L_i(ω) ≈ Φ · pdf(ω) (see [`Self::radiance`]).
+    flux: f32,
 }
 
 impl Default for DTree {
@@ -353,6 +363,21 @@ impl DTree {
         self.pdf_square(dir_to_square(d)) * (0.25 / PI)
     }
 
+    /// Φ, the mean record: the radiance arriving from all directions,
+    /// ∫ L_i dω (0 where no record was counted).
+    #[inline]
+    pub fn flux(&self) -> f32 {
+        self.flux
+    }
+
+    /// The radiance arriving from a direction drawn with density `pdf`
+    /// from this tree, Φ · pdf: each record is L / p, so a cell's share of
+    /// their sum, over its solid angle, estimates L_i there.
+    #[inline]
+    pub fn radiance(&self, pdf: f32) -> f32 {
+        self.flux * pdf
+    }
+
     /// Nodes in the tree (for memory reports).
     pub fn node_count(&self) -> usize {
         self.nodes.len()
@@ -364,6 +389,7 @@ impl DTree {
         for p in self.prob.iter().flatten() {
             out.extend_from_slice(&p.to_le_bytes());
         }
+        out.extend_from_slice(&self.flux.to_le_bytes());
     }
 
     pub(crate) fn decode(r: &mut Bytes) -> Result<DTree, String> {
@@ -381,7 +407,11 @@ impl DTree {
             }
             prob.push(p);
         }
-        Ok(DTree { nodes, prob })
+        let flux = r.f32()?;
+        if !(flux.is_finite() && flux >= 0.0) {
+            return Err(format!("a quadtree's mean record of {flux}"));
+        }
+        Ok(DTree { nodes, prob, flux })
     }
 }
 

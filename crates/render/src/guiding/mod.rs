@@ -15,11 +15,13 @@
 //! positive wherever the BSDF's is (see `integrator::path`).
 
 pub mod dtree;
+pub mod roulette;
 
 use crate::geometry::Aabb;
 use dtree::{dir_to_square, DTree, DTreeBuilder};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use roulette::PixelEstimate;
 
 pub use dtree::MAX_DEPTH;
 
@@ -128,6 +130,8 @@ pub struct Guide {
     leaves: Vec<Leaf>,
     /// Updates so far; the guide samples once there was one.
     iterations: u32,
+    /// The image of the last training pass, for roulette ([`roulette`]).
+    image: Option<PixelEstimate>,
 }
 
 impl Guide {
@@ -147,6 +151,7 @@ impl Guide {
             nodes: vec![SNode { child: [0; 2], leaf: 0 }],
             leaves: vec![Leaf::default()],
             iterations: 0,
+            image: None,
         }
     }
 
@@ -217,8 +222,9 @@ impl Guide {
                 let r = &records[i as usize];
                 leaf.building.record(r.dir, r.value as f64);
             }
-            leaf.records = leaf.records.saturating_add((start[l + 1] - start[l]) as u64);
-            leaf.sampling = leaf.building.freeze();
+            let n = (start[l + 1] - start[l]) as u64;
+            leaf.records = leaf.records.saturating_add(n);
+            leaf.sampling = leaf.building.freeze_counted(n);
         });
         // Space: leaves with many records split (their children share the
         // records, half each, and keep what the parent learnt).
@@ -251,6 +257,19 @@ impl Guide {
         self.iterations += 1;
     }
 
+    /// Sets the image that roulette compares a path's expected share with:
+    /// the image of the training pass just learnt from (`None`: black).
+    pub fn set_image(&mut self, image: Option<PixelEstimate>) {
+        self.image = image;
+    }
+
+    /// The value of pixel `global` (full-image coordinates) in the last
+    /// training pass's image, for roulette; 0 when there is none.
+    #[inline]
+    pub fn pixel_estimate(&self, global: (u32, u32)) -> f32 {
+        self.image.as_ref().map_or(0.0, |i| i.at(global))
+    }
+
     /// Appends the guide to `out` (little-endian), for a checkpoint: a
     /// resumed render goes on with the very guide it stopped with.
     pub fn encode(&self, out: &mut Vec<u8>) {
@@ -269,6 +288,10 @@ impl Guide {
             l.sampling.encode(out);
             l.building.encode(out);
             out.extend_from_slice(&l.records.to_le_bytes());
+        }
+        out.push(self.image.is_some() as u8);
+        if let Some(i) = &self.image {
+            i.encode(out);
         }
     }
 
@@ -309,8 +332,13 @@ impl Guide {
             let building = DTreeBuilder::decode(&mut r)?;
             leaves.push(Leaf { sampling, building, records: r.u64()? });
         }
+        let image = match r.take(1)?[0] {
+            0 => None,
+            1 => Some(PixelEstimate::decode(&mut r)?),
+            f => return Err(format!("a pixel-estimate flag of {f}")),
+        };
         *at = r.at;
-        Ok(Guide { min, size, nodes, leaves, iterations })
+        Ok(Guide { min, size, nodes, leaves, iterations, image })
     }
 
     /// Spatial leaves and quadtree nodes (sampling trees), for reports.
@@ -423,6 +451,33 @@ mod tests {
         println!("guide: {leaves} leaves, {nodes} nodes, {} KiB", g.memory() / 1024);
     }
 
+    /// Each leaf's tree also estimates the radiance arriving from a
+    /// direction (Φ · pdf, for roulette): Φ, the mean record, is ∫ L_i dω.
+    #[test]
+    fn estimates_incident_radiance() {
+        let mut g = Guide::new(unit_box());
+        for it in 0..3 {
+            g.update(&records(40_000 << it, 20 + it as u64));
+        }
+        // Per side: 10 from a cap of 2π (1 − 0.8) sr, 0.1 from the rest.
+        let cap = 2.0 * std::f64::consts::PI * 0.2;
+        let flux = 10.0 * cap + 0.1 * (4.0 * std::f64::consts::PI - cap);
+        let leaves = g.size().0;
+        for p in [Vec3::new(0.2, 0.5, 0.5), Vec3::new(0.8, 0.3, 0.6)] {
+            let t = g.at(p);
+            // A leaf's last pass gave it about 160,000 / leaves records of
+            // L / p with standard deviation 37 (0.1 of them 126, the rest 1.26).
+            let se = 37.3 / (160_000.0 / leaves as f64).sqrt();
+            assert!((t.flux() as f64 - flux).abs() < 5.0 * se, "at {p}: Φ = {} against {flux}", t.flux());
+            let (bright, dark) = if p.x < 0.5 { (Vec3::Z, -Vec3::Z) } else { (-Vec3::Z, Vec3::Z) };
+            let bright = (bright + Vec3::new(0.1, 0.1, 0.0)).normalize();
+            let (lb, ld) = (t.radiance(t.pdf(bright)), t.radiance(t.pdf(dark)));
+            assert!((lb - 10.0).abs() < 1.5, "at {p}: L_i = {lb} from the cap, 10 expected");
+            assert!((ld - 0.1).abs() < 0.015, "at {p}: L_i = {ld} from below, 0.1 expected");
+        }
+        assert_eq!(Guide::new(unit_box()).at(Vec3::ZERO).flux(), 0.0, "untrained: unknown");
+    }
+
     /// A guide read back from its bytes guides exactly as the original;
     /// damaged bytes are refused, never a panic.
     #[test]
@@ -431,6 +486,7 @@ mod tests {
         for it in 0..3 {
             g.update(&records(20_000 << it, 60 + it as u64));
         }
+        g.set_image(PixelEstimate::new((0, 0), 2, 1, vec![1.0, 3.0]));
         let mut bytes = vec![7u8; 3];
         g.encode(&mut bytes);
         let mut at = 3;
@@ -442,7 +498,9 @@ mod tests {
             let u = rng.next_2d();
             assert_eq!(g.at(p).sample(u).0, h.at(p).sample(u).0);
             assert_eq!(g.at(p).pdf(Vec3::Z).to_bits(), h.at(p).pdf(Vec3::Z).to_bits());
+            assert_eq!(g.at(p).flux().to_bits(), h.at(p).flux().to_bits());
         }
+        assert_eq!(h.pixel_estimate((1, 0)), 3.0);
         // Learning goes on identically from the decoded guide.
         let (mut g2, mut h2) = (g.clone(), h);
         g2.update(&records(30_000, 99));

@@ -151,6 +151,33 @@ impl Termination {
         let q = (beta_max * eta * eta).min(0.95);
         (rng.next_1d() < q).then_some(q)
     }
+
+    /// [`Self::survive`], or where `expected` is known (the share of its
+    /// pixel's value the path is expected to bring) with roulette by
+    /// expected contribution ([`roulette`]), at every depth.
+    ///
+    /// [`roulette`]: crate::guiding::roulette
+    #[inline]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    pub fn survive_expected(
+        &self,
+        beta: Spectrum,
+        eta: f32,
+        depth: u32,
+        expected: Option<f32>,
+        rng: &mut SampleStream,
+    ) -> Option<f32> {
+        let Some(r) = expected else { return self.survive(beta, eta, depth, rng) };
+        let beta_max = beta.max_element();
+        if !(beta_max > 0.0) || beta_max < self.throughput_threshold {
+            return None;
+        }
+        let q = crate::guiding::roulette::survival(r, (beta_max * eta * eta).min(0.95));
+        if q >= 1.0 {
+            return Some(1.0);
+        }
+        (rng.next_1d() < q).then_some(q)
+    }
 }
 
 /// The scene's integrator: one variant per plugin (see the module docs).

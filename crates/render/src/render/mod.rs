@@ -10,6 +10,7 @@ pub use stream::LANE_WIDTHS;
 use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
 use crate::geometry::Ray;
+use crate::guiding::roulette::PixelEstimate;
 use crate::guiding::{Guide, GuideRecord};
 use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
@@ -186,8 +187,8 @@ impl RenderJob {
     /// As [`render_pass_masked`](Self::render_pass_masked), with path
     /// guiding: vertices are guided by `guide` once it is trained, and
     /// with `train` the pass's records (in tile order) update it afterwards.
-    /// Training passes run one path at a time (records are gathered per
-    /// path); the guided passes after them run in the stream, lanes and all.
+    /// Training passes and the guided passes after them run in the stream,
+    /// lanes and all (each tile's records in the one-path loop's order).
     pub fn render_pass_guided(
         &self,
         film: &mut Film,
@@ -197,18 +198,29 @@ impl RenderJob {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Option<RenderStats> {
-        let (guide, train) = match guide {
+        let (mut guide, train) = match guide {
             Some((g, train)) => (Some(g), train),
             None => (None, false),
         };
-        let (mut stats, records) =
-            self.render_pass_inner(film, samples, active, guide.as_deref(), train, progress, cancel)?;
-        if let (Some(g), true) = (guide, train) {
+        if let (Some(g), true) = (guide.as_deref_mut(), train) {
+            // A training pass renders into a film of its own and is then
+            // added: its image, which roulette after training compares paths
+            // with, is thus the same whatever the film held before (a part
+            // that does not keep the training passes renders them on a
+            // blank film).
+            let mut own = Film::with_layers(film.width, film.height, &film.layers());
+            let (mut stats, records) =
+                self.render_pass_inner(&mut own, samples, active, Some(&*g), true, progress, cancel)?;
+            film.merge(&own);
             let t = std::time::Instant::now();
+            let image = own.develop().iter().map(|c| (c[0] + c[1] + c[2]) / 3.0).collect();
+            g.set_image(PixelEstimate::new(self.crop_offset, own.width, own.height, image));
             g.update(&records);
             stats.guide_records += records.len() as u64;
             stats.guide_seconds += t.elapsed().as_secs_f64();
+            return Some(stats);
         }
+        let (stats, _) = self.render_pass_inner(film, samples, active, guide.as_deref(), false, progress, cancel)?;
         Some(stats)
     }
 
@@ -348,11 +360,10 @@ impl RenderJob {
         let train = record_every > 0;
         let guided = train || guide.is_some_and(|g| g.trained());
         let mut records = Vec::new();
-        // A pass that trains a guide runs one path at a time (its records
-        // are gathered per path); a guided pass that does not, in the stream.
-        match (&self.integrator, self.stream && self.scene.ray_log.is_none() && !train) {
+        match (&self.integrator, self.stream && self.scene.ray_log.is_none()) {
             (Integrator::Path(path), true) => {
-                stream::render(self, path, guide.filter(|g| g.trained()), &pixels, samples, &mut tile)
+                let training = train.then_some(stream::Training { every: record_every, full_width: self.full_size.0 });
+                records = stream::render(self, path, guide, &pixels, samples, &mut tile, training);
             }
             _ => {
                 // The integrator's own output channels (the `aov` and `moment` integrators').
@@ -374,7 +385,9 @@ impl RenderJob {
                                     let index = y as u64 * self.full_size.0 as u64 + x as u64 + s as u64;
                                     let r =
                                         (train && index.is_multiple_of(record_every as u64)).then_some(&mut records);
-                                    path.li_guided(scene, &ray, &mut rng, stats, scratch, guide, r)
+                                    // Roulette by expected contribution after training only.
+                                    let target = if train { 0.0 } else { path.roulette_target(guide, p.global) };
+                                    path.li_guided(scene, &ray, &mut rng, stats, scratch, guide, r, target)
                                 }
                                 i => i.li(scene, &ray, &mut rng, stats, scratch),
                             }

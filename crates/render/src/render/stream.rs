@@ -16,7 +16,10 @@
 //! lanes; a last vertex on a shape that emits nothing ends its path at once
 //! ([`PathIntegrator::ends_dark`]); every other vertex runs the scalar
 //! [`PathIntegrator::vertex`] (or `vertex_guided`), so every BSDF and light
-//! works.
+//! works. A pass that trains a path guide keeps, for the paths that record
+//! ([`Training`]), each direction drawn with the radiance before it and the
+//! throughput after it; once the tile is done, they become the guide's
+//! records in the one-path loop's order (by sample, then vertex).
 //!
 //! **Bitwise the scalar loop.** A path's vertices run the same code in the
 //! same order with its own random stream, a pure function of (seed, pixel,
@@ -32,8 +35,8 @@
 use super::{RenderJob, Tile, TilePixel};
 use crate::accel::Hit;
 use crate::geometry::Ray;
-use crate::guiding::Guide;
-use crate::integrator::path::{LaneBins, LaneOutcomes, PathIntegrator, PathState};
+use crate::guiding::{Guide, GuideRecord};
+use crate::integrator::path::{LaneBins, LaneOutcomes, PathIntegrator, PathState, Sampled};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
 use crate::simd::{gather, Float};
@@ -91,9 +94,26 @@ thread_local! {
 /// A placeholder ray.
 const EMPTY_RAY: Ray = Ray { o: Vec3::ZERO, d: Vec3::Z, t_max: 0.0 };
 
+/// What a pass that trains a guide asks of the stream: every
+/// `every`-th path (by full-film pixel index plus sample index, as the
+/// one-path loop counts) gives the guide its records.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Training {
+    pub every: u32,
+    /// The full film's width, for the path's index.
+    pub full_width: u32,
+}
+
+/// A direction drawn on a recording path, until the path's end gives its
+/// record: the sample it belongs to, the direction, the throughput after
+/// it (0 where roulette ended the path) and the radiance before it.
+type Drawn = (usize, Sampled, Spectrum, Spectrum);
+
 /// Renders `samples` of each of `pixels` with `path` (guided by `guide`,
-/// when given) into `tile`, in packets of `job.packet_lanes` rays (0: the
-/// widest of [`LANE_WIDTHS`]).
+/// when given and trained) into `tile`, in packets of `job.packet_lanes`
+/// rays (0: the widest of [`LANE_WIDTHS`]). With `training`, the paths'
+/// records for the guide are returned in the one-path loop's order (by
+/// pixel, then sample, then vertex).
 pub(super) fn render(
     job: &RenderJob,
     path: &PathIntegrator,
@@ -101,14 +121,16 @@ pub(super) fn render(
     pixels: &[TilePixel],
     samples: Range<u32>,
     tile: &mut Tile,
-) {
+    training: Option<Training>,
+) -> Vec<GuideRecord> {
     let lanes = if job.packet_lanes == 0 { LANE_WIDTHS[0] } else { job.packet_lanes };
+    let guide = guide.filter(|g| g.trained());
     match lanes {
         #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
-        16 => run::<crate::simd::F32x16>(job, path, guide, pixels, samples, tile),
+        16 => run::<crate::simd::F32x16>(job, path, guide, pixels, samples, tile, training),
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
-        8 => run::<crate::simd::F32x8>(job, path, guide, pixels, samples, tile),
-        1 => run::<f32>(job, path, guide, pixels, samples, tile),
+        8 => run::<crate::simd::F32x8>(job, path, guide, pixels, samples, tile, training),
+        1 => run::<f32>(job, path, guide, pixels, samples, tile, training),
         n => panic!("packets of {n} rays: this build has {LANE_WIDTHS:?}"),
     }
 }
@@ -120,7 +142,8 @@ fn run<F: Float>(
     pixels: &[TilePixel],
     samples: Range<u32>,
     tile: &mut Tile,
-) {
+    training: Option<Training>,
+) -> Vec<GuideRecord> {
     let spp = samples.len();
     let total = pixels.len() * spp;
     let scene = &job.scene;
@@ -148,7 +171,20 @@ fn run<F: Float>(
     // Vertices run in lanes where they can (see `PathIntegrator::lane_vertex`),
     // guided by a trained guide as `vertex_guided` is.
     let vertex_lanes = F::WIDTH > 1;
-    let lane_guide = guide.filter(|g| g.trained());
+    let lane_guide = guide;
+    // Roulette by expected contribution once training is over.
+    let roulette_guide = if training.is_some() { None } else { guide };
+    // Which samples record their directions, and the directions drawn:
+    // this round's (slot, direction), then every round's until the tile ends.
+    let records_of = |k: usize| {
+        training.is_some_and(|t| {
+            let (x, y) = pixels[k / spp].global;
+            let index = y as u64 * t.full_width as u64 + x as u64 + (samples.start as usize + k % spp) as u64;
+            index.is_multiple_of(t.every as u64)
+        })
+    };
+    let mut round_drawn: Vec<(usize, Sampled)> = Vec::new();
+    let mut drawn: Vec<Drawn> = Vec::new();
     let env = scene.single_envmap();
     let mut lane_out = LaneOutcomes::default();
     let mut next = 0;
@@ -179,6 +215,7 @@ fn run<F: Float>(
                 for (l, slot) in slots[first..].iter_mut().enumerate() {
                     let ray = rays.ray(l);
                     slot.state = PathState::camera(&ray);
+                    slot.state.set_target(path.roulette_target(roulette_guide, pixels[slot.sample / spp].global));
                     if aovs {
                         camera_rays.push(ray);
                     }
@@ -196,7 +233,8 @@ fn run<F: Float>(
             if aovs {
                 camera_rays.push(ray);
             }
-            if let Some(state) = path.start(&ray) {
+            if let Some(mut state) = path.start(&ray) {
+                state.set_target(path.roulette_target(roulette_guide, p.global));
                 slots.push(Slot { sample: next, state, rng });
             }
             next += 1;
@@ -264,6 +302,9 @@ fn run<F: Float>(
                     let i = b.slot(l);
                     let slot = &mut slots[i];
                     let (shadow, go_on) = path.lane_vertex_done(&mut slot.state, &lane_out, l, &mut slot.rng);
+                    if training.is_some() {
+                        round_drawn.extend(lane_out.sampled(l).map(|s| (i, s)));
+                    }
                     if shadow {
                         shadow_slots.push(i);
                         shadow_rays.push(lane_out.shadow_ray(l));
@@ -305,6 +346,9 @@ fn run<F: Float>(
                 shadow_slots.push(i);
                 shadow_rays.push(r);
             }
+            if training.is_some() {
+                round_drawn.extend(v.sampled.map(|s| (i, s)));
+            }
             ended.push(!v.go_on);
         }
         // (Without lanes no batch is ever filled: the test lets a scalar build drop the lane kernels.)
@@ -324,6 +368,14 @@ fn run<F: Float>(
                 slots[slot].state.shadow_done(blocked >> j & 1 != 0);
             }
         }
+        // A recording path's direction keeps its throughput after it and
+        // the radiance before it, the light sample's included (as `li_guided`).
+        for (i, s) in round_drawn.drain(..) {
+            let (k, st) = (slots[i].sample, &slots[i].state);
+            if records_of(k) {
+                drawn.push((k, s, if ended[i] { Spectrum::ZERO } else { st.throughput() }, st.radiance()));
+            }
+        }
         // Retire ended paths; the others keep their order.
         let mut i = 0;
         slots.retain(|s| {
@@ -337,6 +389,13 @@ fn run<F: Float>(
     }
     // Every slot has retired and every batch has run: the buffers go back empty.
     BUFFERS.with(|b| b.replace(Buffers { slots, rays, hits, shadow_slots, shadow_rays, ended, sky_slots, bins }));
+    // Records in the one-path loop's order: by sample (pixel, then sample
+    // index), each path's in vertex order (rounds are in order; the sort is stable).
+    drawn.sort_by_key(|d| d.0);
+    let records = drawn
+        .iter()
+        .filter_map(|&(k, s, beta, before)| PathIntegrator::record(results[k].1, s, beta, before))
+        .collect();
     // Splat in canonical order, a pixel's samples at a time where no AOVs need the rays.
     if aovs {
         for (k, (&(u, l), ray)) in results.iter().zip(&camera_rays).enumerate() {
@@ -348,6 +407,7 @@ fn run<F: Float>(
             job.add_pixel_samples(tile, p, rs);
         }
     }
+    records
 }
 
 #[cfg(test)]

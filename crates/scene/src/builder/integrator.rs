@@ -193,7 +193,7 @@ fn light_candidates(node: &Node) -> Result<u32> {
     Ok(m as u32)
 }
 
-/// `guiding`, `guiding_budget` and `guiding_bsdf_fraction` (see `integrator::path`).
+/// `guiding`, `guiding_budget`, `guiding_bsdf_fraction` and `guiding_roulette` (see `integrator::path`).
 fn guiding(node: &Node) -> Result<Option<Guiding>> {
     let on = node.bool("guiding", false)?;
     let d = Guiding::default();
@@ -211,7 +211,8 @@ fn guiding(node: &Node) -> Result<Option<Guiding>> {
             "guiding_bsdf_fraction must be in (0, 1]: the BSDF must keep a share of the samples for the estimate to stay unbiased",
         ));
     }
-    Ok(on.then_some(Guiding { budget: budget as f32, bsdf_fraction: fraction as f32 }))
+    let roulette = node.bool("guiding_roulette", d.roulette)?;
+    Ok(on.then_some(Guiding { budget: budget as f32, bsdf_fraction: fraction as f32, roulette }))
 }
 
 /// `volpath` and `volpathmis` (one estimator; see `integrator::volpath`).

@@ -45,7 +45,7 @@
 //! (`sample_guided`), the mixed density in every MIS weight; the guide's
 //! quadtree is walked per lane.
 
-use super::{PathIntegrator, PathState};
+use super::{PathIntegrator, PathState, Sampled};
 use crate::accel::Hit;
 use crate::bsdf::microfacet::{beckmann_slope_x_lanes, beckmann_slope_y_lanes, smith_g1_lanes};
 use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
@@ -397,8 +397,10 @@ mod out_row {
     pub const PDF: usize = 22;
     pub const WEIGHT: usize = 23;
     pub const ETA: usize = 26;
+    /// The guide's density of the next direction (0: not guided, or a delta lobe).
+    pub const GUIDE_PDF: usize = 27;
     /// How many rows there are.
-    pub const COUNT: usize = 27;
+    pub const COUNT: usize = 28;
 }
 
 /// What the lane kernel found at the vertices of a [`LaneBatch`], stored
@@ -453,6 +455,21 @@ impl LaneOutcomes {
     pub fn shadow_ray(&self, l: usize) -> Ray {
         use out_row::*;
         Ray::new(self.at3(SHADOW_O, l), self.at3(SHADOW_D, l), self.at(SHADOW_T, l))
+    }
+
+    /// Lane `l`'s non-delta direction drawn, as [`Vertex::sampled`] has it
+    /// (for a guide's training records); `None` where sampling failed or
+    /// the direction is specular.
+    ///
+    /// [`Vertex::sampled`]: super::Vertex::sampled
+    #[inline]
+    pub fn sampled(&self, l: usize) -> Option<Sampled> {
+        use out_row::*;
+        (self.go >> l & 1 != 0 && self.delta >> l & 1 == 0).then(|| Sampled {
+            p: self.at3(P, l),
+            d: self.at3(WI, l),
+            pdf: self.at(PDF, l),
+        })
     }
 }
 
@@ -1387,6 +1404,7 @@ impl PathIntegrator {
                 let side = Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 });
                 let leaf = g.leaf_of(si.p);
                 let density = GuideDensity { tree: g.leaf(leaf), fold: reflects_only.then(|| si.to_world(side)) };
+                st.flux = density.tree.flux();
                 b.set(l, row::GUIDE_LEAF, leaf as f32);
                 b.set3(l, row::GUIDE_FOLD, density.fold.unwrap_or(Vec3::ZERO));
                 // `sample_guided`: the BSDF's direction with probability α
@@ -1694,8 +1712,8 @@ impl PathIntegrator {
         // With a guide (`sample_guided`): the guide's direction where it was
         // picked; either way (a specular lobe aside) the value and the mixed
         // density at the direction, and a failed sample ends the path.
-        let (wi_next, bsdf_pdf, weight, go, delta, eta_next) = match guide {
-            None => (wi_next, bsdf_pdf, weight, go, delta, eta_next),
+        let (wi_next, bsdf_pdf, weight, go, delta, eta_next, guide_next) = match guide {
+            None => (wi_next, bsdf_pdf, weight, go, delta, eta_next, zero),
             Some(gd) => {
                 let pick = v.mask::<F>(row::GUIDE_PICK);
                 let specular = !pick & delta;
@@ -1713,6 +1731,7 @@ impl PathIntegrator {
                     (pick & ok) | (!pick & go & (delta | ok)),
                     specular,
                     F::select(pick, one, eta_next),
+                    F::select(specular, zero, pdf_guide),
                 )
             }
         };
@@ -1723,6 +1742,7 @@ impl PathIntegrator {
         out.put3(out_row::SHADOW_D, shadow_d);
         out.put(out_row::SHADOW_T, shadow_t);
         next_rays(&h, wi_next, bsdf_pdf, go, weight, eta_next, delta, out);
+        out.put(out_row::GUIDE_PDF, guide_next);
     }
 
     /// The rest of lane `l`'s vertex of a batch, one path at a time: its
@@ -1756,7 +1776,7 @@ impl PathIntegrator {
         st.prev_delta = out.delta >> l & 1 != 0;
         st.ray = Ray::new(out.at3(O, l), out.at3(WI, l), f32::INFINITY);
         st.depth += 1;
-        (shadow, self.roulette(st, rng))
+        (shadow, self.roulette(st, rng, out.at(GUIDE_PDF, l)))
     }
 }
 
@@ -1902,4 +1922,5 @@ fn next_rays<F: Float>(
     out.put(out_row::PDF, pdf);
     out.put3(out_row::WEIGHT, weight);
     out.put(out_row::ETA, eta);
+    out.put(out_row::GUIDE_PDF, F::splat(0.0));
 }

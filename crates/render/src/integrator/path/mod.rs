@@ -13,6 +13,7 @@
 //! | guiding       | boolean | false: path guiding ([`crate::guiding`]), learnt in the first passes |
 //! | guiding_budget | float  | 0.25: the share of the samples (under `--time`, of the time) whose passes train the guide (their samples are kept) |
 //! | guiding_bsdf_fraction | float | 0.5: at a guided vertex, the probability of drawing from the BSDF rather than the guide |
+//! | guiding_roulette | boolean | true: after the guide's training, Russian roulette by the share of its pixel a path is expected to bring ([`crate::guiding::roulette`]) where the guide knows the radiance ahead; false: by throughput, as without guiding |
 //! | light_candidates | integer | light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below), 1 to 64; by default 4 in scenes of at least 8 lights, else 1 |
 //!
 //! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
@@ -92,11 +93,13 @@ pub struct Guiding {
     pub budget: f32,
     /// α: the probability that a guided vertex draws from the BSDF, in (0, 1].
     pub bsdf_fraction: f32,
+    /// Roulette by expected contribution once trained ([`crate::guiding::roulette`]).
+    pub roulette: bool,
 }
 
 impl Default for Guiding {
     fn default() -> Self {
-        Guiding { budget: 0.25, bsdf_fraction: 0.5 }
+        Guiding { budget: 0.25, bsdf_fraction: 0.5, roulette: true }
     }
 }
 
@@ -146,6 +149,12 @@ pub struct PathState {
     prev_delta: bool,
     /// The light sample's contribution, added if its shadow ray is unblocked.
     pending: Spectrum,
+    /// Its pixel's value as the guide's training saw it, for roulette by
+    /// expected contribution (0: roulette by throughput).
+    target: f32,
+    /// The guide's mean record at the last guided vertex (Φ, see
+    /// [`crate::guiding::dtree::DTree::radiance`]).
+    flux: f32,
 }
 
 impl PathState {
@@ -164,13 +173,28 @@ impl PathState {
             prev_bsdf_pdf: 1.0,
             prev_delta: true,
             pending: Spectrum::ZERO,
+            target: 0.0,
+            flux: 0.0,
         }
+    }
+
+    /// Sets its pixel's value as the guide's training saw it
+    /// ([`PathIntegrator::roulette_target`]).
+    #[inline]
+    pub fn set_target(&mut self, target: f32) {
+        self.target = target;
     }
 
     /// The radiance gathered so far (all of it once the path has ended).
     #[inline]
     pub fn radiance(&self) -> Spectrum {
         self.l
+    }
+
+    /// The throughput β.
+    #[inline]
+    pub fn throughput(&self) -> Spectrum {
+        self.beta
     }
 
     /// Whether the last bounce was specular (or the path is a camera ray).
@@ -249,7 +273,7 @@ impl PathIntegrator {
         stats: &mut RayStats,
         scratch: &Scratch,
     ) -> Spectrum {
-        self.li_guided(scene, camera_ray, rng, stats, scratch, None, None)
+        self.li_guided(scene, camera_ray, rng, stats, scratch, None, None, 0.0)
     }
 
     /// [`Self::li`] guided by `guide` (see the module notes) and, with
@@ -266,8 +290,10 @@ impl PathIntegrator {
         scratch: &Scratch,
         guide: Option<&Guide>,
         records: Option<&mut Vec<GuideRecord>>,
+        target: f32,
     ) -> Spectrum {
         let Some(mut st) = self.start(camera_ray) else { return Spectrum::ZERO };
+        st.set_target(target);
         // Per drawn direction: it, the throughput after it, the radiance before it.
         let mut drawn: Vec<(Sampled, Spectrum, Spectrum)> = Vec::new();
         loop {
@@ -288,20 +314,28 @@ impl PathIntegrator {
         }
         if let Some(records) = records {
             for (s, beta, before) in drawn {
-                // L_i = (radiance after) / β per channel, averaged over the channels β carries.
-                let after = st.l - before;
-                let (mut sum, mut n) = (0.0, 0);
-                for c in 0..3 {
-                    if beta[c] > 0.0 {
-                        sum += after[c] / beta[c];
-                        n += 1;
-                    }
-                }
-                let radiance = if n > 0 { sum / n as f32 } else { 0.0 };
-                records.extend(GuideRecord::new(s.p, s.d, radiance, s.pdf));
+                records.extend(Self::record(st.l, s, beta, before));
             }
         }
         st.radiance()
+    }
+
+    /// The training record of direction `s` drawn on a path that gathered
+    /// `total` in all and `before` until then (its light sample included),
+    /// with throughput `beta` after it (0 where roulette ended the path
+    /// there: the rest brings nothing): L_i = (radiance after) / β per
+    /// channel, averaged over the channels β carries.
+    pub fn record(total: Spectrum, s: Sampled, beta: Spectrum, before: Spectrum) -> Option<GuideRecord> {
+        let after = total - before;
+        let (mut sum, mut n) = (0.0, 0);
+        for c in 0..3 {
+            if beta[c] > 0.0 {
+                sum += after[c] / beta[c];
+                n += 1;
+            }
+        }
+        let radiance = if n > 0 { sum / n as f32 } else { 0.0 };
+        GuideRecord::new(s.p, s.d, radiance, s.pdf)
     }
 
     /// A path leaving the camera along `camera_ray`, or `None` when
@@ -396,10 +430,13 @@ impl PathIntegrator {
         let u = rng.next_1d();
         let u2 = rng.next_2d();
         let sample = match guide {
-            Some(g) => Self::sample_guided(&bsdf, &g, alpha, &si, wo, u, u2),
-            None => bsdf.sample(wo, u, u2),
+            Some(g) => {
+                st.flux = g.tree.flux();
+                Self::sample_guided(&bsdf, &g, alpha, &si, wo, u, u2)
+            }
+            None => bsdf.sample(wo, u, u2).map(|bs| (bs, 0.0)),
         };
-        let Some(bs) = sample else { return Vertex { shadow, go_on: false, sampled: None } };
+        let Some((bs, guide_pdf)) = sample else { return Vertex { shadow, go_on: false, sampled: None } };
         st.beta *= bs.weight;
         st.eta *= bs.eta;
         let wi = si.to_world(bs.wi);
@@ -410,7 +447,7 @@ impl PathIntegrator {
         st.prev_delta = bs.delta;
         st.ray = scene.spawn_ray(&si, wi);
         st.depth += 1;
-        Vertex { shadow, go_on: self.roulette(st, rng), sampled }
+        Vertex { shadow, go_on: self.roulette(st, rng, guide_pdf), sampled }
     }
 
     /// The BSDF's side of light sample `ls` at `si`: f cos θ and, with MIS,
@@ -464,7 +501,8 @@ impl PathIntegrator {
 
     /// The next direction drawn from the BSDF with probability `alpha`
     /// (`u` below it, rescaled, picks the lobe), else from the guide `d`
-    /// with `u2`; a non-delta direction weighted by the mixed density.
+    /// with `u2`; a non-delta direction weighted by the mixed density. With
+    /// it, the guide's density of the direction (0 for a delta one).
     #[inline(never)]
     fn sample_guided(
         bsdf: &Bsdf,
@@ -474,12 +512,12 @@ impl PathIntegrator {
         wo: Vec3,
         u: f32,
         u2: glam::Vec2,
-    ) -> Option<BsdfSample> {
+    ) -> Option<(BsdfSample, f32)> {
         let (wi, eta, pdf_guide) = if u < alpha {
             let bs = bsdf.sample(wo, u / alpha, u2)?;
             if bs.delta {
                 // The guide never draws it: weight over the probability of asking the BSDF.
-                return Some(BsdfSample { pdf: bs.pdf * alpha, weight: bs.weight / alpha, ..bs });
+                return Some((BsdfSample { pdf: bs.pdf * alpha, weight: bs.weight / alpha, ..bs }, 0.0));
             }
             (bs.wi, bs.eta, g.pdf(si.to_world(bs.wi)))
         } else {
@@ -493,7 +531,7 @@ impl PathIntegrator {
         if pdf.is_nan() || pdf <= 0.0 || f == Spectrum::ZERO {
             return None;
         }
-        Some(BsdfSample { wi, pdf, weight: f / pdf, delta: false, null: false, eta })
+        Some((BsdfSample { wi, pdf, weight: f / pdf, delta: false, null: false, eta }, pdf_guide))
     }
 
     /// The light candidates a vertex draws in a scene of `lights` lights:
@@ -512,7 +550,12 @@ impl PathIntegrator {
     /// record them, for a scene of `lights` lights picked by `selection`.
     pub fn summary(&self, lights: usize, selection: LightSelection) -> String {
         let guiding = match self.guiding {
-            Some(g) => format!("guiding=true (budget {}, bsdf_fraction {})", g.budget, g.bsdf_fraction),
+            Some(g) => format!(
+                "guiding=true (budget {}, bsdf_fraction {}, roulette {})",
+                g.budget,
+                g.bsdf_fraction,
+                if g.roulette { "by expected contribution" } else { "by throughput" }
+            ),
             None => "guiding=false".into(),
         };
         let depth = |d: u32| if d == u32::MAX { "-1".to_string() } else { d.to_string() };
@@ -533,11 +576,28 @@ impl PathIntegrator {
         self.guiding.map_or(1.0, |g| g.bsdf_fraction)
     }
 
-    /// Russian roulette after a bounce: whether the path goes on (its
-    /// throughput divided by the survival probability).
+    /// The value of pixel `global` that roulette by expected contribution
+    /// compares with: the guide's image, 0 (roulette by throughput)
+    /// without a guide or with `guiding_roulette` off.
     #[inline]
-    fn roulette(&self, st: &mut PathState, rng: &mut SampleStream) -> bool {
-        match self.term.survive(st.beta, st.eta, st.depth, rng) {
+    pub fn roulette_target(&self, guide: Option<&Guide>, global: (u32, u32)) -> f32 {
+        match (self.guiding, guide) {
+            (Some(g), Some(guide)) if g.roulette => guide.pixel_estimate(global),
+            _ => 0.0,
+        }
+    }
+
+    /// Russian roulette after a bounce: whether the path goes on (its
+    /// throughput divided by the survival probability). Where the bounce
+    /// was guided (`guide_pdf`, the guide's density of the direction, > 0)
+    /// and the path has a target, by the share of it the path is expected
+    /// to bring, β̄ · Φ · p_guide / target ([`crate::guiding::roulette`]);
+    /// else by throughput.
+    #[inline]
+    fn roulette(&self, st: &mut PathState, rng: &mut SampleStream, guide_pdf: f32) -> bool {
+        let expected = (guide_pdf > 0.0 && st.flux > 0.0 && st.target > 0.0)
+            .then(|| (st.beta[0] + st.beta[1] + st.beta[2]) * (1.0 / 3.0) * st.flux * guide_pdf / st.target);
+        match self.term.survive_expected(st.beta, st.eta, st.depth, expected, rng) {
             Some(q) => {
                 st.beta /= q;
                 true
