@@ -367,7 +367,10 @@ fn guided_many_lights_match_mitsuba() {
 
 #[test]
 fn guided_envmap_sun_matches_mitsuba() {
-    compare_guided("envmap_sun", 8, 512);
+    // 1024 spp: with roulette by expected contribution the guided image is
+    // noisier here (see README, Path guiding), and 512 spp could no longer
+    // resolve the comparison's 2 % error in the mean.
+    compare_guided("envmap_sun", 8, 1024);
 }
 
 // Resampled light selection is unbiased: scenes rendered with

@@ -171,7 +171,6 @@ fn run<F: Float>(
     // Vertices run in lanes where they can (see `PathIntegrator::lane_vertex`),
     // guided by a trained guide as `vertex_guided` is.
     let vertex_lanes = F::WIDTH > 1;
-    let lane_guide = guide;
     // Roulette by expected contribution once training is over.
     let roulette_guide = if training.is_some() { None } else { guide };
     // Which samples record their directions, and the directions drawn:
@@ -295,7 +294,7 @@ fn run<F: Float>(
         macro_rules! run_batch {
             ($at:expr) => {{
                 let b = bins.batch($at);
-                path.lane_vertices::<F>(env.map(|e| e.1), scene.lane_tables(), lane_guide, b, &mut lane_out);
+                path.lane_vertices::<F>(env.map(|e| e.1), scene.lane_tables(), guide, b, &mut lane_out);
                 tile.stats.rays.lane_vertices += b.len() as u64;
                 tile.stats.rays.vertex_lanes += if b.is_empty() { 0 } else { F::WIDTH as u64 };
                 for l in 0..b.len() {
@@ -325,9 +324,7 @@ fn run<F: Float>(
                 continue;
             }
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                if let Some(at) =
-                    path.lane_vertex(scene, env, &mut slot.state, h, &mut slot.rng, i, &mut bins, lane_guide)
-                {
+                if let Some(at) = path.lane_vertex(scene, env, &mut slot.state, h, &mut slot.rng, i, &mut bins, guide) {
                     ended.push(false);
                     if bins.batch(at).len() == F::WIDTH {
                         run_batch!(at);
