@@ -346,14 +346,18 @@ impl Guide {
         (self.leaves.len(), self.leaves.iter().map(|l| l.sampling.node_count()).sum())
     }
 
-    /// Bytes the guide holds (both trees of every leaf).
+    /// Bytes the guide holds (both trees of every leaf, the sampling tree's table).
     pub fn memory(&self) -> usize {
         let per_node = 16 + 16 + 16 + 32;
         self.nodes.len() * std::mem::size_of::<SNode>()
             + self
                 .leaves
                 .iter()
-                .map(|l| std::mem::size_of::<Leaf>() + per_node * l.sampling.node_count().max(l.building.node_count()))
+                .map(|l| {
+                    std::mem::size_of::<Leaf>()
+                        + per_node * l.sampling.node_count().max(l.building.node_count())
+                        + l.sampling.table_bytes()
+                })
                 .sum::<usize>()
     }
 }

@@ -53,7 +53,7 @@ use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::guiding::{Guide, GuideDensity};
 use crate::light::{EnvMapLight, LightSelection};
-use crate::material::{two_sided_frame, LaneMaterial, Material};
+use crate::material::{LaneMaterial, Material};
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
 use crate::sampling::distrib1d::alias_pick;
 use crate::sampling::SampleStream;
@@ -147,21 +147,15 @@ mod row {
     pub const NS: usize = 62;
     /// 1 where the material is two-sided (every kind reads it).
     pub const TWO_SIDED_BSDF: usize = 71;
-    /// With a path guide (lit kinds only): the spatial leaf's number
-    /// ([`Guide::leaf_of`], exact below 2^24) and the fold's unit normal
-    /// (3 rows; zero where the density is not folded, [`GuideDensity::fold`]).
-    pub const GUIDE_LEAF: usize = 72;
-    pub const GUIDE_FOLD: usize = 73;
-    /// 1 where the next direction is the guide's (else the BSDF's, its
-    /// `U_BSDF1` rescaled), that direction (world, 3 rows) and its density.
-    pub const GUIDE_PICK: usize = 76;
-    pub const GUIDE_D: usize = 77;
-    pub const GUIDE_PDF: usize = 80;
+    /// With a path guide (lit kinds only): 1 where the next direction is
+    /// the guide's (drawn in lanes with `U_BSDF`), else the BSDF's, its
+    /// `U_BSDF1` rescaled.
+    pub const GUIDE_PICK: usize = 72;
     /// With resampled light selection: the number that picks among the
     /// candidates (their rows are [`cand_row`]'s).
-    pub const U_PICK: usize = 81;
+    pub const U_PICK: usize = 73;
     /// How many rows there are.
-    pub const COUNT: usize = 82;
+    pub const COUNT: usize = 74;
 }
 
 /// The most light candidates a lane vertex resamples from (more run the
@@ -397,10 +391,13 @@ mod out_row {
     pub const PDF: usize = 22;
     pub const WEIGHT: usize = 23;
     pub const ETA: usize = 26;
-    /// The guide's density of the next direction (0: not guided, or a delta lobe).
+    /// The guide's density of the next direction (0: not guided, or a delta
+    /// lobe) and its quadtree's mean record Φ (for roulette, read only
+    /// where that density is positive).
     pub const GUIDE_PDF: usize = 27;
+    pub const GUIDE_FLUX: usize = 28;
     /// How many rows there are.
-    pub const COUNT: usize = 28;
+    pub const COUNT: usize = 29;
 }
 
 /// What the lane kernel found at the vertices of a [`LaneBatch`], stored
@@ -1390,36 +1387,14 @@ impl PathIntegrator {
         b.set(l, row::U_BSDF + 1, u.y);
         match guide.filter(|_| lit) {
             None => b.set(l, row::U_BSDF1, u1),
-            Some(g) => {
-                // The guide's density as `vertex_guided` finds it: at the
-                // hit's point, folded onto wo's side where the BSDF only
-                // reflects, in the frame `Material::bsdf` leaves (a
-                // two-sided material's flipped below its normal).
-                let mut si = scene.interaction(&st.ray, hit);
-                if surface.two_sided {
-                    two_sided_frame(&mut si);
-                }
-                let wo = si.to_local(si.wo);
-                let reflects_only = material.reflects_only();
-                let side = Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 });
-                let leaf = g.leaf_of(si.p);
-                let density = GuideDensity { tree: g.leaf(leaf), fold: reflects_only.then(|| si.to_world(side)) };
-                st.flux = density.tree.flux();
-                b.set(l, row::GUIDE_LEAF, leaf as f32);
-                b.set3(l, row::GUIDE_FOLD, density.fold.unwrap_or(Vec3::ZERO));
+            Some(_) => {
                 // `sample_guided`: the BSDF's direction with probability α
-                // (its number rescaled), else the guide's.
+                // (its number rescaled), else the guide's (drawn in lanes,
+                // where the hit's point and frame are).
                 let alpha = self.guide_bsdf_fraction();
-                if u1 < alpha {
-                    b.set(l, row::U_BSDF1, u1 / alpha);
-                    b.set(l, row::GUIDE_PICK, 0.0);
-                } else {
-                    let (d, pdf) = density.sample(u);
-                    b.set(l, row::U_BSDF1, u1);
-                    b.set(l, row::GUIDE_PICK, 1.0);
-                    b.set3(l, row::GUIDE_D, d);
-                    b.set(l, row::GUIDE_PDF, pdf);
-                }
+                let pick = u1 >= alpha;
+                b.set(l, row::U_BSDF1, if pick { u1 } else { u1 / alpha });
+                b.set(l, row::GUIDE_PICK, if pick { 1.0 } else { 0.0 });
             }
         }
         if emitter {
@@ -1521,6 +1496,27 @@ impl PathIntegrator {
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
         let h = hit::<F, S>(v);
         let (p, n) = (h.p, h.n);
+        // With a guide, each lane's density as `vertex_guided` finds it: the
+        // quadtree of the point's spatial leaf, folded onto wo's side where
+        // the BSDF only reflects (all but rough dielectrics), about the
+        // normal of the frame `Material::bsdf` leaves (`h`'s: a two-sided
+        // material's flipped below its normal).
+        let guided = guide.map(|g| {
+            let at = p.to_lanes();
+            let mut leaves = [0u32; LaneBatch::LANES];
+            for (leaf, p) in leaves.iter_mut().zip(&at).take(v.len().min(F::WIDTH)) {
+                *leaf = g.leaf_of(*p);
+            }
+            let fold = (B != 3).then(|| {
+                let side = F::select(h.wo.z.cmp_lt(zero), -one, one);
+                h.to_world(V3::new(zero, zero, side)).to_lanes()
+            });
+            (g, leaves, fold)
+        });
+        let density = |l: usize| {
+            let (g, leaves, fold) = guided.as_ref().expect("a guided lane without its guide");
+            GuideDensity { tree: g.leaf(leaves[l]), fold: fold.map(|f| f[l]) }
+        };
 
         // A rough plastic's material and its transmittance at wo, shared by
         // its evaluation and its sample.
@@ -1641,20 +1637,12 @@ impl PathIntegrator {
         // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
         // per lane, where the sample contributes.
         let alpha = self.guide_bsdf_fraction();
-        let guide_pdf = |g: &Guide, d: V3<F>, need: u32| {
+        let guide_pdf = |d: V3<F>, need: u32| {
             let d = d.to_lanes();
-            simd::gather::<F>(|l| {
-                if need >> l & 1 == 0 {
-                    return 0.0;
-                }
-                let at = |r: usize| v.rows[r][l];
-                let fold = Vec3::new(at(row::GUIDE_FOLD), at(row::GUIDE_FOLD + 1), at(row::GUIDE_FOLD + 2));
-                let folded = fold != Vec3::ZERO;
-                GuideDensity { tree: g.leaf(at(row::GUIDE_LEAF) as u32), fold: folded.then_some(fold) }.pdf(d[l])
-            })
+            simd::gather::<F>(|l| if need >> l & 1 == 0 { 0.0 } else { density(l).pdf(d[l]) })
         };
         let bsdf_pdf = match guide {
-            Some(gd) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(gd, wi, contributes.bitmask()),
+            Some(_) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(wi, contributes.bitmask()),
             None => bsdf_pdf,
         };
         let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
@@ -1714,13 +1702,21 @@ impl PathIntegrator {
         // density at the direction, and a failed sample ends the path.
         let (wi_next, bsdf_pdf, weight, go, delta, eta_next, guide_next) = match guide {
             None => (wi_next, bsdf_pdf, weight, go, delta, eta_next, zero),
-            Some(gd) => {
+            Some(_) => {
                 let pick = v.mask::<F>(row::GUIDE_PICK);
+                // The guide's direction (world) and density where it was picked.
+                let (u0, u1) = (g(row::U_BSDF).to_array(), g(row::U_BSDF + 1).to_array());
+                let (picks, mut drawn) = (pick.bitmask(), [(Vec3::ZERO, 0.0f32); LaneBatch::LANES]);
+                for (l, d) in drawn.iter_mut().enumerate().take(v.len().min(F::WIDTH)) {
+                    if picks >> l & 1 != 0 {
+                        *d = density(l).sample(glam::Vec2::new(u0.as_ref()[l], u1.as_ref()[l]));
+                    }
+                }
                 let specular = !pick & delta;
-                let wi = V3::select(pick, h.to_local(gv(row::GUIDE_D)), wi_next);
+                let wi = V3::select(pick, h.to_local(V3::gather(|l| drawn[l].0)), wi_next);
                 let (f, pdf_bsdf) = eval_pdf(wi);
                 let need = (!pick & !delta & go).bitmask();
-                let pdf_guide = F::select(pick, g(row::GUIDE_PDF), guide_pdf(gd, h.to_world(wi_next), need));
+                let pdf_guide = F::select(pick, simd::gather(|l| drawn[l].1), guide_pdf(h.to_world(wi_next), need));
                 let pdf = F::splat(alpha) * pdf_bsdf + F::splat(1.0 - alpha) * pdf_guide;
                 let f = f * wi.z.abs();
                 let ok = !(pdf.cmp_ne(pdf) | pdf.cmp_le(zero)) & f.ne_zero();
@@ -1743,6 +1739,9 @@ impl PathIntegrator {
         out.put(out_row::SHADOW_T, shadow_t);
         next_rays(&h, wi_next, bsdf_pdf, go, weight, eta_next, delta, out);
         out.put(out_row::GUIDE_PDF, guide_next);
+        if let Some((g, leaves, _)) = &guided {
+            out.put(out_row::GUIDE_FLUX, simd::gather::<F>(|l| g.leaf(leaves[l]).flux()));
+        }
     }
 
     /// The rest of lane `l`'s vertex of a batch, one path at a time: its
@@ -1776,7 +1775,11 @@ impl PathIntegrator {
         st.prev_delta = out.delta >> l & 1 != 0;
         st.ray = Ray::new(out.at3(O, l), out.at3(WI, l), f32::INFINITY);
         st.depth += 1;
-        (shadow, self.roulette(st, rng, out.at(GUIDE_PDF, l)))
+        let guide_pdf = out.at(GUIDE_PDF, l);
+        if guide_pdf > 0.0 {
+            st.flux = out.at(GUIDE_FLUX, l);
+        }
+        (shadow, self.roulette(st, rng, guide_pdf))
     }
 }
 
