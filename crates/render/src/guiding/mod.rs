@@ -165,19 +165,23 @@ impl Guide {
         self.iterations
     }
 
-    /// The spatial leaf holding `p` (clamped into the cube).
+    /// The spatial leaf holding `p` (clamped into the cube). The axes
+    /// x, y, z in turn, unrolled: an axis chosen at run time indexed the
+    /// point through memory, and a guided lane vertex looks its leaf up.
     fn leaf_index(&self, p: Vec3) -> usize {
-        let mut t = ((p - self.min) / self.size).clamp(Vec3::ZERO, Vec3::ONE);
-        let (mut node, mut axis) = (0usize, 0usize);
+        let t = ((p - self.min) / self.size).clamp(Vec3::ZERO, Vec3::ONE);
+        let mut t = [t.x, t.y, t.z];
+        let mut node = 0usize;
         loop {
-            let n = self.nodes[node];
-            if n.child[0] == 0 {
-                return n.leaf as usize;
+            for x in &mut t {
+                let n = self.nodes[node];
+                if n.child[0] == 0 {
+                    return n.leaf as usize;
+                }
+                let hi = *x >= 0.5;
+                *x = if hi { *x * 2.0 - 1.0 } else { *x * 2.0 };
+                node = n.child[hi as usize] as usize;
             }
-            let hi = t[axis] >= 0.5;
-            t[axis] = if hi { t[axis] * 2.0 - 1.0 } else { t[axis] * 2.0 };
-            node = n.child[hi as usize] as usize;
-            axis = (axis + 1) % 3;
         }
     }
 
@@ -453,6 +457,39 @@ mod tests {
         assert!(g.at(left).pdf(up) > 20.0 * g.at(left).pdf(down));
         assert!(g.at(right).pdf(down) > 20.0 * g.at(right).pdf(up));
         println!("guide: {leaves} leaves, {nodes} nodes, {} KiB", g.memory() / 1024);
+    }
+
+    /// The spatial lookup splits along x, y, z in turn by depth: each leaf
+    /// found is the one a walk that picks the axis by depth mod 3 finds,
+    /// inside the cube and clamped outside it.
+    #[test]
+    fn leaf_lookup_cycles_the_axes() {
+        let mut g = Guide::new(unit_box());
+        for it in 0..4 {
+            g.update(&records(40_000 << it, 60 + it as u64));
+        }
+        let deepest = |p: Vec3| {
+            let mut t = ((p - g.min) / g.size).clamp(Vec3::ZERO, Vec3::ONE);
+            let (mut node, mut depth) = (0usize, 0usize);
+            loop {
+                let n = g.nodes[node];
+                if n.child[0] == 0 {
+                    return (n.leaf as usize, depth);
+                }
+                let hi = t[depth % 3] >= 0.5;
+                t[depth % 3] = if hi { t[depth % 3] * 2.0 - 1.0 } else { t[depth % 3] * 2.0 };
+                (node, depth) = (n.child[hi as usize] as usize, depth + 1);
+            }
+        };
+        let mut rng = TestRng::new(8);
+        let mut max_depth = 0;
+        for _ in 0..20_000 {
+            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 1.2 - Vec3::splat(0.1);
+            let (leaf, depth) = deepest(p);
+            max_depth = max_depth.max(depth);
+            assert_eq!(g.leaf_index(p), leaf, "at {p}");
+        }
+        assert!(max_depth > 3, "the tree splits past one round of the axes: depth {max_depth}");
     }
 
     /// Each leaf's tree also estimates the radiance arriving from a
