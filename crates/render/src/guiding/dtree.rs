@@ -326,11 +326,10 @@ impl DTree {
         let mut stack = vec![(0usize, 0u32, 0usize, 0usize, 1.0f32)];
         while let Some((node, depth, x0, y0, pdf)) = stack.pop() {
             let half = TOP_SIDE >> (depth + 1);
-            for q in 0..4 {
+            for (q, (&p, &child)) in prob[node].iter().zip(&nodes[node].child).enumerate() {
                 let (x, y) = (x0 + (q & 1) * half, y0 + (q >> 1) * half);
                 let mut d = pdf;
-                d *= 4.0 * prob[node][q];
-                let child = nodes[node].child[q];
+                d *= 4.0 * p;
                 if depth + 1 == TOP || child == 0 {
                     for row in top[y * TOP_SIDE..(y + half) * TOP_SIDE].chunks_exact_mut(TOP_SIDE) {
                         row[x..x + half].fill(TopCell { pdf: d, node: child });
