@@ -383,7 +383,7 @@ impl DTree {
     }
 
     /// The density on the square at `p`: the walk from the root, its first
-    /// [`TOP`] levels read from the table. Scaling by 2^TOP and taking the
+    /// 4 levels (`TOP`) read from the table. Scaling by 2^TOP and taking the
     /// fraction is exact, as each level's doubling is.
     pub fn pdf_square(&self, p: Vec2) -> f32 {
         let s = p * TOP_SIDE as f32;
