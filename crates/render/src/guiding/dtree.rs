@@ -392,7 +392,14 @@ impl DTree {
         if cell.node == 0 {
             return cell.pdf;
         }
-        let (mut p, mut node, mut pdf) = (s - Vec2::new(cx as f32, cy as f32), cell.node as usize, cell.pdf);
+        self.walk(cell.node as usize, s - Vec2::new(cx as f32, cy as f32), cell.pdf)
+    }
+
+    /// The density at `p`, walking down from `node` (`p` in the node's
+    /// unit square) with `pdf` the density above it.
+    #[inline]
+    fn walk(&self, node: usize, p: Vec2, pdf: f32) -> f32 {
+        let (mut p, mut node, mut pdf) = (p, node, pdf);
         loop {
             let q;
             (q, p) = quadrant(p);
@@ -502,21 +509,6 @@ mod tests {
         b
     }
 
-    /// The density by walking from the root, level by level (what
-    /// `pdf_square` did before its table).
-    fn walked(t: &DTree, p: Vec2) -> f32 {
-        let (mut p, mut node, mut pdf) = (p, 0usize, 1.0f32);
-        loop {
-            let q;
-            (q, p) = quadrant(p);
-            pdf *= 4.0 * t.prob[node][q];
-            match t.nodes[node].child[q] {
-                0 => return pdf,
-                c => node = c as usize,
-            }
-        }
-    }
-
     /// The table of the top levels gives the walk's bits, for shallow and
     /// deep trees, at random points, cell borders and the square's edges.
     #[test]
@@ -558,7 +550,9 @@ mod tests {
                 }
             }
             for p in points {
-                assert_eq!(t.pdf_square(p).to_bits(), walked(t, p).to_bits(), "at {p} ({} nodes)", t.node_count());
+                // The walk from the root, level by level, without the table.
+                let walked = t.walk(0, p, 1.0);
+                assert_eq!(t.pdf_square(p).to_bits(), walked.to_bits(), "at {p} ({} nodes)", t.node_count());
             }
         }
     }

@@ -1515,7 +1515,7 @@ impl PathIntegrator {
         });
         let density = |l: usize| {
             let (g, leaves, fold) = guided.as_ref().expect("a guided lane without its guide");
-            GuideDensity { tree: g.leaf(leaves[l]), fold: fold.map(|f| f[l]) }
+            GuideDensity { tree: g.leaf(leaves[l]), fold: fold.as_ref().map(|f| f[l]) }
         };
 
         // A rough plastic's material and its transmittance at wo, shared by
