@@ -5,6 +5,7 @@ Usage:
     /work/.venv-mitsuba/bin/python tools/mitsuba_bench.py SCENE.xml
         [--variant llvm_ad_rgb|scalar_rgb] [--spp 64] [--threads 2]
         [--runs 2] [--budget SECONDS] [--out FILE.exr] [-D name=value ...]
+        [--reference CHUNKS --out REF.exr --out-var REF-VAR.exr]
 
 Loads the scene once (timed separately, not counted), then renders it
 `--runs` times with different seeds. The first render includes Dr.Jit's
@@ -21,6 +22,12 @@ first; scalar variants, which have no JIT: fastest of all runs):
     mitsuba variant=V scene=S spp=N seconds=T samples_per_sec=R first_seconds=T0 load_seconds=TL threads=K
 
 samples_per_sec = width * height * spp / seconds (camera samples, i.e. paths).
+
+With `--reference CHUNKS` it times nothing: it renders CHUNKS images of
+`--spp` each with seeds 10000, 10001, ... and writes their mean to `--out`
+and, to `--out-var`, the per-pixel variance of that mean (the chunks' sample
+variance over CHUNKS): what a reference still owes to noise, which an
+error measured against it includes and can subtract.
 `spp` is passed to mi.render, overriding the scene's sample_count.
 
 Tested with Mitsuba 3.9.1. The LLVM variant needs LLVM 19; set
@@ -46,6 +53,9 @@ def main():
     ap.add_argument("--budget", type=float,
                     help="after the timed runs, render once more with as many spp as the "
                          "warm time per spp says fit in this many seconds, and time that")
+    ap.add_argument("--reference", type=int, metavar="CHUNKS",
+                    help="render a converged reference: the mean of CHUNKS renders of --spp")
+    ap.add_argument("--out-var", help="with --reference: the variance of its mean (EXR)")
     ap.add_argument("-D", dest="defines", action="append", default=[],
                     metavar="NAME=VALUE", help="scene parameter (like mitsuba -D)")
     args = ap.parse_args()
@@ -75,6 +85,25 @@ def main():
     w, h = film.crop_size()
     nsamples = int(w) * int(h) * args.spp
     name = os.path.basename(args.scene)
+
+    if args.reference:
+        k = args.reference
+        total = total_sq = None
+        t0 = time.perf_counter()
+        for i in range(k):
+            a = np.array(mi.render(scene, spp=args.spp, seed=10000 + i), dtype=np.float64)
+            assert np.all(np.isfinite(a)), "non-finite pixels"
+            total = a if total is None else total + a
+            total_sq = a * a if total_sq is None else total_sq + a * a
+        mean = total / k
+        var_of_mean = np.maximum(total_sq / k - mean * mean, 0.0) * (k / (k - 1)) / k if k > 1 \
+            else np.zeros_like(mean)
+        mi.Bitmap(mean.astype(np.float32)).write(args.out)
+        if args.out_var:
+            mi.Bitmap(var_of_mean.astype(np.float32)).write(args.out_var)
+        print(f"mitsuba_reference variant={args.variant} scene={name} spp={k * args.spp} "
+              f"seconds={time.perf_counter() - t0:.1f}", flush=True)
+        return 0
 
     times = []
     for run in range(args.runs):
