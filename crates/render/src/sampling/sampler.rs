@@ -181,7 +181,9 @@ impl SampleStream {
     /// `next_1d` leaves it.
     #[inline]
     pub fn skip_1d(&mut self) {
-        if let SamplerKind::Independent = self.sampler.kind {
+        // Sobol's values are a pure function of the dimension, so moving
+        // past one is counting it (as next_1d_general does).
+        if let SamplerKind::Independent | SamplerKind::Sobol = self.sampler.kind {
             self.dim += 1;
         } else {
             self.next_1d_general();
@@ -191,11 +193,14 @@ impl SampleStream {
     /// [`Self::skip_1d`] for [`Self::next_2d`].
     #[inline]
     pub fn skip_2d(&mut self) {
-        if let SamplerKind::Independent = self.sampler.kind {
+        match self.sampler.kind {
             // `independent_2d`: one hash, one dimension.
-            self.dim += 1;
-        } else {
-            self.next_2d_general();
+            SamplerKind::Independent => self.dim += 1,
+            // `next_2d_general`'s pair of one set, without its values.
+            SamplerKind::Sobol => self.dim = ((self.dim + 1) & !1) + 2,
+            _ => {
+                self.next_2d_general();
+            }
         }
     }
 
@@ -237,7 +242,7 @@ impl SampleStream {
     fn sobol_set(&mut self, set: u32) -> [f32; 4] {
         if self.sobol_set != set {
             let (i, seed) = self.sobol_index_and_seed(set);
-            self.sobol = sobol_burley::sample_4d(i, 0, seed);
+            self.sobol = sequences::sobol_4d_first_set(i, seed);
             self.sobol_set = set;
         }
         self.sobol
