@@ -189,7 +189,7 @@ fn rough_coated_diffuse_renders_alike_with_and_without_mis() {
 /// quarter of the samples; α = 0.3, so most directions come from the
 /// guide). Each half trains its own guide, so the halves stay independent.
 fn guided(mut j: RenderJob) -> RenderJob {
-    let g = penumbra_render::integrator::Guiding { budget: 0.25, bsdf_fraction: 0.3, roulette: true };
+    let g = penumbra_render::integrator::Guiding { budget: 0.25, bsdf_fraction: 0.3, ..Default::default() };
     j.integrator = Integrator::Path(PathIntegrator { guiding: Some(g), ..PathIntegrator::default() });
     j
 }

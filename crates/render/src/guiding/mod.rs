@@ -203,9 +203,10 @@ impl Guide {
 
     /// Ends a pass: its `records` (in tile order, each tile's in sample
     /// order) become the guide of the next pass. Space is split where a
-    /// leaf got many records, and each leaf's quadtree refined where its
-    /// radiance is large.
-    pub fn update(&mut self, records: &[GuideRecord]) {
+    /// leaf got more than `threshold` · √(2^passes so far) records (c,
+    /// [`SPATIAL_THRESHOLD`] in the paper), and each leaf's quadtree refined
+    /// where its radiance is large.
+    pub fn update(&mut self, records: &[GuideRecord], threshold: f64) {
         // Records grouped by leaf, keeping their order (a counting sort).
         let leaf_of: Vec<u32> = records.par_iter().map(|r| self.leaf_index(r.p) as u32).collect();
         let mut start = vec![0usize; self.leaves.len() + 1];
@@ -232,7 +233,7 @@ impl Guide {
         });
         // Space: leaves with many records split (their children share the
         // records, half each, and keep what the parent learnt).
-        let threshold = SPATIAL_THRESHOLD * 2f64.powi(self.iterations as i32).sqrt();
+        let threshold = threshold * 2f64.powi(self.iterations as i32).sqrt();
         let mut stack: Vec<(usize, u32)> = vec![(0, 0)];
         while let Some((node, depth)) = stack.pop() {
             let n = self.nodes[node];
@@ -396,7 +397,7 @@ mod tests {
         use crate::testing::chi2::{alpha, chi2_test};
         let mut g = Guide::new(unit_box());
         for it in 0..3 {
-            g.update(&records(20_000 << it, 40 + it as u64));
+            g.update(&records(20_000 << it, 40 + it as u64), SPATIAL_THRESHOLD);
         }
         let p = Vec3::new(0.2, 0.5, 0.5);
         let normals = [Vec3::Z, Vec3::new(0.3, -0.9, 0.2).normalize(), -Vec3::Z];
@@ -448,7 +449,7 @@ mod tests {
         let mut g = Guide::new(unit_box());
         assert!(!g.trained());
         for it in 0..4 {
-            g.update(&records(40_000 << it, it as u64));
+            g.update(&records(40_000 << it, it as u64), SPATIAL_THRESHOLD);
         }
         let (leaves, nodes) = g.size();
         assert!(leaves >= 2 && nodes > 2 * 21, "{leaves} leaves, {nodes} nodes");
@@ -466,7 +467,7 @@ mod tests {
     fn leaf_lookup_cycles_the_axes() {
         let mut g = Guide::new(unit_box());
         for it in 0..4 {
-            g.update(&records(40_000 << it, 60 + it as u64));
+            g.update(&records(40_000 << it, 60 + it as u64), SPATIAL_THRESHOLD);
         }
         let deepest = |p: Vec3| {
             let mut t = ((p - g.min) / g.size).clamp(Vec3::ZERO, Vec3::ONE);
@@ -500,7 +501,7 @@ mod tests {
     fn estimates_incident_radiance() {
         let mut g = Guide::new(unit_box());
         for it in 0..5 {
-            g.update(&records(40_000 << it, 20 + it as u64));
+            g.update(&records(40_000 << it, 20 + it as u64), SPATIAL_THRESHOLD);
         }
         // Per side: 10 from a cap of 2π (1 − 0.8) sr, 0.1 from the rest.
         let cap = 2.0 * std::f64::consts::PI * 0.2;
@@ -556,7 +557,7 @@ mod tests {
     fn encodes_and_decodes() {
         let mut g = Guide::new(unit_box());
         for it in 0..3 {
-            g.update(&records(20_000 << it, 60 + it as u64));
+            g.update(&records(20_000 << it, 60 + it as u64), SPATIAL_THRESHOLD);
         }
         g.set_image(PixelEstimate::new((0, 0), 2, 1, vec![1.0, 3.0]));
         let mut bytes = vec![7u8; 3];
@@ -575,8 +576,8 @@ mod tests {
         assert_eq!(h.pixel_estimate((1, 0)), 3.0);
         // Learning goes on identically from the decoded guide.
         let (mut g2, mut h2) = (g.clone(), h);
-        g2.update(&records(30_000, 99));
-        h2.update(&records(30_000, 99));
+        g2.update(&records(30_000, 99), SPATIAL_THRESHOLD);
+        h2.update(&records(30_000, 99), SPATIAL_THRESHOLD);
         let (mut a, mut b) = (Vec::new(), Vec::new());
         g2.encode(&mut a);
         h2.encode(&mut b);
@@ -605,7 +606,7 @@ mod tests {
             pool.install(|| {
                 let mut g = Guide::new(unit_box());
                 for it in 0..3 {
-                    g.update(&records(30_000 << it, 10 + it as u64));
+                    g.update(&records(30_000 << it, 10 + it as u64), SPATIAL_THRESHOLD);
                 }
                 g
             })

@@ -11,7 +11,7 @@ use crate::camera::Camera;
 use crate::film::{Film, FilmLayers, Filter, MAX_MARGIN};
 use crate::geometry::Ray;
 use crate::guiding::roulette::PixelEstimate;
-use crate::guiding::{Guide, GuideRecord};
+use crate::guiding::{Guide, GuideRecord, SPATIAL_THRESHOLD};
 use crate::integrator::aov;
 use crate::integrator::{Integrator, RayStats};
 use crate::material::Scratch;
@@ -215,7 +215,11 @@ impl RenderJob {
             let t = std::time::Instant::now();
             let image = own.develop().iter().map(|c| (c[0] + c[1] + c[2]) / 3.0).collect();
             g.set_image(PixelEstimate::new(self.crop_offset, own.width, own.height, image));
-            g.update(&records);
+            let threshold = match &self.integrator {
+                Integrator::Path(p) => p.guiding.map_or(SPATIAL_THRESHOLD, |g| g.spatial_threshold as f64),
+                _ => SPATIAL_THRESHOLD,
+            };
+            g.update(&records, threshold);
             stats.guide_records += records.len() as u64;
             stats.guide_seconds += t.elapsed().as_secs_f64();
             return Some(stats);

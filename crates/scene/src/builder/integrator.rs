@@ -193,7 +193,8 @@ fn light_candidates(node: &Node) -> Result<u32> {
     Ok(m as u32)
 }
 
-/// `guiding`, `guiding_budget`, `guiding_bsdf_fraction` and `guiding_roulette` (see `integrator::path`).
+/// `guiding`, `guiding_budget`, `guiding_bsdf_fraction`, `guiding_roulette` and
+/// `guiding_spatial_threshold` (see `integrator::path`).
 fn guiding(node: &Node) -> Result<Option<Guiding>> {
     let on = node.bool("guiding", false)?;
     let d = Guiding::default();
@@ -212,7 +213,19 @@ fn guiding(node: &Node) -> Result<Option<Guiding>> {
         ));
     }
     let roulette = node.bool("guiding_roulette", d.roulette)?;
-    Ok(on.then_some(Guiding { budget: budget as f32, bsdf_fraction: fraction as f32, roulette }))
+    let threshold = node.float("guiding_spatial_threshold", d.spatial_threshold as f64)?;
+    if !(threshold.is_finite() && threshold >= 1.0) {
+        return Err(LoadError::at(
+            node.loc_of("guiding_spatial_threshold"),
+            "guiding_spatial_threshold must be at least 1 (records per spatial leaf before it splits)",
+        ));
+    }
+    Ok(on.then_some(Guiding {
+        budget: budget as f32,
+        bsdf_fraction: fraction as f32,
+        roulette,
+        spatial_threshold: threshold as f32,
+    }))
 }
 
 /// `volpath` and `volpathmis` (one estimator; see `integrator::volpath`).

@@ -14,6 +14,7 @@
 //! | guiding_budget | float  | 0.25: the share of the samples (under `--time`, of the time) whose passes train the guide (their samples are kept) |
 //! | guiding_bsdf_fraction | float | 0.5: at a guided vertex, the probability of drawing from the BSDF rather than the guide |
 //! | guiding_roulette | boolean | true: after the guide's training, Russian roulette by the share of its pixel a path is expected to bring ([`crate::guiding::roulette`]) where the guide knows the radiance ahead; false: by throughput, as without guiding |
+//! | guiding_spatial_threshold | float | 12000: c, a spatial leaf of the guide splits once a training pass of 2^k spp gives it more than c·√(2^k) records (Müller et al.'s c); lower: finer space, fewer records per leaf |
 //! | light_candidates | integer | light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below), 1 to 64; by default 4 in scenes of at least 8 lights, else 1 |
 //!
 //! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
@@ -43,7 +44,7 @@ use super::{RayStats, Termination};
 use crate::accel::Hit;
 use crate::bsdf::{Bsdf, BsdfSample};
 use crate::geometry::{Ray, SurfaceInteraction};
-use crate::guiding::{Guide, GuideDensity, GuideRecord};
+use crate::guiding::{Guide, GuideDensity, GuideRecord, SPATIAL_THRESHOLD};
 use crate::light::{LightSample, LightSelection};
 use crate::material::Scratch;
 use crate::math::Spectrum;
@@ -95,11 +96,14 @@ pub struct Guiding {
     pub bsdf_fraction: f32,
     /// Roulette by expected contribution once trained ([`crate::guiding::roulette`]).
     pub roulette: bool,
+    /// c: a spatial leaf splits once a pass gives it more than c·√(2^pass)
+    /// records ([`crate::guiding::Guide::update`]).
+    pub spatial_threshold: f32,
 }
 
 impl Default for Guiding {
     fn default() -> Self {
-        Guiding { budget: 0.25, bsdf_fraction: 0.5, roulette: true }
+        Guiding { budget: 0.25, bsdf_fraction: 0.5, roulette: true, spatial_threshold: SPATIAL_THRESHOLD as f32 }
     }
 }
 
@@ -551,10 +555,11 @@ impl PathIntegrator {
     pub fn summary(&self, lights: usize, selection: LightSelection) -> String {
         let guiding = match self.guiding {
             Some(g) => format!(
-                "guiding=true (budget {}, bsdf_fraction {}, roulette {})",
+                "guiding=true (budget {}, bsdf_fraction {}, roulette {}, spatial_threshold {})",
                 g.budget,
                 g.bsdf_fraction,
-                if g.roulette { "by expected contribution" } else { "by throughput" }
+                if g.roulette { "by expected contribution" } else { "by throughput" },
+                g.spatial_threshold
             ),
             None => "guiding=false".into(),
         };
