@@ -7,8 +7,10 @@ Usage (Mitsuba's Python, with Penumbra built in release):
     .venv-mitsuba/bin/python tools/guiding_side_by_side.py SCENE.xml REF.exr OUT.png [--budget 4]
 
 REF.exr is the converged reference `penumbra bench --suite efficiency`
-caches under target/bench-refs/ (Mitsuba at 2048 spp). relMSE is the
-bench's: mean over pixels and channels of (a - b)^2 / (b^2 + 0.01).
+caches under target/bench-refs/ (Mitsuba at 32,768 spp, e.g.
+door-ajar-32768.exr). relMSE is the bench's: mean over pixels and channels
+of (a - b)^2 / (b^2 + 0.01), less the reference's own where its variance
+(REF-var.exr, beside it) is there.
 """
 import argparse
 import os
@@ -44,6 +46,9 @@ def main():
     ap.add_argument("--budget", type=float, default=4.0)
     a = ap.parse_args()
     ref = load(a.reference)
+    var_path = a.reference[:-4] + "-var.exr"
+    floor = float(np.mean(load(var_path) / (ref * ref + 0.01))) if os.path.exists(var_path) else 0.0
+    ref_spp = re.search(r"-(\d+)\.exr$", a.reference)
     tmp = tempfile.mkdtemp(prefix="penumbra-side-")
     images = []
     mi_out = os.path.join(tmp, "mitsuba.exr")
@@ -62,10 +67,10 @@ def main():
             capture_output=True, text=True, check=True)
         spp = re.search(r"rendered (\d+) of", run.stderr)
         images.append((name, spp.group(1) if spp else "?", load(out)))
-    images.append(("reference", "2048", ref))
-    print(f"{a.scene}, {a.budget} s each:")
-    for name, spp, img in images:
-        print(f"  {name:<18} {spp:>6} spp  relMSE {rel_mse(img, ref):.3e}")
+    images.append(("reference", ref_spp.group(1) if ref_spp else "?", ref))
+    print(f"{a.scene}, {a.budget} s each (relMSE less the reference's own, {floor:.2e}):")
+    for name, spp, img in images[:-1]:
+        print(f"  {name:<18} {spp:>6} spp  relMSE {rel_mse(img, ref) - floor:.3e}")
     gap = np.ones((ref.shape[0], 2, 3), dtype=np.float32)
     row = np.concatenate(sum(([srgb(img), gap] for _, _, img in images), [])[:-1], axis=1)
     mi.Bitmap((row * 255 + 0.5).astype(np.uint8), mi.Bitmap.PixelFormat.RGB).write(a.out)
