@@ -104,6 +104,26 @@ fn light_candidates_outside_one_to_sixty_four_are_refused() {
 }
 
 #[test]
+fn guiding_spatial_threshold_is_read_and_checked() {
+    use penumbra_render::integrator::Integrator;
+    let scene = root().join("tests/scenes/many_lights.xml");
+    let load = |v: &str| {
+        let ov = penumbra_scene::Overrides {
+            integrator: Some(format!("path:guiding=true,guiding_spatial_threshold={v}")),
+            ..Default::default()
+        };
+        penumbra_scene::load_scene(&scene, &[], &ov)
+    };
+    for v in ["0", "0.5", "-3", "inf", "nan"] {
+        let err = load(v).err().unwrap_or_else(|| panic!("{v} was accepted"));
+        assert!(err.to_string().contains("guiding_spatial_threshold must be at least 1"), "{v}: {err}");
+    }
+    let job = load("3000").expect("3000 is valid");
+    let Integrator::Path(p) = &job.integrator else { panic!("not path") };
+    assert_eq!(p.guiding.map(|g| g.spatial_threshold), Some(3000.0));
+}
+
+#[test]
 fn light_candidates_default_to_four_from_eight_lights_on() {
     use penumbra_render::integrator::{Integrator, DEFAULT_LIGHT_CANDIDATES};
     for (scene, expected) in
