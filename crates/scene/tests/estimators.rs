@@ -114,9 +114,14 @@ fn guiding_spatial_threshold_is_read_and_checked() {
         };
         penumbra_scene::load_scene(&scene, &[], &ov)
     };
-    for v in ["0", "0.5", "-3", "inf", "nan"] {
+    for v in ["0", "0.5", "-3"] {
         let err = load(v).err().unwrap_or_else(|| panic!("{v} was accepted"));
         assert!(err.to_string().contains("guiding_spatial_threshold must be at least 1"), "{v}: {err}");
+    }
+    // Non-finite numbers are refused by the parameter reader, naming the parameter.
+    for v in ["inf", "nan"] {
+        let err = load(v).err().unwrap_or_else(|| panic!("{v} was accepted"));
+        assert!(err.to_string().contains("'guiding_spatial_threshold'"), "{v}: {err}");
     }
     let job = load("3000").expect("3000 is valid");
     let Integrator::Path(p) = &job.integrator else { panic!("not path") };
