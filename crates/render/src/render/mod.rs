@@ -13,7 +13,7 @@ use crate::geometry::Ray;
 use crate::guiding::roulette::PixelEstimate;
 use crate::guiding::{Guide, GuideRecord, SPATIAL_THRESHOLD};
 use crate::integrator::aov;
-use crate::integrator::{Integrator, RayStats};
+use crate::integrator::{Guiding, Integrator, RayStats};
 use crate::material::Scratch;
 use crate::math::Spectrum;
 use crate::sampling::{SampleStream, Sampler};
@@ -158,30 +158,29 @@ impl RenderJob {
         spp_done < self.guide_training_spp()
     }
 
+    /// The path integrator's guiding parameters (`None`: no guiding).
+    fn guiding(&self) -> Option<Guiding> {
+        match &self.integrator {
+            Integrator::Path(p) => p.guiding,
+            _ => None,
+        }
+    }
+
     /// The share of a render's time (or samples) that trains the path
     /// integrator's guide: its `guiding_budget` (0 without guiding).
     pub fn guide_training_share(&self) -> f64 {
-        match &self.integrator {
-            Integrator::Path(p) => p.guiding.map_or(0.0, |g| g.budget as f64),
-            _ => 0.0,
-        }
+        self.guiding().map_or(0.0, |g| g.budget as f64)
     }
 
     /// Samples per pixel whose passes train the guide: the budget's share
     /// of the sampler's count, rounded up (0 without guiding).
     pub fn guide_training_spp(&self) -> u32 {
-        match &self.integrator {
-            Integrator::Path(p) => p.guiding.map_or(0, |g| (g.budget as f64 * self.sampler.spp as f64).ceil() as u32),
-            _ => 0,
-        }
+        self.guiding().map_or(0, |g| (g.budget as f64 * self.sampler.spp as f64).ceil() as u32)
     }
 
     /// A new guide for this scene when the path integrator guides.
     pub fn new_guide(&self) -> Option<Guide> {
-        match &self.integrator {
-            Integrator::Path(p) if p.guiding.is_some() => Some(Guide::new(self.scene.bounds())),
-            _ => None,
-        }
+        self.guiding().map(|_| Guide::new(self.scene.bounds()))
     }
 
     /// As [`render_pass_masked`](Self::render_pass_masked), with path
@@ -215,11 +214,7 @@ impl RenderJob {
             let t = std::time::Instant::now();
             let image = own.develop().iter().map(|c| (c[0] + c[1] + c[2]) / 3.0).collect();
             g.set_image(PixelEstimate::new(self.crop_offset, own.width, own.height, image));
-            let threshold = match &self.integrator {
-                Integrator::Path(p) => p.guiding.map_or(SPATIAL_THRESHOLD, |g| g.spatial_threshold as f64),
-                _ => SPATIAL_THRESHOLD,
-            };
-            g.update(&records, threshold);
+            g.update(&records, self.guiding().map_or(SPATIAL_THRESHOLD, |g| g.spatial_threshold as f64));
             stats.guide_records += records.len() as u64;
             stats.guide_seconds += t.elapsed().as_secs_f64();
             return Some(stats);

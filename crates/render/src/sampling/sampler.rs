@@ -197,7 +197,7 @@ impl SampleStream {
             // `independent_2d`: one hash, one dimension.
             SamplerKind::Independent => self.dim += 1,
             // `next_2d_general`'s pair of one set, without its values.
-            SamplerKind::Sobol => self.dim = ((self.dim + 1) & !1) + 2,
+            SamplerKind::Sobol => self.dim = Self::sobol_pair(self.dim) + 2,
             _ => {
                 self.next_2d_general();
             }
@@ -235,6 +235,13 @@ impl SampleStream {
                 self.sobol_set(d / 4)[(d % 4) as usize]
             }
         }
+    }
+
+    /// The first dimension of the Sobol' pair a 2D draw at `dim` takes: the
+    /// next even one, so the pair is (0, 1) or (2, 3) of one set.
+    #[inline]
+    fn sobol_pair(dim: u32) -> u32 {
+        (dim + 1) & !1
     }
 
     /// The four values of a dimension set (see [`SamplerKind::Sobol`]).
@@ -337,7 +344,7 @@ impl SampleStream {
             SamplerKind::Sobol => {
                 // Start on an even dimension, so the pair is (0, 1) or (2, 3)
                 // of one set: Sobol's first two dimensions form a (0, 2)-net.
-                let d = (self.dim + 1) & !1;
+                let d = Self::sobol_pair(self.dim);
                 self.dim = d + 2;
                 let v = self.sobol_set(d / 4);
                 let c = (d % 4) as usize;
