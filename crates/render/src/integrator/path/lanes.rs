@@ -1482,7 +1482,11 @@ impl PathIntegrator {
     /// environment map, 2: an area light on a sphere), with BSDF `B` (0:
     /// diffuse, 1: rough conductor, 2: plastic, 3: rough dielectric, 4:
     /// rough plastic, its transmittance tables in `tables`).
-    #[inline(always)]
+    // Not inlined: `lane_vertices` instantiates this for about 100 (shape,
+    // light, BSDF) kinds per lane width, and inlined into one function they
+    // made LLVM's loop unrolling spend most of a build (its dominator-tree
+    // updates grow with the function's size). One call per batch costs nothing.
+    #[inline(never)]
     fn lit<F: Float, const S: u8, const L: u8, const B: u8>(
         &self,
         env: Option<&EnvMapLight>,
@@ -1869,7 +1873,7 @@ fn hit<F: Float, const S: u8>(v: &LaneBatch) -> LaneHit<F> {
 /// Lane vertices with a smooth conductor (`dielectric` false) or
 /// dielectric on shape kind `S`: `Conductor::sample` or
 /// `Dielectric::sample` and the next ray; no light sample.
-#[inline(always)]
+#[inline(never)] // As `lit`: its own function, not part of `lane_vertices`.
 fn specular<F: Float, const S: u8>(dielectric: bool, v: &LaneBatch, out: &mut LaneOutcomes) {
     let g = |r: usize| v.get::<F>(r);
     let gv = |r: usize| v.get3::<F>(r);
