@@ -1,9 +1,9 @@
 //! AOVs, variance, noise threshold, adaptive sampling and denoising, end to
 //! end through the `penumbra` binary on tiny images.
 
-mod common;
+use crate::common;
 
-use common::{bin, ok, read_exr, Exr};
+use crate::common::{bin, ok, read_exr, Exr};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

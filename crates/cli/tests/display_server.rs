@@ -9,7 +9,7 @@ use std::io::Read;
 use std::net::{TcpListener, TcpStream};
 use std::thread;
 
-mod common;
+use crate::common;
 
 /// One parsed packet.
 #[derive(Debug)]

@@ -5,9 +5,9 @@
 //! temporary file, and the next run resumes from the kept checkpoint (and
 //! removes temporary files that a killed run left).
 
-mod common;
+use crate::common;
 
-use common::{bin, ok};
+use crate::common::{bin, ok};
 use std::fs;
 use std::os::unix::process::CommandExt;
 use std::path::Path;

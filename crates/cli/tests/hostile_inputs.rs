@@ -2,9 +2,9 @@
 //! images larger than any film, or a data window outside the frame, are
 //! refused with a message naming the file, before the pixels are allocated.
 
-mod common;
+use crate::common;
 
-use common::bin;
+use crate::common::bin;
 use penumbra::exrmeta::{self, ExrImage};
 use std::collections::BTreeMap;
 

@@ -2,9 +2,9 @@
 //! `penumbra` binary: their EXR channels, and that checkpoints (resume
 //! bitwise) and `--part`/`merge` (equal up to f32 rounding) keep working.
 
-mod common;
+use crate::common;
 
-use common::{bin, ok, read_exr, Exr};
+use crate::common::{bin, ok, read_exr, Exr};
 use std::fs;
 use std::path::{Path, PathBuf};
 

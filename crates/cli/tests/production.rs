@@ -3,9 +3,9 @@
 //! budgets, partial images, signals, parts and crops merged into the single
 //! render, and the metadata that `merge` relies on.
 
-mod common;
+use crate::common;
 
-use common::{bin, ok, read_exr, Exr};
+use crate::common::{bin, ok, read_exr, Exr};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -2,9 +2,8 @@
 //! cosine and BSDF sampling), path tracing with and without MIS, with power
 //! light selection, and `direct` against `path` at max_depth 2.
 
-mod common;
 
-use common::{assert_agree, render_with_variance, root};
+use crate::common::{assert_agree, render_with_variance, root};
 
 /// Each comparison must resolve an error of this fraction of the image mean
 /// (see `common::compare`).

@@ -6,10 +6,9 @@
 
 #![cfg(feature = "gltf")]
 
-mod common;
 
 use ::gltf::json::Value;
-use common::{assert_agree, compare, estimate, injected_errors, root, Estimate};
+use crate::common::{assert_agree, compare, estimate, injected_errors, root, Estimate};
 use penumbra_render::film::Film;
 use penumbra_render::sampling::Sampler;
 use penumbra_scene::{gltf, load_scene, Overrides};

@@ -2,9 +2,8 @@
 //! reads them, errors naming file and line, and behaviour of the wrappers
 //! (`twosided`, `mask`, `null`) checked by rendering.
 
-mod common;
 
-use common::{assert_agree, render_with_variance};
+use crate::common::{assert_agree, render_with_variance};
 use penumbra_render::bsdf::MicrofacetType;
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;

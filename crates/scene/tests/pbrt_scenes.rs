@@ -2,9 +2,9 @@
 //! written as Mitsuba XML (independently seeded renders that must agree
 //! within noise), the image's orientation, and bad input.
 
-mod common;
+use crate::common;
 
-use common::{assert_agree, compare, injected_errors, render_with_variance};
+use crate::common::{assert_agree, compare, injected_errors, render_with_variance};
 use penumbra_scene::{load_scene, Overrides};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

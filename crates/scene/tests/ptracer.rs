@@ -3,9 +3,9 @@
 //! crop windows, the pass split resume relies on, and its load errors.
 //! Agreement with Mitsuba's `ptracer` is in references.rs.
 
-mod common;
+use crate::common;
 
-use common::{assert_agree, compare, root};
+use crate::common::{assert_agree, compare, root};
 use penumbra_render::film::Film;
 use penumbra_render::sampling::Sampler;
 use penumbra_scene::{load_scene, Overrides};

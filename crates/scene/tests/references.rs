@@ -7,9 +7,9 @@
 //! 10 % more light over a fifth of the image) must fail it. At the end, the same
 //! comparisons with path guiding on.
 
-mod common;
+use crate::common;
 
-use common::{
+use crate::common::{
     assert_agree, compare as compare_estimates, injected_errors, reference, render_with_sampler, render_with_variance,
     root,
 };

@@ -201,7 +201,7 @@ fn cylinder_parameters_are_read() {
     assert!(e.contains("scene.xml:") && e.contains("cylinder"), "{e}");
 }
 
-mod common;
+use crate::common;
 
 /// Instanced geometry renders as the same geometry written out: the same
 /// random numbers follow the same paths, so the images agree to rounding

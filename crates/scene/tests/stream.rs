@@ -5,9 +5,8 @@
 //! pass and for a later sample range, with packets of every lane width the
 //! build has (16 with AVX-512, 8 with AVX2, and 1, scalar, on any CPU).
 
-mod common;
 
-use common::root;
+use crate::common::root;
 use penumbra_render::film::{AovKind, Film, FilmLayers};
 use penumbra_render::render::LANE_WIDTHS;
 use penumbra_scene::{load_scene, Overrides};
