@@ -13,7 +13,6 @@
 //! normal, with no variance to compare against). Each test also shows its
 //! power: a 2 % error injected into one channel must fail it.
 
-
 use crate::common::{root, welch_z2, FALSE_ALARM};
 use penumbra_render::film::{Film, FilmLayers};
 use penumbra_render::sampling::Sampler;

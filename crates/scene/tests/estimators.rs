@@ -2,7 +2,6 @@
 //! cosine and BSDF sampling), path tracing with and without MIS, with power
 //! light selection, and `direct` against `path` at max_depth 2.
 
-
 use crate::common::{assert_agree, render_with_variance, root};
 
 /// Each comparison must resolve an error of this fraction of the image mean

@@ -6,9 +6,8 @@
 
 #![cfg(feature = "gltf")]
 
-
-use ::gltf::json::Value;
 use crate::common::{assert_agree, compare, estimate, injected_errors, root, Estimate};
+use ::gltf::json::Value;
 use penumbra_render::film::Film;
 use penumbra_render::sampling::Sampler;
 use penumbra_scene::{gltf, load_scene, Overrides};

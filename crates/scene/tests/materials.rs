@@ -2,7 +2,6 @@
 //! reads them, errors naming file and line, and behaviour of the wrappers
 //! (`twosided`, `mask`, `null`) checked by rendering.
 
-
 use crate::common::{assert_agree, render_with_variance};
 use penumbra_render::bsdf::MicrofacetType;
 use penumbra_render::material::Material;

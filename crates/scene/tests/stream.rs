@@ -5,7 +5,6 @@
 //! pass and for a later sample range, with packets of every lane width the
 //! build has (16 with AVX-512, 8 with AVX2, and 1, scalar, on any CPU).
 
-
 use crate::common::root;
 use penumbra_render::film::{AovKind, Film, FilmLayers};
 use penumbra_render::render::LANE_WIDTHS;
