@@ -65,7 +65,10 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
     let layer = Layer::new(
         (img.width as usize, img.height as usize),
         attrs,
-        Encoding::SMALL_LOSSLESS,
+        // RLE, not ZIP: a render's noisy floats shrink by a few percent under
+        // zlib, which cost more of a small render's process than its last
+        // pass; runs of equal values (backgrounds, AOVs, weights) still shrink.
+        Encoding { compression: Compression::RLE, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
         AnyChannels::sort(channels.into_iter().collect()),
     );
     let display = IntegerBounds::from_dimensions((img.full_size.0 as usize, img.full_size.1 as usize));
