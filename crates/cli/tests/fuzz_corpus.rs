@@ -87,14 +87,20 @@ fn the_seeds_are_valid_inputs() {
     let ck = std::fs::read(corpus.join("checkpoint/seed-guided")).unwrap();
     let guided = penumbra::checkpoint::Checkpoint::decode(&ck, "seed-guided").unwrap();
     assert!(guided.guide.is_some_and(|g| g.trained()), "seed-guided holds no trained guide");
-    let part = std::fs::read(corpus.join("part/seed-part")).unwrap();
-    let dir = tempfile_dir();
-    std::fs::write(dir.join("p.exr"), &part[1..]).unwrap();
-    let args =
-        penumbra::args::MergeArgs { inputs: vec![dir.join("p.exr")], output: dir.join("m.exr"), allow_missing: true };
-    penumbra::merge::run(&args).unwrap();
-    assert!(dir.join("m.exr").exists());
-    std::fs::remove_dir_all(&dir).unwrap();
+    // A ZIP-compressed part (as penumbra wrote them before) and an RLE one (as now).
+    for seed in ["seed-part", "seed-part-rle"] {
+        let part = std::fs::read(corpus.join("part").join(seed)).unwrap();
+        let dir = tempfile_dir();
+        std::fs::write(dir.join("p.exr"), &part[1..]).unwrap();
+        let args = penumbra::args::MergeArgs {
+            inputs: vec![dir.join("p.exr")],
+            output: dir.join("m.exr"),
+            allow_missing: true,
+        };
+        penumbra::merge::run(&args).unwrap_or_else(|e| panic!("{seed}: {e:#}"));
+        assert!(dir.join("m.exr").exists(), "{seed}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
 
 fn tempfile_dir() -> std::path::PathBuf {
