@@ -65,10 +65,7 @@ pub fn write(path: &Path, img: &ExrImage) -> Result<()> {
     let layer = Layer::new(
         (img.width as usize, img.height as usize),
         attrs,
-        // RLE, not ZIP: zlib does not shrink a render's noisy floats (it grew
-        // them a little) and cost 4-5 ms of a small render's process; RLE
-        // still shrinks runs of equal values (backgrounds, AOVs, weights).
-        Encoding { compression: Compression::RLE, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing },
+        Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into_iter().collect()),
     );
     let display = IntegerBounds::from_dimensions((img.full_size.0 as usize, img.full_size.1 as usize));

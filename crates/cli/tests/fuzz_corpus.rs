@@ -87,7 +87,8 @@ fn the_seeds_are_valid_inputs() {
     let ck = std::fs::read(corpus.join("checkpoint/seed-guided")).unwrap();
     let guided = penumbra::checkpoint::Checkpoint::decode(&ck, "seed-guided").unwrap();
     assert!(guided.guide.is_some_and(|g| g.trained()), "seed-guided holds no trained guide");
-    // A ZIP-compressed part (as penumbra wrote them before) and an RLE one (as now).
+    // A ZIP-compressed part (as penumbra writes them) and an RLE one (the exr
+    // crate's default, as other tools may write them).
     for seed in ["seed-part", "seed-part-rle"] {
         let part = std::fs::read(corpus.join("part").join(seed)).unwrap();
         let dir = tempfile_dir();
