@@ -31,7 +31,7 @@ use super::LightSample;
 use crate::math::{fast, luminance, Mat3, Mat4, Spectrum, INV_2PI, INV_PI, PI};
 use crate::sampling::distrib2d::index_lanes;
 use crate::sampling::Distribution2D;
-use crate::simd::{self, gather, Float, Int as _, V3};
+use crate::simd::{self, Float, Int as _, V3};
 use glam::{Vec2, Vec3};
 
 /// Mitsuba's `envmap` emitter (mapping and sampling in the module docs).
@@ -162,28 +162,19 @@ impl EnvMapLight {
     /// lane by lane: the rotation, the inverse trigonometry (the lane forms
     /// of `math::fast`) and the texel coordinates in lanes, the bilinear
     /// blend of each lane's four texels by `blend`, as `eval`.
-    pub fn eval_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [Spectrum; 16] {
+    pub fn eval_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> V3<F> {
         let (_, u, theta) = self.local_lanes(wx, wy, wz);
         let (x, y) = self.texel_lanes(u, theta);
-        let mut out = [Spectrum::ZERO; 16];
-        for (o, (&x, &y)) in out.iter_mut().zip(x.as_ref().iter().zip(y.as_ref())) {
-            *o = self.blend(x, y) * self.scale;
-        }
-        out
+        self.blend_lanes(x, y) * F::splat(self.scale)
     }
 
     /// [`Self::eval_pdf`] of `F::WIDTH` directions, bitwise lane by lane as
     /// [`Self::eval_lanes`]; each lane's density by `pdf_local`.
-    pub fn eval_pdf_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> [(Spectrum, f32); 16] {
+    pub fn eval_pdf_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> (V3<F>, F) {
         let (d, u, theta) = self.local_lanes(wx, wy, wz);
         let (x, y) = self.texel_lanes(u, theta);
-        let pdf = self.pdf_local_lanes(V3 { x: d[0], y: d[1], z: d[2] }, u, theta).to_array();
-        let mut out = [(Spectrum::ZERO, 0.0); 16];
-        for (l, o) in out.iter_mut().enumerate().take(F::WIDTH) {
-            let le = self.blend(x.as_ref()[l], y.as_ref()[l]) * self.scale;
-            *o = (le, pdf.as_ref()[l]);
-        }
-        out
+        let pdf = self.pdf_local_lanes(V3 { x: d[0], y: d[1], z: d[2] }, u, theta);
+        (self.blend_lanes(x, y) * F::splat(self.scale), pdf)
     }
 
     /// The light-space direction d = A⁻¹ w, u = atan2(d.x, −d.z) / 2π and
@@ -203,12 +194,51 @@ impl EnvMapLight {
 
     /// The texel coordinates of `lookup(u, θ/π)` in lanes.
     #[inline(always)]
-    fn texel_lanes<F: Float>(&self, u: F, theta: F) -> (F::Array, F::Array) {
+    fn texel_lanes<F: Float>(&self, u: F, theta: F) -> (F, F) {
         let v = theta * F::splat(INV_PI);
         // As `lookup`; f32::clamp's NaN passes through minps / maxps too.
         let x = (u - u.floor()) * F::splat(self.width as f32) - F::splat(0.5);
         let y = F::splat(1.0).min(F::splat(0.0).max(v)) * F::splat((self.height - 1) as f32);
-        (x.to_array(), y.to_array())
+        (x, y)
+    }
+
+    /// [`Self::blend`] in lanes, bitwise lane by lane: the texel indices in
+    /// lanes, each texel's channels read by a gather, the same products and
+    /// sums per channel (glam's `f32 * Vec3` and `Vec3 + Vec3` are per
+    /// component).
+    #[inline(always)]
+    fn blend_lanes<F: Float>(&self, x: F, y: F) -> V3<F> {
+        let (w, h) = (self.width, self.height);
+        let x0 = x.floor();
+        let i0 = index_lanes(y, h - 2);
+        let (fx, fy) = (x - x0, y - F::from_int(i0));
+        let last = F::Int::splat(w as i32 - 1);
+        let j0 = F::Int::select(x0.cmp_lt(F::splat(0.0)), last, index_lanes(x0, w - 1));
+        let j1 = F::Int::select(j0.cmp_eq(last), F::Int::splat(0), j0.wrapping_add(F::Int::splat(1)));
+        // Float k of texel (i, j) is at 3 (i W + j) + k (`texels` is packed).
+        let floats = self.texel_floats();
+        let (three, width) = (F::Int::splat(3), F::Int::splat(w as i32));
+        let row0 = i0.wrapping_mul(width);
+        let row1 = row0.wrapping_add(width);
+        let at = |row: F::Int, j: F::Int| {
+            let i = row.wrapping_add(j).wrapping_mul(three);
+            let c = |k: i32| F::gather_table(floats, i.wrapping_add(F::Int::splat(k)));
+            V3 { x: c(0), y: c(1), z: c(2) }
+        };
+        let one = F::splat(1.0);
+        let top = at(row0, j0) * (one - fx) + at(row0, j1) * fx;
+        let bottom = at(row1, j0) * (one - fx) + at(row1, j1) * fx;
+        top * (one - fy) + bottom * fy
+    }
+
+    /// The texels as one slice of floats, 3 per texel.
+    #[inline(always)]
+    fn texel_floats(&self) -> &[f32] {
+        const { assert!(std::mem::size_of::<Spectrum>() == 12 && std::mem::align_of::<Spectrum>() == 4) };
+        // SAFETY: `Spectrum` (glam's `Vec3`) is `#[repr(C)]` of three f32
+        // with no padding (asserted above), so `n` texels are `3 n` floats
+        // in the same allocation, borrowed as long as `self`.
+        unsafe { std::slice::from_raw_parts(self.texels.as_ptr().cast::<f32>(), 3 * self.texels.len()) }
     }
 
     /// Bilinear lookup, texel (i, j) at (u, v) = ((j + ½) / W, i / (H - 1)).
@@ -267,8 +297,7 @@ impl EnvMapLight {
         let rows = self.height - 1;
         let y = py * F::splat(rows as f32);
         let r = index_lanes(y, rows - 1);
-        let ra = r.to_array();
-        let at = |t: &[f32], k: usize| gather::<F>(|l| t[ra.as_ref()[l] as usize + k]);
+        let at = |t: &[f32], k: i32| F::gather_table(t, r.wrapping_add(F::Int::splat(k)));
         let (c0, c1) = (at(&self.cos_theta, 0), at(&self.cos_theta, 1));
         let cos_t = c0 + (y - F::from_int(r)) * (c1 - c0);
         let cos_t = F::splat(1.0).min(F::splat(-1.0).max(cos_t));
@@ -338,8 +367,7 @@ impl EnvMapLight {
         let u = u - F::splat(0.5 / self.width as f32);
         let v = (F::from_int(r) + F::splat(0.5)) / F::splat(rows as f32);
         let pdf_uv = distribution.pdf_lanes(u - u.floor(), v);
-        let r = r.to_array();
-        let inv_row = gather::<F>(|l| self.inv_row_solid_angle[r.as_ref()[l] as usize]);
+        let inv_row = F::gather_table(&self.inv_row_solid_angle, r);
         pdf_uv * inv_row / (m * m * m * F::splat(self.abs_det))
     }
 
@@ -359,6 +387,7 @@ impl EnvMapLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd::gather;
     use crate::testing::chi2::{alpha, chi2_test};
 
     fn deg(a: f32) -> f32 {
@@ -399,8 +428,9 @@ mod tests {
                 for light in &self.0 {
                     for chunk in self.1.chunks(F::WIDTH).filter(|c| c.len() == F::WIDTH) {
                         let lane = |f: fn(&Vec3) -> f32| crate::simd::gather::<F>(|l| f(&chunk[l]));
-                        let got = light.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
-                        let got_pdf = light.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                        let got = light.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z)).to_lanes();
+                        let (le, pdf) = light.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                        let got_pdf = le.to_lanes().into_iter().zip(pdf.to_array().as_ref().to_vec());
                         let f = |c: f32| if c.is_nan() { u32::MAX } else { c.to_bits() };
                         let bits = |v: Vec3| v.to_array().map(f);
                         for ((g, (gp, p)), d) in got.iter().zip(got_pdf).zip(chunk) {

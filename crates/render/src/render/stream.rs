@@ -264,14 +264,15 @@ fn run<F: Float>(
                 let d = |l: usize| slots[chunk[l.min(chunk.len() - 1)]].state.ray.d;
                 let lane = |c: fn(Vec3) -> f32| gather::<F>(|l| c(d(l)));
                 if chunk.iter().all(|&i| slots[i].state.prev_delta()) {
-                    let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                    let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z)).to_lanes();
                     for (&i, le) in chunk.iter().zip(le) {
                         PathIntegrator::add_delta_miss(&mut slots[i].state, Spectrum::ZERO + le);
                     }
                     continue;
                 }
-                let le_pdf = env.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
-                for (&i, (le, pdf)) in chunk.iter().zip(le_pdf) {
+                let (le, pdf) = env.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                let (le, pdf) = (le.to_lanes(), pdf.to_array());
+                for (&i, (le, &pdf)) in chunk.iter().zip(le.into_iter().zip(pdf.as_ref())) {
                     let st = &mut slots[i].state;
                     if st.prev_delta() {
                         PathIntegrator::add_delta_miss(st, Spectrum::ZERO + le);

@@ -5,7 +5,7 @@
 use super::distrib1d::alias_pick;
 use super::Distribution1D;
 use crate::math::fast;
-use crate::simd::{gather, Float, Int, Mask as _};
+use crate::simd::{Float, Int, Mask as _};
 use glam::Vec2;
 
 /// Density proportional to a `width` × `height` grid of non-negative cell
@@ -21,11 +21,20 @@ pub struct Distribution2D {
     cells: Vec<Cell>,
     /// Distribution over rows, weighted by the row sums.
     marginal: Distribution1D,
+    /// The marginal's alias table as floats, (share kept, the bits of the
+    /// row taking the rest) per bucket, for gathers in lanes.
+    marginal_floats: Vec<f32>,
     width: usize,
     height: usize,
 }
 
+/// Floats per [`Cell`], and where its density is among them (`keep` and
+/// `other` come first, as `alias_pick_lanes` reads them).
+const CELL_FLOATS: i32 = 3;
+const CELL_PDF: i32 = 2;
+
 #[derive(Debug, Clone, Copy)]
+#[repr(C)]
 struct Cell {
     keep: f32,
     other: u32,
@@ -58,7 +67,23 @@ impl Distribution2D {
                 None => cells.extend((0..width).map(|j| Cell { keep: 1.0, other: j as u32, pdf: 0.0 })),
             }
         }
-        Some(Distribution2D { cells, marginal, width, height })
+        let marginal_floats =
+            marginal.alias().iter().flat_map(|&(keep, other)| [keep, f32::from_bits(other)]).collect();
+        Some(Distribution2D { cells, marginal, marginal_floats, width, height })
+    }
+
+    /// The cells as one slice of floats, [`CELL_FLOATS`] per cell (`other`
+    /// as its bits).
+    #[inline(always)]
+    fn cell_floats(&self) -> &[f32] {
+        const { assert!(std::mem::size_of::<Cell>() == 4 * CELL_FLOATS as usize && std::mem::align_of::<Cell>() == 4) };
+        // SAFETY: `Cell` is `#[repr(C)]` of three 4-byte fields with no
+        // padding (asserted above), each of which any f32 bit pattern may
+        // be read as; `n` cells are `3 n` floats of the same allocation,
+        // borrowed as long as `self`.
+        unsafe {
+            std::slice::from_raw_parts(self.cells.as_ptr().cast::<f32>(), CELL_FLOATS as usize * self.cells.len())
+        }
     }
 
     /// Samples a point p ∈ [0, 1)² (p.x along columns, p.y along rows) and
@@ -83,19 +108,15 @@ impl Distribution2D {
     }
 
     /// [`Self::sample`] of `F::WIDTH` pairs of numbers, bitwise lane by
-    /// lane: (p.x, p.y, density), the table reads per lane.
+    /// lane: (p.x, p.y, density), the tables read by gathers.
     #[inline(always)]
     pub fn sample_lanes<F: Float>(&self, ux: F, uy: F) -> (F, F, F) {
-        let alias = self.marginal.alias();
-        let (row, uy) = alias_pick_lanes(uy, self.height, |_, b| alias[b]);
-        let rows = row.to_array();
-        let start = |l: usize| rows.as_ref()[l] as usize * self.width;
-        let (col, ux) = alias_pick_lanes(ux, self.width, |l, b| {
-            let c = self.cells[start(l) + b];
-            (c.keep, c.other)
-        });
-        let cols = col.to_array();
-        let pdf = gather::<F>(|l| self.cells[start(l) + cols.as_ref()[l] as usize].pdf);
+        let (row, uy) = alias_pick_lanes(uy, self.height, &self.marginal_floats, F::Int::splat(0), 2);
+        let cells = self.cell_floats();
+        let start = row.wrapping_mul(F::Int::splat(self.width as i32));
+        let (col, ux) =
+            alias_pick_lanes(ux, self.width, cells, start.wrapping_mul(F::Int::splat(CELL_FLOATS)), CELL_FLOATS);
+        let pdf = F::gather_table(cells, self.cell_float(start.wrapping_add(col), CELL_PDF));
         (point_in_cell_lanes(col, ux, self.width), point_in_cell_lanes(row, uy, self.height), pdf)
     }
 
@@ -104,10 +125,17 @@ impl Distribution2D {
     pub fn pdf_lanes<F: Float>(&self, x: F, y: F) -> F {
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
         let inside = x.cmp_ge(zero) & x.cmp_le(one) & y.cmp_ge(zero) & y.cmp_le(one);
-        let col = index_lanes(x * F::splat(self.width as f32), self.width - 1).to_array();
-        let row = index_lanes(y * F::splat(self.height as f32), self.height - 1).to_array();
-        let pdf = gather::<F>(|l| self.cells[row.as_ref()[l] as usize * self.width + col.as_ref()[l] as usize].pdf);
+        let col = index_lanes(x * F::splat(self.width as f32), self.width - 1);
+        let row = index_lanes(y * F::splat(self.height as f32), self.height - 1);
+        let cell = row.wrapping_mul(F::Int::splat(self.width as i32)).wrapping_add(col);
+        let pdf = F::gather_table(self.cell_floats(), self.cell_float(cell, CELL_PDF));
         F::select(inside, pdf, zero)
+    }
+
+    /// Where field `field` of each lane's cell `cell` is in [`Self::cell_floats`].
+    #[inline(always)]
+    fn cell_float<I: Int>(&self, cell: I, field: i32) -> I {
+        cell.wrapping_mul(I::splat(CELL_FLOATS)).wrapping_add(I::splat(field))
     }
 }
 
@@ -122,19 +150,17 @@ pub(crate) fn index_lanes<F: Float>(x: F, max: usize) -> F::Int {
     F::Int::select(i.cmp_gt(max), max, i)
 }
 
-/// `alias_pick` in lanes: `bucket(l, b)` is lane `l`'s table at bucket `b`.
+/// `alias_pick` in lanes, bitwise lane by lane: lane `l`'s bucket `b`
+/// is at float `start[l] + stride b` of `table` (the share kept), the bits
+/// of the item taking the rest right after it.
 #[inline(always)]
-fn alias_pick_lanes<F: Float>(u: F, n: usize, bucket: impl Fn(usize, usize) -> (f32, u32)) -> (F::Int, F) {
+pub(crate) fn alias_pick_lanes<F: Float>(u: F, n: usize, table: &[f32], start: F::Int, stride: i32) -> (F::Int, F) {
     let x = u * F::splat(n as f32);
     let b = index_lanes(x, n - 1);
     let f = x - F::from_int(b);
-    let (bs, mut keep, mut other) = (b.to_array(), F::Array::default(), <F::Int as Int>::Array::default());
-    for l in 0..F::WIDTH {
-        let (k, o) = bucket(l, bs.as_ref()[l] as usize);
-        keep.as_mut()[l] = k;
-        other.as_mut()[l] = o as i32;
-    }
-    let (keep, other) = (F::from_array(keep), F::Int::from_array(other));
+    let at = start.wrapping_add(b.wrapping_mul(F::Int::splat(stride)));
+    let keep = F::gather_table(table, at);
+    let other = F::gather_table(table, at.wrapping_add(F::Int::splat(1))).to_bits();
     let own = f.cmp_lt(keep);
     let one = F::splat(1.0);
     let u_re = F::select(own, f / keep, (f - keep) / (one - keep));
@@ -183,6 +209,7 @@ fn point_in_cell(i: usize, t: f32, n: usize) -> f32 {
 mod tests {
     use super::*;
     use crate::sampling::rng::{hash_words, to_unit_f32};
+    use crate::simd::gather;
     use statrs::distribution::{ChiSquared, ContinuousCDF};
 
     /// 5 × 4 grid with an empty row (1) and an empty column (3).

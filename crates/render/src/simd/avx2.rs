@@ -171,6 +171,10 @@ impl Int for I32x8 {
         unsafe { I32x8(_mm256_sub_epi32(self.0, o.0)) }
     }
     #[inline(always)]
+    fn wrapping_mul(self, o: I32x8) -> I32x8 {
+        unsafe { I32x8(_mm256_mullo_epi32(self.0, o.0)) }
+    }
+    #[inline(always)]
     fn shift_left(self, n: u32) -> I32x8 {
         unsafe { I32x8(_mm256_sll_epi32(self.0, count(n))) }
     }
@@ -347,5 +351,16 @@ impl Float for F32x8 {
     #[inline(always)]
     fn from_int(i: I32x8) -> F32x8 {
         unsafe { F32x8(_mm256_cvtepi32_ps(i.0)) }
+    }
+    #[inline(always)]
+    fn gather_table(table: &[f32], i: I32x8) -> F32x8 {
+        assert!(!table.is_empty() && table.len() <= i32::MAX as usize, "a gather from {} floats", table.len());
+        // SAFETY: AVX2 (see the top of the file); the unsigned minimum puts
+        // every index (a negative one reads as at least 2^31) in
+        // 0..table.len(), so each lane reads one float of `table`.
+        unsafe {
+            let i = _mm256_min_epu32(i.0, _mm256_set1_epi32(table.len() as i32 - 1));
+            F32x8(_mm256_i32gather_ps::<4>(table.as_ptr(), i))
+        }
     }
 }

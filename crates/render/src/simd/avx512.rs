@@ -171,6 +171,10 @@ impl Int for I32x16 {
         unsafe { I32x16(_mm512_sub_epi32(self.0, o.0)) }
     }
     #[inline(always)]
+    fn wrapping_mul(self, o: I32x16) -> I32x16 {
+        unsafe { I32x16(_mm512_mullo_epi32(self.0, o.0)) }
+    }
+    #[inline(always)]
     fn shift_left(self, n: u32) -> I32x16 {
         unsafe { I32x16(_mm512_sll_epi32(self.0, count(n))) }
     }
@@ -344,5 +348,16 @@ impl Float for F32x16 {
     #[inline(always)]
     fn from_int(i: I32x16) -> F32x16 {
         unsafe { F32x16(_mm512_cvtepi32_ps(i.0)) }
+    }
+    #[inline(always)]
+    fn gather_table(table: &[f32], i: I32x16) -> F32x16 {
+        assert!(!table.is_empty() && table.len() <= i32::MAX as usize, "a gather from {} floats", table.len());
+        // SAFETY: AVX-512F (see the top of the file); the unsigned minimum
+        // puts every index (a negative one reads as at least 2^31) in
+        // 0..table.len(), so each lane reads one float of `table`.
+        unsafe {
+            let i = _mm512_min_epu32(i.0, _mm512_set1_epi32(table.len() as i32 - 1));
+            F32x16(_mm512_i32gather_ps::<4>(i, table.as_ptr()))
+        }
     }
 }

@@ -117,6 +117,8 @@ pub trait Int:
     fn wrapping_add(self, o: Self) -> Self;
     /// Lane-wise `self - o`, wrapping.
     fn wrapping_sub(self, o: Self) -> Self;
+    /// Lane-wise `self * o`, wrapping (the low 32 bits, as `pmulld`).
+    fn wrapping_mul(self, o: Self) -> Self;
     /// Lane-wise `self << n`; 0 for `n` ≥ 32 (as `pslld`).
     fn shift_left(self, n: u32) -> Self;
     /// Lane-wise arithmetic `self >> n`; the sign in every bit for `n` ≥ 32
@@ -233,6 +235,14 @@ pub trait Float:
     fn to_int_trunc(self) -> Self::Int;
     /// Lane-wise conversion from i32, rounded to nearest (as `as f32`).
     fn from_int(i: Self::Int) -> Self;
+    /// Lane `l` = `table[i[l]]`, read by the hardware gather (`vgatherdps`)
+    /// in SIMD instances: the table loads of a lane stage without a scalar
+    /// loop. An index outside the table (negative ones included) reads its
+    /// last element, so no lane ever reads outside it.
+    ///
+    /// # Panics
+    /// If `table` is empty or longer than `i32::MAX`.
+    fn gather_table(table: &[f32], i: Self::Int) -> Self;
 }
 
 #[cfg(test)]
@@ -303,6 +313,7 @@ mod tests {
     // Integer lanes on the arguments' bit patterns.
     kernel!(IntAdd, false, |a, b, c| bits::<F>(a.to_bits().wrapping_add(b.to_bits())));
     kernel!(IntSub, false, |a, b, c| bits::<F>(a.to_bits().wrapping_sub(b.to_bits())));
+    kernel!(IntMul, false, |a, b, c| bits::<F>(a.to_bits().wrapping_mul(b.to_bits())));
     kernel!(IntAnd, false, |a, b, c| bits::<F>(a.to_bits() & b.to_bits()));
     kernel!(IntOr, false, |a, b, c| bits::<F>(a.to_bits() | b.to_bits()));
     kernel!(IntXor, false, |a, b, c| bits::<F>(a.to_bits() ^ b.to_bits()));
@@ -399,6 +410,7 @@ mod tests {
             check_kernel::<MaskOps>(&v),
             check_kernel::<IntAdd>(&v),
             check_kernel::<IntSub>(&v),
+            check_kernel::<IntMul>(&v),
             check_kernel::<IntAnd>(&v),
             check_kernel::<IntOr>(&v),
             check_kernel::<IntXor>(&v),
@@ -551,5 +563,45 @@ mod tests {
         let ran = each_simd(&mut V);
         V.visit::<f32>();
         println!("lanes and masks: f32 and {ran:?}");
+    }
+
+    /// `gather_table` reads `table[i]` per lane on every instance, and an
+    /// index outside the table (past its end, negative, `i32::MIN`) reads
+    /// its last element.
+    #[test]
+    fn gather_reads_each_lane_index() {
+        struct V;
+        impl Visit for V {
+            fn visit<F: Float>(&mut self) {
+                let w = F::WIDTH;
+                let table: Vec<f32> = (0..37).map(|i| i as f32 * 0.25 - 2.0).collect();
+                let mut rng = Rng::new(17 + w as u64);
+                for _ in 0..500 {
+                    let mut idx = <F::Int as Int>::Array::default();
+                    for v in idx.as_mut() {
+                        *v = match rng.next_u64() % 8 {
+                            0 => 37 + (rng.next_u64() % 1000) as i32,
+                            1 => -1 - (rng.next_u64() % 1000) as i32,
+                            2 => i32::MIN,
+                            _ => (rng.next_u64() % 37) as i32,
+                        };
+                    }
+                    let got = F::gather_table(&table, F::Int::from_array(idx)).to_array();
+                    for (l, &i) in idx.as_ref().iter().enumerate() {
+                        let want = if (0..37).contains(&i) { table[i as usize] } else { table[36] };
+                        assert_eq!(got.as_ref()[l].to_bits(), want.to_bits(), "{} lane {l} index {i}", F::NAME);
+                    }
+                }
+            }
+        }
+        let ran = each_simd(&mut V);
+        V.visit::<f32>();
+        println!("gathers: f32 and {ran:?}");
+    }
+
+    #[test]
+    #[should_panic]
+    fn gather_from_nothing() {
+        f32::gather_table(&[], 0);
     }
 }

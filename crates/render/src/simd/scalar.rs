@@ -48,6 +48,10 @@ impl Int for i32 {
         i32::wrapping_sub(self, o)
     }
     #[inline(always)]
+    fn wrapping_mul(self, o: i32) -> i32 {
+        i32::wrapping_mul(self, o)
+    }
+    #[inline(always)]
     fn shift_left(self, n: u32) -> i32 {
         if n < 32 {
             self << n
@@ -216,5 +220,10 @@ impl Float for f32 {
     #[inline(always)]
     fn from_int(i: i32) -> f32 {
         i as f32
+    }
+    #[inline(always)]
+    fn gather_table(table: &[f32], i: i32) -> f32 {
+        assert!(!table.is_empty() && table.len() <= i32::MAX as usize, "a gather from {} floats", table.len());
+        table[(i as u32).min(table.len() as u32 - 1) as usize]
     }
 }

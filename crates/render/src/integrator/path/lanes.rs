@@ -1572,7 +1572,6 @@ impl PathIntegrator {
             let (wi, pdf) = env.sample_direction(x, cos_t, pdf_row);
             let li = env.eval_lanes(wi.x, wi.y, wi.z);
             let (f, bsdf_pdf) = value(wi);
-            let li = V3::gather(|l| li[l]);
             (wi, F::splat(f32::INFINITY), pdf * g(row::PMF), li, F::Mask::splat(true), f, bsdf_pdf, one)
         } else if v.candidates > 1 {
             // `resample_light`: each candidate offered to a reservoir per lane
