@@ -5,6 +5,7 @@ use crate::accel::{Accel, Hit, Instance, Primitive};
 use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::bsdf::Bsdf;
 use crate::geometry::{offset_origin, Ray, Shape, SurfaceInteraction};
+use crate::light::lane_table::LaneLightTable;
 use crate::light::{Light, LightSample, LightSampler, LightSelection};
 use crate::material::{LaneMaterial, LaneSurface, Material, Scratch};
 use crate::math::{Spectrum, SHADOW_EPSILON};
@@ -117,6 +118,8 @@ pub struct Scene {
     lane_lights: Vec<Option<LaneLight>>,
     /// The triangles of the mesh lights among `lane_lights`.
     lane_light_tris: Vec<LaneLightTri>,
+    /// `lane_lights` as one table, where every light has a lane kernel.
+    lane_light_table: Option<LaneLightTable>,
     /// The transmittance tables of the `roughplastic`s among `lane_material`.
     lane_tables: Vec<[f32; TRANSMITTANCE_RES]>,
     /// When set, every `intersect` and `occluded` query is appended here
@@ -256,7 +259,23 @@ impl Scene {
                     _ => None,
                 }
             })
-            .collect();
+            .collect::<Vec<_>>();
+        let lane_light_table = (!lane_lights.is_empty()).then(|| {
+            let mut table = LaneLightTable::default();
+            for l in &lane_lights {
+                match *l.as_ref()? {
+                    LaneLight::Mesh { first, count, area_pdf, li, two_sided } => {
+                        let tris = &lane_light_tris[first as usize..][..count as usize];
+                        let tris: Vec<_> = tris.iter().map(|t| (t.keep, t.other, t.p)).collect();
+                        table.push_mesh(&tris, area_pdf, li, two_sided);
+                    }
+                    LaneLight::Sphere { center, params, li, two_sided } => {
+                        table.push_sphere(center, params, li, two_sided)
+                    }
+                }
+            }
+            Some(table)
+        });
         Scene {
             shapes,
             shape_info,
@@ -271,6 +290,7 @@ impl Scene {
             lane_material,
             lane_lights,
             lane_light_tris,
+            lane_light_table: lane_light_table.flatten(),
             lane_tables,
             ray_log: None,
             media: Vec::new(),
@@ -366,6 +386,17 @@ impl Scene {
     #[inline(always)]
     pub fn lane_tables(&self) -> &[[f32; TRANSMITTANCE_RES]] {
         &self.lane_tables
+    }
+
+    /// Every light as one table for lane kernels to pick from, where every
+    /// light has a lane kernel ([`Self::lane_light`]) and lights are
+    /// selected uniformly.
+    #[inline(always)]
+    pub fn lane_light_table(&self) -> Option<&LaneLightTable> {
+        match self.light_sampler {
+            LightSampler::Uniform { count } => self.lane_light_table.as_ref().filter(|t| t.len() == count),
+            _ => None,
+        }
     }
 
     /// The triangles of a [`LaneLight::Mesh`] (its `first..first + count`).

@@ -171,7 +171,9 @@ fn resampled_light_selection_is_bitwise_the_scalar_loop() {
 /// lane-kinds scene without its environment map (which has no resampled
 /// lane kernel), so that every candidate is an area light on a mesh or a
 /// sphere, mixed within a batch; bitwise the scalar vertex, with uniform
-/// and power selection, 2 to 8 candidates and a guide.
+/// selection (its lights and triangles picked in the kernel, from the
+/// scene's `LaneLightTable`) and power selection (picked per vertex), 1 to
+/// 8 candidates and a guide.
 #[test]
 fn resampled_lane_vertices_are_bitwise_the_scalar_vertex() {
     let env = root().join("tests/scenes/textures/sunsky.exr");
@@ -186,6 +188,8 @@ fn resampled_lane_vertices_are_bitwise_the_scalar_vertex() {
         "path:max_depth=6,light_candidates=3",
         "path:max_depth=6,light_candidates=8,light_selection=power",
         "path:max_depth=6,light_candidates=2,guiding=true,guiding_budget=0.25",
+        "path:max_depth=6,light_candidates=1",
+        "path:max_depth=6,light_candidates=1,light_selection=power",
     ] {
         let (is_path, lane_vertices, rays) = check_integrator(&scene, &[], 8, Some(integrator));
         eprintln!("{integrator}: {lane_vertices} of {rays} hits shaded in lanes");

@@ -28,6 +28,7 @@ pub mod directionalarea;
 pub mod envmap;
 pub mod equal_area;
 pub mod image_point;
+pub mod lane_table;
 pub mod point;
 pub mod projector;
 pub mod sampler;

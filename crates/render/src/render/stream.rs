@@ -295,7 +295,14 @@ fn run<F: Float>(
         macro_rules! run_batch {
             ($at:expr) => {{
                 let b = bins.batch($at);
-                path.lane_vertices::<F>(env.map(|e| e.1), scene.lane_tables(), guide, b, &mut lane_out);
+                path.lane_vertices::<F>(
+                    env.map(|e| e.1),
+                    scene.lane_tables(),
+                    scene.lane_light_table(),
+                    guide,
+                    b,
+                    &mut lane_out,
+                );
                 tile.stats.rays.lane_vertices += b.len() as u64;
                 tile.stats.rays.vertex_lanes += if b.is_empty() { 0 } else { F::WIDTH as u64 };
                 for l in 0..b.len() {

@@ -52,6 +52,7 @@ use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
 use crate::guiding::{Guide, GuideDensity};
+use crate::light::lane_table::LaneLightTable;
 use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
 use crate::math::{Spectrum, INV_PI, PI, RAY_EPSILON, SHADOW_EPSILON};
@@ -154,8 +155,12 @@ mod row {
     /// With resampled light selection: the number that picks among the
     /// candidates (their rows are [`cand_row`]'s).
     pub const U_PICK: usize = 73;
+    /// Where the kernel picks the light from the scene's
+    /// [`LaneLightTable`]: the selection's number (`U_LIGHT` then holds
+    /// the light's numbers as drawn, and the candidates' rows are unused).
+    pub const U_SEL: usize = 74;
     /// How many rows there are.
-    pub const COUNT: usize = 74;
+    pub const COUNT: usize = 75;
 }
 
 /// The most light candidates a lane vertex resamples from (more run the
@@ -317,8 +322,9 @@ impl LaneBatch {
         let keep = F::from_array(index).cmp_lt(F::splat(len as f32));
         let pad = |r: &mut [f32; Self::LANES]| F::select(keep, F::load(r), F::splat(r[last])).store(r);
         self.rows.iter_mut().for_each(pad);
+        // (Candidates picked from the scene's table have no rows.)
         let cands = if self.candidates > 1 { self.candidates as usize } else { 0 };
-        self.cands[..cands].iter_mut().flatten().for_each(pad);
+        self.cands.iter_mut().take(cands).flatten().for_each(pad);
     }
 }
 
@@ -1126,7 +1132,10 @@ impl PathIntegrator {
             Env,
             Sphere(Vec3, Vec3),
             Tri(&'a [Vec3; 3], f32, f32),
+            /// Picked in the kernel from the scene's table (true: on a sphere).
+            Table(bool),
         }
+        let table = scene.lane_light_table();
         // The numbers `vertex` draws, in its order; those this vertex never
         // reads are skipped, not computed (specular BSDFs sample no light, and
         // a lone light is picked without a number).
@@ -1154,6 +1163,10 @@ impl PathIntegrator {
                 break 'pick Some((Picked::Env, pmf, Spectrum::ZERO, false));
             }
             let Some(&light) = scene.lane_light(i) else { break 'pick None };
+            if table.is_some() {
+                let sphere = matches!(light, LaneLight::Sphere { .. });
+                break 'pick Some((Picked::Table(sphere), pmf, Spectrum::ZERO, false));
+            }
             match light {
                 LaneLight::Sphere { center, params, li, two_sided } => {
                     Some((Picked::Sphere(center, params), pmf, li, two_sided))
@@ -1172,7 +1185,7 @@ impl PathIntegrator {
         };
         let light_kind = match light.0 {
             Picked::Env => 1,
-            Picked::Sphere(..) => 2,
+            Picked::Sphere(..) | Picked::Table(true) => 2,
             _ => 0,
         };
         let at = bins.of(LaneKind { shape: shape_kind, bsdf, light: light_kind });
@@ -1300,11 +1313,15 @@ impl PathIntegrator {
             // `resample_light`'s candidates, picked as `sample_light` picks
             // each; a light that has no lane kernel sends the vertex back.
             b.candidates = m;
-            if b.cands.len() < m as usize {
+            b.set(l, row::U_PICK, u_pick);
+            if table.is_some() {
+                b.set(l, row::U_SEL, u_sel);
+                b.set(l, row::U_LIGHT, u_light.x);
+                b.set(l, row::U_LIGHT + 1, u_light.y);
+            } else if b.cands.len() < m as usize {
                 b.cands.resize(m as usize, [[0.0; LaneBatch::LANES]; cand_row::COUNT]);
             }
-            b.set(l, row::U_PICK, u_pick);
-            for i in 0..m {
+            for i in 0..if table.is_some() { 0 } else { m } {
                 let (u_i, u2_i) = super::candidate_numbers(u_sel, u_light, i, m);
                 let c = i as usize;
                 let cand = &mut b.cands[c];
@@ -1342,6 +1359,10 @@ impl PathIntegrator {
                 }
                 put(cand, l, cand_row::U + 1, u2_i.y);
             }
+        } else if let (Picked::Table(_), ..) = light {
+            b.set(l, row::U_SEL, u_sel);
+            b.set(l, row::U_LIGHT, u_light.x);
+            b.set(l, row::U_LIGHT + 1, u_light.y);
         } else if lit {
             let (picked, pmf, li, two_sided) = light;
             b.set(l, row::PMF, pmf);
@@ -1366,7 +1387,7 @@ impl PathIntegrator {
                     b.set(l, row::U_LIGHT, ux);
                     b.set(l, row::U_LIGHT + 1, u_light.y);
                 }
-                Picked::None | Picked::Candidates => unreachable!("a lit vertex has its light"),
+                Picked::None | Picked::Candidates | Picked::Table(_) => unreachable!("a lit vertex has its light"),
             }
         }
         // The BSDF's numbers: diffuse and rough conductors sample with the 2D
@@ -1412,6 +1433,7 @@ impl PathIntegrator {
         &self,
         env: Option<&EnvMapLight>,
         tables: &[[f32; TRANSMITTANCE_RES]],
+        lights: Option<&LaneLightTable>,
         guide: Option<&Guide>,
         b: &mut LaneBatch,
         out: &mut LaneOutcomes,
@@ -1425,9 +1447,9 @@ impl PathIntegrator {
         macro_rules! lit_b {
             ($s:literal, $b:literal) => {
                 match k.light {
-                    0 => self.lit::<F, $s, 0, $b>(None, tables, guide, v, out),
-                    1 => self.lit::<F, $s, 1, $b>(env, tables, guide, v, out),
-                    _ => self.lit::<F, $s, 2, $b>(None, tables, guide, v, out),
+                    0 => self.lit::<F, $s, 0, $b>(None, tables, lights, guide, v, out),
+                    1 => self.lit::<F, $s, 1, $b>(env, tables, lights, guide, v, out),
+                    _ => self.lit::<F, $s, 2, $b>(None, tables, lights, guide, v, out),
                 }
             };
         }
@@ -1458,15 +1480,15 @@ impl PathIntegrator {
                     _ => 3,
                 };
                 match (k.light, micro(k.bsdf)) {
-                    (0, 1) => self.lit::<F, 4, 0, 1>(None, tables, guide, v, out),
-                    (1, 1) => self.lit::<F, 4, 1, 1>(env, tables, guide, v, out),
-                    (_, 1) => self.lit::<F, 4, 2, 1>(None, tables, guide, v, out),
-                    (0, 4) => self.lit::<F, 4, 0, 4>(None, tables, guide, v, out),
-                    (1, 4) => self.lit::<F, 4, 1, 4>(env, tables, guide, v, out),
-                    (_, 4) => self.lit::<F, 4, 2, 4>(None, tables, guide, v, out),
-                    (0, _) => self.lit::<F, 4, 0, 3>(None, tables, guide, v, out),
-                    (1, _) => self.lit::<F, 4, 1, 3>(env, tables, guide, v, out),
-                    (_, _) => self.lit::<F, 4, 2, 3>(None, tables, guide, v, out),
+                    (0, 1) => self.lit::<F, 4, 0, 1>(None, tables, lights, guide, v, out),
+                    (1, 1) => self.lit::<F, 4, 1, 1>(env, tables, lights, guide, v, out),
+                    (_, 1) => self.lit::<F, 4, 2, 1>(None, tables, lights, guide, v, out),
+                    (0, 4) => self.lit::<F, 4, 0, 4>(None, tables, lights, guide, v, out),
+                    (1, 4) => self.lit::<F, 4, 1, 4>(env, tables, lights, guide, v, out),
+                    (_, 4) => self.lit::<F, 4, 2, 4>(None, tables, lights, guide, v, out),
+                    (0, _) => self.lit::<F, 4, 0, 3>(None, tables, lights, guide, v, out),
+                    (1, _) => self.lit::<F, 4, 1, 3>(env, tables, lights, guide, v, out),
+                    (_, _) => self.lit::<F, 4, 2, 3>(None, tables, lights, guide, v, out),
                 }
             }
             (0, b) => specular::<F, 0>(b == 3, v, out),
@@ -1491,6 +1513,7 @@ impl PathIntegrator {
         &self,
         env: Option<&EnvMapLight>,
         tables: &[[f32; TRANSMITTANCE_RES]],
+        lights: Option<&LaneLightTable>,
         guide: Option<&Guide>,
         v: &LaneBatch,
         out: &mut LaneOutcomes,
@@ -1584,20 +1607,42 @@ impl PathIntegrator {
             let v0 = V3::splat(Vec3::ZERO);
             let (mut y_wi, mut y_dist, mut y_pdf, mut y_li, mut y_f, mut y_bsdf_pdf) = (v0, zero, zero, v0, v0, zero);
             for c in 0..m {
-                let kind = v.cand::<F>(c, cand_row::KIND);
-                let (tri, sphere) = (kind.cmp_eq(zero), kind.cmp_eq(one));
-                let geo = [v.cand3(c, cand_row::GEO), v.cand3(c, cand_row::GEO + 3), v.cand3(c, cand_row::GEO + 6)];
-                let (wi, dist, pdf, sampled) = area_light_sample(
-                    p,
-                    geo,
-                    v.cand(c, cand_row::AREA_PDF),
-                    (v.cand(c, cand_row::U), v.cand(c, cand_row::U + 1)),
-                    v.cand(c, cand_row::PMF),
-                    v.cand::<F>(c, cand_row::TWO_SIDED).cmp_eq(one),
-                    sphere,
-                    (tri.any(), sphere.any()),
-                );
-                let li = v.cand3::<F>(c, cand_row::LI);
+                let (tri, sphere, (wi, dist, pdf, sampled), li) = match lights {
+                    // The candidate's light and triangle picked here, as
+                    // `lane_vertex` picks them otherwise.
+                    Some(t) => {
+                        let (u_i, u2x, u2y) = super::candidate_numbers_lanes(
+                            g(row::U_SEL),
+                            (g(row::U_LIGHT), g(row::U_LIGHT + 1)),
+                            c as u32,
+                            m as u32,
+                        );
+                        let pick = t.pick(t.select_uniform(u_i), (u2x, u2y), t.kinds());
+                        let sphere = pick.sphere;
+                        let pmf = F::splat(1.0 / t.len() as f32);
+                        let kinds = ((!sphere).any(), sphere.any());
+                        let sample =
+                            area_light_sample(p, pick.geo, pick.area_pdf, pick.u, pmf, pick.two_sided, sphere, kinds);
+                        (!sphere, sphere, sample, pick.li)
+                    }
+                    None => {
+                        let kind = v.cand::<F>(c, cand_row::KIND);
+                        let (tri, sphere) = (kind.cmp_eq(zero), kind.cmp_eq(one));
+                        let geo =
+                            [v.cand3(c, cand_row::GEO), v.cand3(c, cand_row::GEO + 3), v.cand3(c, cand_row::GEO + 6)];
+                        let sample = area_light_sample(
+                            p,
+                            geo,
+                            v.cand(c, cand_row::AREA_PDF),
+                            (v.cand(c, cand_row::U), v.cand(c, cand_row::U + 1)),
+                            v.cand(c, cand_row::PMF),
+                            v.cand::<F>(c, cand_row::TWO_SIDED).cmp_eq(one),
+                            sphere,
+                            (tri.any(), sphere.any()),
+                        );
+                        (tri, sphere, sample, v.cand3::<F>(c, cand_row::LI))
+                    }
+                };
                 let (f, bsdf_pdf) = value(wi);
                 let contribution = f.mul_elem(li);
                 let target = contribution.x.abs() + contribution.y.abs() + contribution.z.abs();
@@ -1620,6 +1665,16 @@ impl PathIntegrator {
             }
             let scale = sum / F::splat(m as f32) / w_y;
             (y_wi, y_dist, y_pdf, y_li, picked, y_f, y_bsdf_pdf, scale)
+        } else if let Some(t) = lights {
+            // The light and its triangle picked here, as `lane_vertex`
+            // picks them otherwise (the batch's light kind is the pick's).
+            let kinds = (L == 0, L == 2);
+            let pick = t.pick(t.select_uniform(g(row::U_SEL)), (g(row::U_LIGHT), g(row::U_LIGHT + 1)), kinds);
+            let pmf = F::splat(1.0 / t.len() as f32);
+            let (wi, dist, pdf, sampled) =
+                area_light_sample(p, pick.geo, pick.area_pdf, pick.u, pmf, pick.two_sided, pick.sphere, kinds);
+            let (f, bsdf_pdf) = value(wi);
+            (wi, dist, pdf, pick.li, sampled, f, bsdf_pdf, one)
         } else {
             let geo = [gv(row::LIGHT_TRI), gv(row::LIGHT_TRI + 3), gv(row::LIGHT_TRI + 6)];
             let (wi, dist, pdf, sampled) = area_light_sample(

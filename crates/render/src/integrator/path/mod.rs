@@ -260,8 +260,19 @@ impl Vertex {
 /// by the R2 sequence's offsets (Roberts 2018), (u_light + i·(g₁, g₂)) mod 1.
 #[inline(always)]
 fn candidate_numbers(u_sel: f32, u_light: glam::Vec2, i: u32, m: u32) -> (f32, glam::Vec2) {
-    const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
     ((u_sel + i as f32 / m as f32).fract(), (u_light + i as f32 * R2).fract())
+}
+
+/// The R2 sequence's offsets of [`candidate_numbers`].
+const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
+
+/// [`candidate_numbers`] in lanes, bitwise lane by lane (the numbers are
+/// in [0, 1), so `x - ⌊x⌋` is `fract`'s `x - trunc(x)`).
+#[inline(always)]
+fn candidate_numbers_lanes<F: crate::simd::Float>(u_sel: F, u_light: (F, F), i: u32, m: u32) -> (F, F, F) {
+    let fract = |x: F| x - x.floor();
+    let r = i as f32 * R2;
+    (fract(u_sel + F::splat(i as f32 / m as f32)), fract(u_light.0 + F::splat(r.x)), fract(u_light.1 + F::splat(r.y)))
 }
 
 impl PathIntegrator {
