@@ -213,8 +213,10 @@ fn run<F: Float>(
                 let rays = job.camera.pinhole_rays::<F>(F::from_array(fx), F::from_array(fy));
                 for (l, slot) in slots[first..].iter_mut().enumerate() {
                     let ray = rays.ray(l);
-                    slot.state = PathState::camera(&ray);
-                    slot.state.set_target(path.roulette_target(roulette_guide, pixels[slot.sample / spp].global));
+                    slot.state.aim(&ray);
+                    if roulette_guide.is_some() {
+                        slot.state.set_target(path.roulette_target(roulette_guide, pixels[slot.sample / spp].global));
+                    }
                     if aovs {
                         camera_rays.push(ray);
                     }

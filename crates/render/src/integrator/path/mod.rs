@@ -182,6 +182,15 @@ impl PathState {
         }
     }
 
+    /// Points a path made by [`Self::camera`] (with any ray) along
+    /// `camera_ray`: the state `camera(camera_ray)` gives, writing only the
+    /// fields the ray sets.
+    #[inline(always)]
+    pub fn aim(&mut self, camera_ray: &Ray) {
+        self.ray = *camera_ray;
+        self.prev_p = camera_ray.o;
+    }
+
     /// Sets its pixel's value as the guide's training saw it
     /// ([`PathIntegrator::roulette_target`]).
     #[inline]
