@@ -8,10 +8,12 @@
 //! alone or in `twosided` ([`Scene::lane_material`]); the non-specular ones lit by an area light
 //! on a mesh or a sphere ([`Scene::lane_light`]) or by the scene's one
 //! environment map, or resampled from up to [`MAX_LANE_CANDIDATES`] light
-//! candidates that are all such area lights (`resample_light`: each
-//! candidate's light and triangle picked in the preparation, the
+//! candidates that are all such area lights (`resample_light`: the
 //! candidates, the reservoir and the pick's scale in lanes, triangles and
-//! spheres mixed in a batch). A
+//! spheres mixed in a batch). With uniform selection and only such lights,
+//! the kernel picks each lane's light (each candidate's) and its triangle
+//! from the scene's [`LaneLightTable`]; otherwise the preparation picks
+//! them and writes their fields into the batch. A
 //! stream prepares such vertices of many paths into a [`LaneBatch`] per
 //! [`LaneKind`] (shape, material and light; structure of arrays, so the
 //! kernel loads each field as one vector), runs a batch once it holds
@@ -22,9 +24,10 @@
 //! **Bitwise [`PathIntegrator::vertex`].** The random numbers are drawn per
 //! path in the scalar order ([`PathIntegrator::lane_vertex`] draws the light
 //! and BSDF numbers, [`PathIntegrator::lane_vertex_done`] Russian
-//! roulette's). The light's pick and the triangle's pick by area stay
-//! scalar; the environment map's cell is picked in lanes
-//! ([`EnvMapLight::sample_cell_lanes`], its tables read per lane). The arithmetic in between is the scalar
+//! roulette's). The light's pick and the triangle's pick by area are the
+//! scalar operations lane by lane (`LaneLightTable::pick`) or scalar; the
+//! environment map's cell is picked in lanes
+//! ([`EnvMapLight::sample_cell_lanes`], its tables gathered). The arithmetic in between is the scalar
 //! code's, operation for operation in glam's order ([`V3`]), both branches
 //! computed and selected per lane: the hit's interaction
 //! (`Shape::interaction_with` without the uv parameterisation and
@@ -1310,54 +1313,57 @@ impl PathIntegrator {
         }
         b.candidates = 1;
         if let (Picked::Candidates, ..) = light {
-            // `resample_light`'s candidates, picked as `sample_light` picks
-            // each; a light that has no lane kernel sends the vertex back.
+            // `resample_light`'s candidates: picked by the kernel from the
+            // scene's table, or here as `sample_light` picks each (a light
+            // that has no lane kernel sends the vertex back).
             b.candidates = m;
             b.set(l, row::U_PICK, u_pick);
             if table.is_some() {
                 b.set(l, row::U_SEL, u_sel);
                 b.set(l, row::U_LIGHT, u_light.x);
                 b.set(l, row::U_LIGHT + 1, u_light.y);
-            } else if b.cands.len() < m as usize {
-                b.cands.resize(m as usize, [[0.0; LaneBatch::LANES]; cand_row::COUNT]);
-            }
-            for i in 0..if table.is_some() { 0 } else { m } {
-                let (u_i, u2_i) = super::candidate_numbers(u_sel, u_light, i, m);
-                let c = i as usize;
-                let cand = &mut b.cands[c];
-                let Some((k, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_i) else {
-                    put(cand, l, cand_row::KIND, 2.0);
-                    continue;
-                };
-                let Some(&light) = scene.lane_light(k) else {
-                    rng.rewind(dim);
-                    return None;
-                };
-                put(cand, l, cand_row::PMF, pmf);
-                match light {
-                    LaneLight::Sphere { center, params, li, two_sided } => {
-                        put(cand, l, cand_row::KIND, 1.0);
-                        put3(cand, l, cand_row::GEO, center);
-                        put3(cand, l, cand_row::GEO + 3, params);
-                        put3(cand, l, cand_row::LI, li);
-                        put(cand, l, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
-                        put(cand, l, cand_row::U, u2_i.x);
-                    }
-                    LaneLight::Mesh { first, count, area_pdf, li, two_sided } => {
-                        let tris = scene.lane_light_tris(first, count);
-                        let (t, ux) = alias_pick(u2_i.x, tris.len(), |b| (tris[b].keep, tris[b].other));
-                        let [q0, q1, q2] = tris[t].p;
-                        put(cand, l, cand_row::KIND, 0.0);
-                        put3(cand, l, cand_row::GEO, q0);
-                        put3(cand, l, cand_row::GEO + 3, q1);
-                        put3(cand, l, cand_row::GEO + 6, q2);
-                        put(cand, l, cand_row::AREA_PDF, area_pdf);
-                        put3(cand, l, cand_row::LI, li);
-                        put(cand, l, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
-                        put(cand, l, cand_row::U, ux);
-                    }
+            } else {
+                if b.cands.len() < m as usize {
+                    b.cands.resize(m as usize, [[0.0; LaneBatch::LANES]; cand_row::COUNT]);
                 }
-                put(cand, l, cand_row::U + 1, u2_i.y);
+                for i in 0..m {
+                    let (u_i, u2_i) = super::candidate_numbers(u_sel, u_light, i, m);
+                    let c = i as usize;
+                    let cand = &mut b.cands[c];
+                    let Some((k, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_i) else {
+                        put(cand, l, cand_row::KIND, 2.0);
+                        continue;
+                    };
+                    let Some(&light) = scene.lane_light(k) else {
+                        rng.rewind(dim);
+                        return None;
+                    };
+                    put(cand, l, cand_row::PMF, pmf);
+                    match light {
+                        LaneLight::Sphere { center, params, li, two_sided } => {
+                            put(cand, l, cand_row::KIND, 1.0);
+                            put3(cand, l, cand_row::GEO, center);
+                            put3(cand, l, cand_row::GEO + 3, params);
+                            put3(cand, l, cand_row::LI, li);
+                            put(cand, l, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+                            put(cand, l, cand_row::U, u2_i.x);
+                        }
+                        LaneLight::Mesh { first, count, area_pdf, li, two_sided } => {
+                            let tris = scene.lane_light_tris(first, count);
+                            let (t, ux) = alias_pick(u2_i.x, tris.len(), |b| (tris[b].keep, tris[b].other));
+                            let [q0, q1, q2] = tris[t].p;
+                            put(cand, l, cand_row::KIND, 0.0);
+                            put3(cand, l, cand_row::GEO, q0);
+                            put3(cand, l, cand_row::GEO + 3, q1);
+                            put3(cand, l, cand_row::GEO + 6, q2);
+                            put(cand, l, cand_row::AREA_PDF, area_pdf);
+                            put3(cand, l, cand_row::LI, li);
+                            put(cand, l, cand_row::TWO_SIDED, if two_sided { 1.0 } else { 0.0 });
+                            put(cand, l, cand_row::U, ux);
+                        }
+                    }
+                    put(cand, l, cand_row::U + 1, u2_i.y);
+                }
             }
         } else if let (Picked::Table(_), ..) = light {
             b.set(l, row::U_SEL, u_sel);
