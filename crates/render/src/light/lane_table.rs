@@ -4,6 +4,10 @@
 //! ([`crate::simd::Float::gather_table`]) instead of a scalar pick per
 //! vertex and per candidate written into its batch.
 //!
+//! The table copies the mesh lights' triangles (44 bytes each) beside
+//! `Scene::lane_light_tris`, which the per-vertex picks of the other
+//! selections read; meshes of more than 2^16 triangles have no lane light.
+//!
 //! The picks are bitwise the scalar ones: the uniform selection is
 //! `LightSampler::Uniform`'s (`fast::index(u n).min(n - 1)`, probability
 //! 1 / n), and the triangle pick is `alias_pick` on the mesh's alias
