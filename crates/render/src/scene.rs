@@ -274,7 +274,8 @@ impl Scene {
                     }
                 }
             }
-            Some(table)
+            // Its float indices fit an i32 (for gathers).
+            table.gathers().then_some(table)
         });
         Scene {
             shapes,
@@ -513,11 +514,12 @@ impl Scene {
     /// The scene's environment, with its light index, when it is one
     /// `envmap` and nothing else: then [`Self::environment_radiance`] of a
     /// direction d is `Spectrum::ZERO + e.eval(d)` (the sum above), which
-    /// [`crate::light::EnvMapLight::eval_lanes`] computes for many directions at once.
+    /// [`crate::light::EnvMapLight::eval_lanes`] computes for many directions at once
+    /// (`None` for a map too large to be gathered in lanes).
     pub fn single_envmap(&self) -> Option<(usize, &crate::light::EnvMapLight)> {
         match self.env_lights[..] {
             [i] => match &self.lights[i as usize] {
-                Light::EnvMap(e) => Some((i as usize, e)),
+                Light::EnvMap(e) if e.gathers() => Some((i as usize, e)),
                 _ => None,
             },
             _ => None,

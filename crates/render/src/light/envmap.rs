@@ -161,7 +161,7 @@ impl EnvMapLight {
     /// [`Self::eval`] of `F::WIDTH` directions (x, y and z lanes), bitwise
     /// lane by lane: the rotation, the inverse trigonometry (the lane forms
     /// of `math::fast`) and the texel coordinates in lanes, the bilinear
-    /// blend of each lane's four texels by `blend`, as `eval`.
+    /// blend of each lane's four texels gathered (`blend_lanes`), as `eval`.
     pub fn eval_lanes<F: Float>(&self, wx: F, wy: F, wz: F) -> V3<F> {
         let (_, u, theta) = self.local_lanes(wx, wy, wz);
         let (x, y) = self.texel_lanes(u, theta);
@@ -304,6 +304,13 @@ impl EnvMapLight {
         (px, cos_t, pdf_uv * at(&self.inv_row_solid_angle, 0))
     }
 
+    /// Whether its tables are small enough to be gathered in lanes (every
+    /// float index fits an i32): the lane forms (`eval_lanes`,
+    /// `sample_cell_lanes`, ...) need it.
+    pub fn gathers(&self) -> bool {
+        3 * self.texels.len() <= i32::MAX as usize
+    }
+
     /// Whether the map can be sampled (it is not black): [`Self::sample_cell`] never gives `None`.
     pub fn samples(&self) -> bool {
         self.distribution.is_some()
@@ -356,7 +363,7 @@ impl EnvMapLight {
         pdf_uv * self.inv_row_solid_angle[r] / (m * m * m * self.abs_det)
     }
 
-    /// `pdf_local` in lanes, bitwise lane by lane (the table reads per lane).
+    /// `pdf_local` in lanes, bitwise lane by lane (the tables gathered).
     #[inline(always)]
     fn pdf_local_lanes<F: Float>(&self, d: V3<F>, u: F, theta: F) -> F {
         let Some(distribution) = &self.distribution else { return F::splat(0.0) };

@@ -85,6 +85,11 @@ impl LaneLightTable {
         self.lights.is_empty()
     }
 
+    /// Whether every float of the table has an i32 index (for gathers).
+    pub fn gathers(&self) -> bool {
+        self.lights.len().max(self.tris.len()) <= i32::MAX as usize
+    }
+
     /// Whether any light is on a mesh, and whether any is on a sphere.
     #[inline]
     pub fn kinds(&self) -> (bool, bool) {

@@ -28,9 +28,10 @@ pub struct Distribution2D {
     height: usize,
 }
 
-/// Floats per [`Cell`], and where its density is among them (`keep` and
-/// `other` come first, as `alias_pick_lanes` reads them).
+/// Floats per [`Cell`] (`keep` and `other` first, as `alias_pick_lanes`
+/// reads them)...
 const CELL_FLOATS: i32 = 3;
+/// ...and where its density is among them.
 const CELL_PDF: i32 = 2;
 
 #[derive(Debug, Clone, Copy)]
@@ -78,9 +79,9 @@ impl Distribution2D {
     fn cell_floats(&self) -> &[f32] {
         const { assert!(std::mem::size_of::<Cell>() == 4 * CELL_FLOATS as usize && std::mem::align_of::<Cell>() == 4) };
         // SAFETY: `Cell` is `#[repr(C)]` of three 4-byte fields with no
-        // padding (asserted above), each of which any f32 bit pattern may
-        // be read as; `n` cells are `3 n` floats of the same allocation,
-        // borrowed as long as `self`.
+        // padding (asserted above), and every bit pattern (`other`'s too)
+        // is a valid f32; `n` cells are `3 n` floats of the same
+        // allocation, borrowed as long as `self`.
         unsafe {
             std::slice::from_raw_parts(self.cells.as_ptr().cast::<f32>(), CELL_FLOATS as usize * self.cells.len())
         }

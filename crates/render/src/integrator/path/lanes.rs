@@ -140,7 +140,7 @@ mod row {
     /// 1 where the area light emits from both sides.
     pub const TWO_SIDED: usize = 55;
     /// The light sample's numbers (the first rescaled by the triangle's
-    /// pick).
+    /// pick, except where the kernel picks the light: `U_SEL`).
     pub const U_LIGHT: usize = 56;
     /// The BSDF sample's numbers: the 1D one, then the 2D one.
     pub const U_BSDF1: usize = 58;
@@ -167,7 +167,8 @@ mod row {
 }
 
 /// The most light candidates a lane vertex resamples from (more run the
-/// scalar vertex): a batch keeps 18 rows of 16 lanes per candidate.
+/// scalar vertex): a batch keeps 18 rows of 16 lanes per candidate, unless
+/// the kernel picks them from the scene's [`LaneLightTable`].
 pub const MAX_LANE_CANDIDATES: u32 = 8;
 
 /// The rows of one light candidate in [`LaneBatch`]'s candidate block
@@ -205,11 +206,16 @@ pub struct LaneBatch {
     len: usize,
     /// The light candidates of every lane (1: no resampling).
     candidates: u32,
+    /// Whether the kernel picks the lights from the scene's
+    /// [`LaneLightTable`] (the batch then holds `U_SEL` and the drawn
+    /// `U_LIGHT`, not the light's fields or candidate rows).
+    table_picks: bool,
     /// The caller's number for each lane's path.
     slots: [u32; LaneBatch::LANES],
     rows: [[f32; LaneBatch::LANES]; row::COUNT],
-    /// With resampled light selection, [`cand_row::COUNT`] rows per
-    /// candidate (empty until a batch first needs them).
+    /// With resampled light selection picked in the preparation,
+    /// [`cand_row::COUNT`] rows per candidate (empty until a batch first
+    /// needs them).
     cands: Vec<[[f32; LaneBatch::LANES]; cand_row::COUNT]>,
 }
 
@@ -222,6 +228,7 @@ impl LaneBatch {
             kind,
             len: 0,
             candidates: 1,
+            table_picks: false,
             slots: [0; Self::LANES],
             rows: [[0.0; Self::LANES]; row::COUNT],
             cands: Vec::new(),
@@ -304,7 +311,7 @@ impl LaneBatch {
     }
 
     /// Repeats the last lane in lanes `len..F::WIDTH`, so a short batch
-    /// runs on valid inputs. A full batch returns at once: walking its 82
+    /// runs on valid inputs. A full batch returns at once: walking all its
     /// rows to fill nothing cost a tenth of the Cornell box's instructions.
     #[inline(always)]
     fn pad<F: Float>(&mut self) {
@@ -326,8 +333,8 @@ impl LaneBatch {
         let pad = |r: &mut [f32; Self::LANES]| F::select(keep, F::load(r), F::splat(r[last])).store(r);
         self.rows.iter_mut().for_each(pad);
         // (Candidates picked from the scene's table have no rows.)
-        let cands = if self.candidates > 1 { self.candidates as usize } else { 0 };
-        self.cands.iter_mut().take(cands).flatten().for_each(pad);
+        let cands = if self.candidates > 1 && !self.table_picks { self.candidates as usize } else { 0 };
+        self.cands[..cands].iter_mut().flatten().for_each(pad);
     }
 }
 
@@ -1129,8 +1136,8 @@ impl PathIntegrator {
         // The light: its kind and what its rows need.
         enum Picked<'a> {
             None,
-            /// Resampled from `m` candidates (picked below, into the batch's
-            /// candidate rows).
+            /// Resampled from `m` candidates (picked below into the
+            /// batch's candidate rows, or by the kernel from the table).
             Candidates,
             Env,
             Sphere(Vec3, Vec3),
@@ -1312,6 +1319,7 @@ impl PathIntegrator {
             _ => unreachable!("the shape kind was found above"),
         }
         b.candidates = 1;
+        b.table_picks = table.is_some();
         if let (Picked::Candidates, ..) = light {
             // `resample_light`'s candidates: picked by the kernel from the
             // scene's table, or here as `sample_light` picks each (a light
@@ -1527,6 +1535,10 @@ impl PathIntegrator {
         let g = |r: usize| v.get::<F>(r);
         let gv = |r: usize| v.get3::<F>(r);
         let (zero, one) = (F::splat(0.0), F::splat(1.0));
+        // The batch says whether its lights are picked here (its rows are
+        // written for one way only); the caller passes the scene's table.
+        let lights =
+            v.table_picks.then(|| lights.expect("a batch prepared for the scene's light table runs without it"));
         let h = hit::<F, S>(v);
         let (p, n) = (h.p, h.n);
         // With a guide, each lane's density as `vertex_guided` finds it: the

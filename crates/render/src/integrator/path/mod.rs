@@ -275,8 +275,8 @@ fn candidate_numbers(u_sel: f32, u_light: glam::Vec2, i: u32, m: u32) -> (f32, g
 /// The R2 sequence's offsets of [`candidate_numbers`].
 const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
 
-/// [`candidate_numbers`] in lanes, bitwise lane by lane (the numbers are
-/// in [0, 1), so `x - ⌊x⌋` is `fract`'s `x - trunc(x)`).
+/// [`candidate_numbers`] in lanes, bitwise lane by lane (the sums are not
+/// negative, so `x - ⌊x⌋` is `fract`'s `x - trunc(x)`).
 #[inline(always)]
 fn candidate_numbers_lanes<F: crate::simd::Float>(u_sel: F, u_light: (F, F), i: u32, m: u32) -> (F, F, F) {
     let fract = |x: F| x - x.floor();
