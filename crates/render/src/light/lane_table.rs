@@ -13,7 +13,7 @@
 //! 1 / n), and the triangle pick is `alias_pick` on the mesh's alias
 //! table (`Mesh::pick_triangle`'s), its operations lane by lane.
 
-use crate::sampling::distrib2d::index_lanes;
+use crate::sampling::distrib2d::{alias_pick_lanes, index_lanes};
 use crate::simd::{Float, Int, Mask, V3};
 use glam::Vec3;
 
@@ -133,12 +133,12 @@ impl LaneLightTable {
         self.lights.extend(l);
     }
 
-    /// `LightSampler::Uniform`'s pick in lanes: light `min(⌊u n⌋, n - 1)`
-    /// (with probability 1 / n).
+    /// `LightSampler::Uniform`'s pick in lanes: light `min(⌊u n⌋, n - 1)`,
+    /// and its probability 1 / n.
     #[inline(always)]
-    pub fn select_uniform<F: Float>(&self, u: F) -> F::Int {
+    pub fn select_uniform<F: Float>(&self, u: F) -> (F::Int, F) {
         let n = self.len();
-        index_lanes(u * F::splat(n as f32), n - 1)
+        (index_lanes(u * F::splat(n as f32), n - 1), F::splat(1.0 / n as f32))
     }
 
     /// Lane `l`'s light `k[l]` with its numbers `u`, its triangle picked on
@@ -156,23 +156,10 @@ impl LaneLightTable {
         if kinds.0 && !self.tris.is_empty() {
             // `alias_pick` on the mesh's table, its size per lane.
             let first = at(light::FIRST).to_bits();
-            let n = at(light::COUNT);
-            let x = u.0 * n;
-            let b = x.to_int_trunc();
-            let b = F::Int::select(b.cmp_lt(F::Int::splat(0)), F::Int::splat(0), b);
-            let last = n.to_int_trunc().wrapping_sub(F::Int::splat(1));
-            let b = F::Int::select(b.cmp_gt(last), last, b);
-            let f = x - F::from_int(b);
             let stride = F::Int::splat(tri::STRIDE as i32);
-            let bucket = first.wrapping_add(b).wrapping_mul(stride);
-            let keep = F::gather_table(&self.tris, bucket.wrapping_add(F::Int::splat(tri::KEEP as i32)));
-            let other = F::gather_table(&self.tris, bucket.wrapping_add(F::Int::splat(tri::KEEP as i32 + 1))).to_bits();
-            let own = f.cmp_lt(keep);
-            let one = F::splat(1.0);
-            let u_re = F::select(own, f / keep, (f - keep) / (one - keep));
-            // As f32::clamp (NaN passes through).
-            let u_re = F::splat(1.0 - f32::EPSILON / 2.0).min(F::splat(0.0).max(u_re));
-            let t = first.wrapping_add(F::Int::select(own, b, other)).wrapping_mul(stride);
+            let start = first.wrapping_mul(stride).wrapping_add(F::Int::splat(tri::KEEP as i32));
+            let (b, u_re) = alias_pick_lanes(u.0, at(light::COUNT), &self.tris, start, tri::STRIDE as i32);
+            let t = first.wrapping_add(b).wrapping_mul(stride);
             let c = |f: usize| F::gather_table(&self.tris, t.wrapping_add(F::Int::splat(f as i32)));
             geo = std::array::from_fn(|k| V3 {
                 x: c(tri::P + 3 * k),
@@ -258,7 +245,7 @@ mod tests {
                             us[F::WIDTH - 1] = [1.0 - f32::EPSILON / 2.0; 3];
                         }
                         let lane = |c: usize| gather::<F>(|l| us[l][c]);
-                        let k = table.select_uniform(lane(0));
+                        let (k, pmf_lanes) = table.select_uniform(lane(0));
                         let pick = table.pick(k, (lane(1), lane(2)), table.kinds());
                         let (k, sphere, two_sided) = (k.to_array(), pick.sphere.bitmask(), pick.two_sided.bitmask());
                         let at = |x: F, l: usize| x.to_array().as_ref()[l].to_bits();
@@ -267,6 +254,7 @@ mod tests {
                         for (l, u) in us.iter().enumerate() {
                             let (i, pmf) = sampler.sample(Vec3::ZERO, Vec3::ZERO, u[0]).unwrap();
                             assert_eq!((k.as_ref()[l] as usize, pmf), (i, 1.0 / n as f32), "{} lane {l}", F::NAME);
+                            assert_eq!(at(pmf_lanes, l), pmf.to_bits());
                             let (light, li, ts) = &scalar[i];
                             assert_eq!(at3(pick.li, l), bits3(*li));
                             assert_eq!(two_sided >> l & 1 == 1, *ts);

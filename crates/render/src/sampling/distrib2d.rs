@@ -112,11 +112,16 @@ impl Distribution2D {
     /// lane: (p.x, p.y, density), the tables read by gathers.
     #[inline(always)]
     pub fn sample_lanes<F: Float>(&self, ux: F, uy: F) -> (F, F, F) {
-        let (row, uy) = alias_pick_lanes(uy, self.height, &self.marginal_floats, F::Int::splat(0), 2);
+        let (row, uy) = alias_pick_lanes(uy, F::splat(self.height as f32), &self.marginal_floats, F::Int::splat(0), 2);
         let cells = self.cell_floats();
         let start = row.wrapping_mul(F::Int::splat(self.width as i32));
-        let (col, ux) =
-            alias_pick_lanes(ux, self.width, cells, start.wrapping_mul(F::Int::splat(CELL_FLOATS)), CELL_FLOATS);
+        let (col, ux) = alias_pick_lanes(
+            ux,
+            F::splat(self.width as f32),
+            cells,
+            start.wrapping_mul(F::Int::splat(CELL_FLOATS)),
+            CELL_FLOATS,
+        );
         let pdf = F::gather_table(cells, self.cell_float(start.wrapping_add(col), CELL_PDF));
         (point_in_cell_lanes(col, ux, self.width), point_in_cell_lanes(row, uy, self.height), pdf)
     }
@@ -144,20 +149,27 @@ impl Distribution2D {
 /// below, as `x as i32` does for NaN).
 #[inline(always)]
 pub(crate) fn index_lanes<F: Float>(x: F, max: usize) -> F::Int {
+    index_lanes_to(x, F::Int::splat(max as i32))
+}
+
+/// [`index_lanes`] with a bound per lane.
+#[inline(always)]
+fn index_lanes_to<F: Float>(x: F, max: F::Int) -> F::Int {
     let zero = F::Int::splat(0);
     let i = x.to_int_trunc();
     let i = F::Int::select(i.cmp_lt(zero), zero, i);
-    let max = F::Int::splat(max as i32);
     F::Int::select(i.cmp_gt(max), max, i)
 }
 
-/// `alias_pick` in lanes, bitwise lane by lane: lane `l`'s bucket `b`
-/// is at float `start[l] + stride b` of `table` (the share kept), the bits
-/// of the item taking the rest right after it.
+/// `alias_pick` in lanes, bitwise lane by lane: lane `l` picks among
+/// `n[l]` buckets (a whole number below 2²⁴ as a float, so that `u n` is
+/// `alias_pick`'s product), its bucket `b` at float `start[l] + stride b`
+/// of `table` (the share kept), the bits of the item taking the rest right
+/// after it.
 #[inline(always)]
-pub(crate) fn alias_pick_lanes<F: Float>(u: F, n: usize, table: &[f32], start: F::Int, stride: i32) -> (F::Int, F) {
-    let x = u * F::splat(n as f32);
-    let b = index_lanes(x, n - 1);
+pub(crate) fn alias_pick_lanes<F: Float>(u: F, n: F, table: &[f32], start: F::Int, stride: i32) -> (F::Int, F) {
+    let x = u * n;
+    let b = index_lanes_to(x, n.to_int_trunc().wrapping_sub(F::Int::splat(1)));
     let f = x - F::from_int(b);
     let at = start.wrapping_add(b.wrapping_mul(F::Int::splat(stride)));
     let keep = F::gather_table(table, at);

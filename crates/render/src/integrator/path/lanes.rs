@@ -1635,9 +1635,9 @@ impl PathIntegrator {
                             c as u32,
                             m as u32,
                         );
-                        let pick = t.pick(t.select_uniform(u_i), (u2x, u2y), t.kinds());
+                        let (k, pmf) = t.select_uniform(u_i);
+                        let pick = t.pick(k, (u2x, u2y), t.kinds());
                         let sphere = pick.sphere;
-                        let pmf = F::splat(1.0 / t.len() as f32);
                         let kinds = ((!sphere).any(), sphere.any());
                         let sample =
                             area_light_sample(p, pick.geo, pick.area_pdf, pick.u, pmf, pick.two_sided, sphere, kinds);
@@ -1687,8 +1687,8 @@ impl PathIntegrator {
             // The light and its triangle picked here, as `lane_vertex`
             // picks them otherwise (the batch's light kind is the pick's).
             let kinds = (L == 0, L == 2);
-            let pick = t.pick(t.select_uniform(g(row::U_SEL)), (g(row::U_LIGHT), g(row::U_LIGHT + 1)), kinds);
-            let pmf = F::splat(1.0 / t.len() as f32);
+            let (k, pmf) = t.select_uniform(g(row::U_SEL));
+            let pick = t.pick(k, (g(row::U_LIGHT), g(row::U_LIGHT + 1)), kinds);
             let (wi, dist, pdf, sampled) =
                 area_light_sample(p, pick.geo, pick.area_pdf, pick.u, pmf, pick.two_sided, pick.sphere, kinds);
             let (f, bsdf_pdf) = value(wi);

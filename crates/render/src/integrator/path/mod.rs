@@ -269,14 +269,15 @@ impl Vertex {
 /// by the R2 sequence's offsets (Roberts 2018), (u_light + i·(g₁, g₂)) mod 1.
 #[inline(always)]
 fn candidate_numbers(u_sel: f32, u_light: glam::Vec2, i: u32, m: u32) -> (f32, glam::Vec2) {
-    ((u_sel + i as f32 / m as f32).fract(), (u_light + i as f32 * R2).fract())
+    let (u, ux, uy) = candidate_numbers_lanes::<f32>(u_sel, (u_light.x, u_light.y), i, m);
+    (u, glam::Vec2::new(ux, uy))
 }
 
 /// The R2 sequence's offsets of [`candidate_numbers`].
 const R2: glam::Vec2 = glam::Vec2::new(0.754_877_7, 0.569_840_3);
 
-/// [`candidate_numbers`] in lanes, bitwise lane by lane (the sums are not
-/// negative, so `x - ⌊x⌋` is `fract`'s `x - trunc(x)`).
+/// [`candidate_numbers`] in lanes (it is the one-lane instance); the sums
+/// are not negative, so `x - ⌊x⌋` is the fractional part.
 #[inline(always)]
 fn candidate_numbers_lanes<F: crate::simd::Float>(u_sel: F, u_light: (F, F), i: u32, m: u32) -> (F, F, F) {
     let fract = |x: F| x - x.floor();
