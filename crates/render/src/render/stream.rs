@@ -201,9 +201,14 @@ fn run<F: Float>(
                 let (mut fx, mut fy) = (F::Array::default(), F::Array::default());
                 // `extend` (not `push`, whose growth call LLVM builds the
                 // slot on the stack for) writes each slot where it goes.
+                // A pixel's streams share its key, hashed once.
+                let mut key = (usize::MAX, 0);
                 slots.extend((next..next + n).map(|k| {
                     let (p, s) = (&pixels[k / spp], samples.start + (k % spp) as u32);
-                    let mut rng = job.sampler.stream(p.global, s);
+                    if key.0 != k / spp {
+                        key = (k / spp, job.sampler.pixel_key(p.global));
+                    }
+                    let mut rng = job.sampler.stream_of_key(key.1, s);
                     let u = rng.next_2d();
                     let f = job.film_position(p.global, u);
                     (fx.as_mut()[k - next], fy.as_mut()[k - next]) = (f.x, f.y);
@@ -211,8 +216,13 @@ fn run<F: Float>(
                     Slot { sample: k, state: PathState::camera(&EMPTY_RAY), rng }
                 }));
                 let rays = job.camera.pinhole_rays::<F>(F::from_array(fx), F::from_array(fy));
+                // Each lane's ray, its lanes read from arrays stored once.
+                let a = |v: F| v.to_array();
+                let (o, d) = ([a(rays.o.x), a(rays.o.y), a(rays.o.z)], [a(rays.d.x), a(rays.d.y), a(rays.d.z)]);
+                let t_max = a(rays.t_max);
                 for (l, slot) in slots[first..].iter_mut().enumerate() {
-                    let ray = rays.ray(l);
+                    let at = |v: &[F::Array; 3]| Vec3::new(v[0].as_ref()[l], v[1].as_ref()[l], v[2].as_ref()[l]);
+                    let ray = Ray::new(at(&o), at(&d), t_max.as_ref()[l]);
                     slot.state.aim(&ray);
                     if roulette_guide.is_some() {
                         slot.state.set_target(path.roulette_target(roulette_guide, pixels[slot.sample / spp].global));

@@ -119,7 +119,20 @@ impl Sampler {
     /// The random stream of one pixel sample.
     #[inline]
     pub fn stream(&self, pixel: (u32, u32), sample_index: u32) -> SampleStream {
-        let pixel_key = hash_words(&[self.seed, ((pixel.1 as u64) << 32) | pixel.0 as u64]);
+        self.stream_of_key(self.pixel_key(pixel), sample_index)
+    }
+
+    /// The key that every stream of `pixel` starts from, for
+    /// [`Self::stream_of_key`]: a caller that makes many samples of one
+    /// pixel hashes it once.
+    #[inline]
+    pub fn pixel_key(&self, pixel: (u32, u32)) -> u64 {
+        hash_words(&[self.seed, ((pixel.1 as u64) << 32) | pixel.0 as u64])
+    }
+
+    /// [`Self::stream`] of the pixel whose [`Self::pixel_key`] is `pixel_key`.
+    #[inline]
+    pub fn stream_of_key(&self, pixel_key: u64, sample_index: u32) -> SampleStream {
         SampleStream {
             pixel_key,
             key: mix64(pixel_key ^ (sample_index as u64).wrapping_mul(0xd1b54a32d192ed03)),
