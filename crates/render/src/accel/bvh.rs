@@ -429,9 +429,9 @@ impl Accel {
         let root = self.root?;
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, false>(ray, &shear, root, shapes, instances),
-            1 => self.traverse::<1, false>(ray, &shear, root, shapes, instances),
-            _ => self.traverse::<2, false>(ray, &shear, root, shapes, instances),
+            0 => self.traverse::<0, false>(ray, &shear, ray.d.recip(), root, shapes, instances),
+            1 => self.traverse::<1, false>(ray, &shear, ray.d.recip(), root, shapes, instances),
+            _ => self.traverse::<2, false>(ray, &shear, ray.d.recip(), root, shapes, instances),
         }
     }
 
@@ -441,28 +441,32 @@ impl Accel {
         let Some(root) = self.root else { return false };
         let shear = RayShear::new(ray.d);
         match shear.kz {
-            0 => self.traverse::<0, true>(ray, &shear, root, shapes, instances),
-            1 => self.traverse::<1, true>(ray, &shear, root, shapes, instances),
-            _ => self.traverse::<2, true>(ray, &shear, root, shapes, instances),
+            0 => self.traverse::<0, true>(ray, &shear, ray.d.recip(), root, shapes, instances),
+            1 => self.traverse::<1, true>(ray, &shear, ray.d.recip(), root, shapes, instances),
+            _ => self.traverse::<2, true>(ray, &shear, ray.d.recip(), root, shapes, instances),
         }
         .is_some()
     }
 
     /// The single-ray walk of the subtree of slot `start` (child, info),
-    /// for the packet traversal's rays left alone in a subtree.
+    /// for the packet traversal's rays left alone in a subtree; `shear`
+    /// and `inv_d` are `RayShear::new(ray.d)` and `ray.d.recip()`, which
+    /// the packet has in its lanes.
     #[inline]
     pub(super) fn traverse_slot<const ANY: bool>(
         &self,
         ray: &Ray,
+        shear: &RayShear,
+        inv_d: Vec3,
         start: (u32, u32),
         shapes: &[Shape],
         instances: &[Instance],
     ) -> Option<Hit> {
-        let shear = RayShear::new(ray.d);
+        debug_assert_eq!(inv_d.to_array().map(f32::to_bits), ray.d.recip().to_array().map(f32::to_bits));
         match shear.kz {
-            0 => self.traverse::<0, ANY>(ray, &shear, start, shapes, instances),
-            1 => self.traverse::<1, ANY>(ray, &shear, start, shapes, instances),
-            _ => self.traverse::<2, ANY>(ray, &shear, start, shapes, instances),
+            0 => self.traverse::<0, ANY>(ray, shear, inv_d, start, shapes, instances),
+            1 => self.traverse::<1, ANY>(ray, shear, inv_d, start, shapes, instances),
+            _ => self.traverse::<2, ANY>(ray, shear, inv_d, start, shapes, instances),
         }
     }
 
@@ -474,6 +478,7 @@ impl Accel {
         &self,
         ray: &Ray,
         shear: &RayShear,
+        inv_d: Vec3,
         (root_child, root_info): (u32, u32),
         shapes: &[Shape],
         instances: &[Instance],
@@ -481,7 +486,6 @@ impl Accel {
         let mut ray = *ray;
         // `ray.t_max` becomes the search limit; hits stay below this.
         let t_max = ray.t_max;
-        let inv_d = ray.d.recip();
         let o = [F8::splat(ray.o.x), F8::splat(ray.o.y), F8::splat(ray.o.z)];
         let id = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
         // Lane rows of the near and far planes per axis, by direction sign.

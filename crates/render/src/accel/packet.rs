@@ -53,7 +53,7 @@ use super::tri4::{intersect4, RayLanes};
 use crate::geometry::triangle::RayShear;
 use crate::geometry::{Disk, Ray, Shape, Sphere};
 use crate::simd::{Float, Mask, V3};
-use glam::{Vec2, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 use std::mem::MaybeUninit;
 
 /// Active rays from which a triangle block is tested a triangle against
@@ -269,6 +269,50 @@ impl<F: Float> RayTri<F> {
     }
 }
 
+/// What the single-ray kernel computes first for each ray (the triangle
+/// test's shear and the reciprocal direction), taken from a packet's
+/// lanes, where they are the same numbers ([`RayTri::new`], [`Lanes::new`]),
+/// for the rays the packet hands to that kernel.
+struct SingleRays<F: Float> {
+    s: [F::Array; 3],
+    inv_d: [F::Array; 3],
+    /// Rays whose dominant axis is x, and those where it is y.
+    kz0: u32,
+    kz1: u32,
+}
+
+impl<F: Float> SingleRays<F> {
+    fn new(lanes: &Lanes<F>, ray_tri: &RayTri<F>) -> Self {
+        let [kz0, kz1] = ray_tri.axis[2];
+        SingleRays {
+            s: ray_tri.s.map(F::to_array),
+            inv_d: lanes.inv_d.map(F::to_array),
+            kz0: kz0.bitmask(),
+            kz1: kz1.bitmask(),
+        }
+    }
+
+    /// Ray `r`'s `RayShear::new(d)`.
+    #[inline(always)]
+    fn shear(&self, r: usize) -> RayShear {
+        let kz = if self.kz0 >> r & 1 != 0 {
+            0
+        } else if self.kz1 >> r & 1 != 0 {
+            1
+        } else {
+            2
+        };
+        let [sx, sy, sz] = self.s.map(|s| s.as_ref()[r]);
+        RayShear { kz, sx, sy, sz }
+    }
+
+    /// Ray `r`'s `d.recip()`.
+    #[inline(always)]
+    fn inv_d(&self, r: usize) -> Vec3 {
+        Vec3::from_array(self.inv_d.map(|v| v.as_ref()[r]))
+    }
+}
+
 impl Accel {
     /// Closest hits of `rays` (at most `F::WIDTH`, at most [`MAX_PACKET`])
     /// traversed as one packet, into `out[..rays.len()]`: bitwise
@@ -335,18 +379,24 @@ impl Accel {
                 }
             }};
         }
+        // Made when the packet first hands a ray to single-ray code.
+        let mut single_rays: Option<SingleRays<F>> = None;
         let mut stack = Stack::<F>::new();
         let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
         loop {
             if cur.info == 0 && (cur.mask & alive).count_ones() <= FEW_RAYS {
                 // Few rays left in this subtree: walk each with the single-ray
                 // kernel (its best hit counts as one found here).
+                let single = single_rays.get_or_insert_with(|| SingleRays::new(&lanes, &ray_tri));
                 let mut m = cur.mask & alive;
                 while m != 0 {
                     let r = m.trailing_zeros() as usize;
                     m &= m - 1;
                     let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
-                    if let Some(h) = self.traverse_slot::<ANY>(&ray, (cur.child, cur.info), shapes, instances) {
+                    let (shear, inv_d) = (single.shear(r), single.inv_d(r));
+                    if let Some(h) =
+                        self.traverse_slot::<ANY>(&ray, &shear, inv_d, (cur.child, cur.info), shapes, instances)
+                    {
                         record!(r, h);
                     }
                 }
@@ -435,8 +485,7 @@ impl Accel {
                         let r = m.trailing_zeros() as usize;
                         m &= m - 1;
                         let tr = t_max.as_ref()[r];
-                        // Built here, not per packet: most blocks are reached by several rays.
-                        let shear = RayShear::new(rays[r].d);
+                        let shear = single_rays.get_or_insert_with(|| SingleRays::new(&lanes, &ray_tri)).shear(r);
                         let single = Single { lanes: RayLanes::new(&rays[r], &shear), kz: shear.kz };
                         let (mut mask, t, b1, b2) = tri_hit(&single, tr, tri);
                         if mask == 0 {
@@ -802,6 +851,37 @@ pub(crate) mod tests {
         // Shared edges and vertices, the duplicated grid, sphere and disks.
         assert!(ties > 500, "{ties} rays whose closest hit ties");
         eprintln!("{}: {hits} hits ({parts} on multi-part shapes), {ties} ties", F::NAME);
+    }
+
+    /// The shear and reciprocal direction a packet hands the single-ray
+    /// kernel are bitwise the ones that kernel computes itself, on rays
+    /// with ties between |d| components too.
+    fn single_rays_are_the_kernels<F: Float>() {
+        let mut rays = rays();
+        rays.extend(
+            [Vec3::ONE, Vec3::new(1.0, -1.0, 0.5), Vec3::new(0.5, 2.0, -2.0), Vec3::NEG_X, Vec3::Y]
+                .map(|d| Ray::new(Vec3::ZERO, d, 1.0)),
+        );
+        let bits = |v: [f32; 3]| v.map(f32::to_bits);
+        for chunk in rays.chunks(F::WIDTH) {
+            let lanes = Lanes::<F>::new(chunk);
+            let single = SingleRays::new(&lanes, &RayTri::new(&lanes));
+            for (r, ray) in chunk.iter().enumerate() {
+                let (got, want) = (single.shear(r), RayShear::new(ray.d));
+                assert_eq!(got.kz, want.kz, "{} {ray:?}", F::NAME);
+                assert_eq!(bits([got.sx, got.sy, got.sz]), bits([want.sx, want.sy, want.sz]), "{ray:?}");
+                assert_eq!(bits(single.inv_d(r).to_array()), bits(ray.d.recip().to_array()), "{ray:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn single_rays_from_lanes() {
+        single_rays_are_the_kernels::<f32>();
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
+        single_rays_are_the_kernels::<crate::simd::F32x8>();
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+        single_rays_are_the_kernels::<crate::simd::F32x16>();
     }
 
     #[test]

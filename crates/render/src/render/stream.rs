@@ -39,7 +39,7 @@ use crate::guiding::{Guide, GuideRecord};
 use crate::integrator::path::{LaneBins, LaneOutcomes, PathIntegrator, PathState, Sampled};
 use crate::math::Spectrum;
 use crate::sampling::SampleStream;
-use crate::simd::{gather, Float};
+use crate::simd::Float;
 use glam::{Vec2, Vec3};
 use std::ops::Range;
 
@@ -272,17 +272,22 @@ fn run<F: Float>(
             let seen = |st: &PathState| !st.prev_delta() || path.delta_miss_seen(st);
             sky_slots.extend((0..slots.len()).filter(|&i| hits[i].is_none() && seen(&slots[i].state)));
             for chunk in sky_slots.chunks(F::WIDTH) {
-                // Short chunks repeat their last direction.
-                let d = |l: usize| slots[chunk[l.min(chunk.len() - 1)]].state.ray.d;
-                let lane = |c: fn(Vec3) -> f32| gather::<F>(|l| c(d(l)));
+                // The directions in lanes, each read once; short chunks
+                // repeat their last direction.
+                let mut d = [F::Array::default(); 3];
+                for l in 0..F::WIDTH {
+                    let v = slots[chunk[l.min(chunk.len() - 1)]].state.ray.d;
+                    (d[0].as_mut()[l], d[1].as_mut()[l], d[2].as_mut()[l]) = (v.x, v.y, v.z);
+                }
+                let [dx, dy, dz] = d.map(F::from_array);
                 if chunk.iter().all(|&i| slots[i].state.prev_delta()) {
-                    let le = env.eval_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z)).to_lanes();
+                    let le = env.eval_lanes(dx, dy, dz).to_lanes();
                     for (&i, le) in chunk.iter().zip(le) {
                         PathIntegrator::add_delta_miss(&mut slots[i].state, Spectrum::ZERO + le);
                     }
                     continue;
                 }
-                let (le, pdf) = env.eval_pdf_lanes(lane(|d| d.x), lane(|d| d.y), lane(|d| d.z));
+                let (le, pdf) = env.eval_pdf_lanes(dx, dy, dz);
                 let (le, pdf) = (le.to_lanes(), pdf.to_array());
                 for (&i, (le, &pdf)) in chunk.iter().zip(le.into_iter().zip(pdf.as_ref())) {
                     let st = &mut slots[i].state;
