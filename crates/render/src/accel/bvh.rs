@@ -451,8 +451,10 @@ impl Accel {
     /// The single-ray walk of the subtree of slot `start` (child, info),
     /// for the packet traversal's rays left alone in a subtree; `shear`
     /// and `inv_d` are `RayShear::new(ray.d)` and `ray.d.recip()`, which
-    /// the packet has in its lanes.
-    #[inline]
+    /// the packet has in its lanes. Kept out of line, where LLVM kept it
+    /// before it took these arguments: the packet loop need not grow by a
+    /// copy of the single-ray walk per dominant axis for its rare handoffs.
+    #[inline(never)]
     pub(super) fn traverse_slot<const ANY: bool>(
         &self,
         ray: &Ray,

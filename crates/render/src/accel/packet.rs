@@ -269,48 +269,27 @@ impl<F: Float> RayTri<F> {
     }
 }
 
-/// What the single-ray kernel computes first for each ray (the triangle
-/// test's shear and the reciprocal direction), taken from a packet's
-/// lanes, where they are the same numbers ([`RayTri::new`], [`Lanes::new`]),
-/// for the rays the packet hands to that kernel.
-struct SingleRays<F: Float> {
-    s: [F::Array; 3],
-    inv_d: [F::Array; 3],
-    /// Rays whose dominant axis is x, and those where it is y.
-    kz0: u32,
-    kz1: u32,
+/// Ray `r`'s `RayShear::new(d)`, which [`RayTri::new`] forms in lanes:
+/// the single-ray kernel's set-up, for the rays a packet hands to it.
+#[inline(always)]
+fn lane_shear<F: Float>(ray_tri: &RayTri<F>, r: usize) -> RayShear {
+    // Lanes where the dominant axis (permuted axis kz) is x, and where it is y.
+    let [kz0, kz1] = ray_tri.axis[2];
+    let kz = if kz0.bitmask() >> r & 1 != 0 {
+        0
+    } else if kz1.bitmask() >> r & 1 != 0 {
+        1
+    } else {
+        2
+    };
+    let [sx, sy, sz] = ray_tri.s.map(|s| s.to_array().as_ref()[r]);
+    RayShear { kz, sx, sy, sz }
 }
 
-impl<F: Float> SingleRays<F> {
-    fn new(lanes: &Lanes<F>, ray_tri: &RayTri<F>) -> Self {
-        let [kz0, kz1] = ray_tri.axis[2];
-        SingleRays {
-            s: ray_tri.s.map(F::to_array),
-            inv_d: lanes.inv_d.map(F::to_array),
-            kz0: kz0.bitmask(),
-            kz1: kz1.bitmask(),
-        }
-    }
-
-    /// Ray `r`'s `RayShear::new(d)`.
-    #[inline(always)]
-    fn shear(&self, r: usize) -> RayShear {
-        let kz = if self.kz0 >> r & 1 != 0 {
-            0
-        } else if self.kz1 >> r & 1 != 0 {
-            1
-        } else {
-            2
-        };
-        let [sx, sy, sz] = self.s.map(|s| s.as_ref()[r]);
-        RayShear { kz, sx, sy, sz }
-    }
-
-    /// Ray `r`'s `d.recip()`.
-    #[inline(always)]
-    fn inv_d(&self, r: usize) -> Vec3 {
-        Vec3::from_array(self.inv_d.map(|v| v.as_ref()[r]))
-    }
+/// Ray `r`'s `d.recip()`, which [`Lanes::new`] forms in lanes.
+#[inline(always)]
+fn lane_inv_d<F: Float>(lanes: &Lanes<F>, r: usize) -> Vec3 {
+    Vec3::from_array(lanes.inv_d.map(|v| v.to_array().as_ref()[r]))
 }
 
 impl Accel {
@@ -379,21 +358,18 @@ impl Accel {
                 }
             }};
         }
-        // Made when the packet first hands a ray to single-ray code.
-        let mut single_rays: Option<SingleRays<F>> = None;
         let mut stack = Stack::<F>::new();
         let mut cur = Entry { child: root_child, info: root_info, mask: all, t0: zero, key: 0.0 };
         loop {
             if cur.info == 0 && (cur.mask & alive).count_ones() <= FEW_RAYS {
                 // Few rays left in this subtree: walk each with the single-ray
                 // kernel (its best hit counts as one found here).
-                let single = single_rays.get_or_insert_with(|| SingleRays::new(&lanes, &ray_tri));
                 let mut m = cur.mask & alive;
                 while m != 0 {
                     let r = m.trailing_zeros() as usize;
                     m &= m - 1;
                     let ray = Ray { t_max: t_max.as_ref()[r], ..rays[r] };
-                    let (shear, inv_d) = (single.shear(r), single.inv_d(r));
+                    let (shear, inv_d) = (lane_shear(&ray_tri, r), lane_inv_d(&lanes, r));
                     if let Some(h) =
                         self.traverse_slot::<ANY>(&ray, &shear, inv_d, (cur.child, cur.info), shapes, instances)
                     {
@@ -485,7 +461,8 @@ impl Accel {
                         let r = m.trailing_zeros() as usize;
                         m &= m - 1;
                         let tr = t_max.as_ref()[r];
-                        let shear = single_rays.get_or_insert_with(|| SingleRays::new(&lanes, &ray_tri)).shear(r);
+                        // Built here, not per packet: most blocks are reached by several rays.
+                        let shear = RayShear::new(rays[r].d);
                         let single = Single { lanes: RayLanes::new(&rays[r], &shear), kz: shear.kz };
                         let (mut mask, t, b1, b2) = tri_hit(&single, tr, tri);
                         if mask == 0 {
@@ -865,12 +842,12 @@ pub(crate) mod tests {
         let bits = |v: [f32; 3]| v.map(f32::to_bits);
         for chunk in rays.chunks(F::WIDTH) {
             let lanes = Lanes::<F>::new(chunk);
-            let single = SingleRays::new(&lanes, &RayTri::new(&lanes));
+            let ray_tri = RayTri::new(&lanes);
             for (r, ray) in chunk.iter().enumerate() {
-                let (got, want) = (single.shear(r), RayShear::new(ray.d));
+                let (got, want) = (lane_shear(&ray_tri, r), RayShear::new(ray.d));
                 assert_eq!(got.kz, want.kz, "{} {ray:?}", F::NAME);
                 assert_eq!(bits([got.sx, got.sy, got.sz]), bits([want.sx, want.sy, want.sz]), "{ray:?}");
-                assert_eq!(bits(single.inv_d(r).to_array()), bits(ray.d.recip().to_array()), "{ray:?}");
+                assert_eq!(bits(lane_inv_d(&lanes, r).to_array()), bits(ray.d.recip().to_array()), "{ray:?}");
             }
         }
     }
