@@ -12,7 +12,7 @@
 //! popped, it keeps the rays whose entry distance is still <= their closest
 //! hit, the single-ray rule applied per ray. Children are visited front to
 //! back by the entry distance of the lowest ray that enters them. A
-//! subtree that at most `FEW_RAYS` (4) rays still enter is handed to the
+//! subtree that at most `FEW_RAYS` (1) rays still enter is handed to the
 //! single-ray kernel a ray at a time ([`Accel::intersect`]'s walk, started
 //! at that subtree with the ray's closest hit so far as its `t_max`), which
 //! tests its boxes for one ray eight at a time instead of eight boxes one
@@ -61,10 +61,14 @@ use std::mem::MaybeUninit;
 const LANE_TRIANGLES: u32 = 2;
 
 /// Active rays up to which a subtree is walked by the single-ray kernel,
-/// one ray after another, rather than as a packet: on many_lights (a
-/// hundred shapes) 4 took 1.9 % fewer instructions than 1 and 1.5 % less
-/// time (3, 6: between); the small scenes have no inner node below the root.
-const FEW_RAYS: u32 = 4;
+/// one ray after another, rather than as a packet. Once that kernel's
+/// set-up no longer waited on its divisions, 1 was fastest (one thread, 4
+/// alternating rounds): many_lights (a hundred shapes) 1.02 s with 4, 1.00
+/// s with 2, 0.99-1.00 s with 1, and Mitsuba's `cbox.xml` (a BVH of 38
+/// triangles) 1.04-1.08 s, 1.03-1.05 s, 1.03-1.04 s; 8 was slower on both.
+/// (Before, 4 had been 1.5 % faster than 1 on many_lights.) The small
+/// bench scenes have no inner node below the root.
+const FEW_RAYS: u32 = 1;
 
 /// Most rays in one packet (the widest [`Float`], `F32x16`).
 pub const MAX_PACKET: usize = 16;
