@@ -452,13 +452,12 @@ mod tests {
                     assert!(c.has_pinhole_lanes());
                     for chunk in self.1.chunks_exact(F::WIDTH) {
                         let rays = c.pinhole_rays::<F>(gather(|l| chunk[l].x), gather(|l| chunk[l].y));
-                        for (l, s) in chunk.iter().enumerate() {
-                            let r = &rays.ray(l);
+                        for (s, r) in chunk.iter().zip(rays.rays()) {
                             let want = c.generate_ray_with_aperture(*s, Vec2::splat(0.5));
                             let bits = |r: &Ray| {
                                 (r.o.to_array().map(f32::to_bits), r.d.to_array().map(f32::to_bits), r.t_max.to_bits())
                             };
-                            assert_eq!(bits(r), bits(&want), "{} at {s}", F::NAME);
+                            assert_eq!(bits(&r), bits(&want), "{} at {s}", F::NAME);
                         }
                     }
                 }

@@ -796,6 +796,7 @@ pub(crate) mod tests {
     }
 
     fn check<F: Float>() {
+        single_rays_are_the_kernels::<F>();
         let shapes = scene();
         let accel = Accel::build_shapes(&shapes);
         let rays = rays();
@@ -854,15 +855,6 @@ pub(crate) mod tests {
                 assert_eq!(bits(lane_inv_d(&lanes, r).to_array()), bits(ray.d.recip().to_array()), "{ray:?}");
             }
         }
-    }
-
-    #[test]
-    fn single_rays_from_lanes() {
-        single_rays_are_the_kernels::<f32>();
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "fma"))]
-        single_rays_are_the_kernels::<crate::simd::F32x8>();
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
-        single_rays_are_the_kernels::<crate::simd::F32x16>();
     }
 
     #[test]

@@ -55,14 +55,15 @@ pub struct RayLanes<F> {
 }
 
 impl<F: Float> RayLanes<F> {
-    /// Lane `l`'s ray.
+    /// Each lane's ray, in lane order (every row stored to an array once).
     #[inline(always)]
-    pub fn ray(&self, l: usize) -> Ray {
-        let at = |v: F| v.to_array().as_ref()[l];
-        Ray::new(
-            Vec3::new(at(self.o.x), at(self.o.y), at(self.o.z)),
-            Vec3::new(at(self.d.x), at(self.d.y), at(self.d.z)),
-            at(self.t_max),
-        )
+    pub fn rays(&self) -> impl Iterator<Item = Ray> {
+        let a = |v: F| v.to_array();
+        let (o, d) = ([a(self.o.x), a(self.o.y), a(self.o.z)], [a(self.d.x), a(self.d.y), a(self.d.z)]);
+        let t_max = a(self.t_max);
+        (0..F::WIDTH).map(move |l| {
+            let at = |v: &[F::Array; 3]| Vec3::new(v[0].as_ref()[l], v[1].as_ref()[l], v[2].as_ref()[l]);
+            Ray::new(at(&o), at(&d), t_max.as_ref()[l])
+        })
     }
 }

@@ -216,13 +216,7 @@ fn run<F: Float>(
                     Slot { sample: k, state: PathState::camera(&EMPTY_RAY), rng }
                 }));
                 let rays = job.camera.pinhole_rays::<F>(F::from_array(fx), F::from_array(fy));
-                // Each lane's ray, its lanes read from arrays stored once.
-                let a = |v: F| v.to_array();
-                let (o, d) = ([a(rays.o.x), a(rays.o.y), a(rays.o.z)], [a(rays.d.x), a(rays.d.y), a(rays.d.z)]);
-                let t_max = a(rays.t_max);
-                for (l, slot) in slots[first..].iter_mut().enumerate() {
-                    let at = |v: &[F::Array; 3]| Vec3::new(v[0].as_ref()[l], v[1].as_ref()[l], v[2].as_ref()[l]);
-                    let ray = Ray::new(at(&o), at(&d), t_max.as_ref()[l]);
+                for (slot, ray) in slots[first..].iter_mut().zip(rays.rays()) {
                     slot.state.aim(&ray);
                     if roulette_guide.is_some() {
                         slot.state.set_target(path.roulette_target(roulette_guide, pixels[slot.sample / spp].global));
