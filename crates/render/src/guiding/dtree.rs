@@ -14,6 +14,7 @@
 //! and [`DTree::pdf`] read.
 
 use crate::math::PI;
+use crate::simd::{Float, V3};
 use glam::{Vec2, Vec3};
 
 /// Deepest level a quadtree refines to (the paper's 20).
@@ -67,6 +68,45 @@ fn atan2(y: f32, x: f32) -> f32 {
     } else {
         a
     }
+}
+
+/// [`dir_to_square`] of every lane: its operations per lane, its branches
+/// as selects, so each lane is bitwise the scalar map (NaN included). A
+/// guided lane vertex maps up to four directions; one at a time, the map
+/// and its division were half of the guide's density lookups.
+#[inline]
+pub fn dir_to_square_lanes<F: Float>(d: V3<F>) -> (F, F) {
+    let (one, zero) = (F::splat(1.0), F::splat(0.0));
+    // f32::clamp: NaN stays NaN.
+    let z = F::select(d.z.cmp_lt(-one), -one, d.z);
+    let z = F::select(z.cmp_gt(one), one, z);
+    let phi = atan2_lanes(d.y, d.x);
+    let phi = F::select(phi.cmp_lt(zero), phi + F::splat(2.0 * PI), phi);
+    let v = phi * F::splat(0.5 / PI);
+    // `min` as f32::min against a number: the number where z is NaN.
+    (((z + one) * F::splat(0.5)).min(F::splat(ONE_BELOW)), F::select(v.cmp_ge(one), zero, v))
+}
+
+/// [`atan2`] of every lane, bitwise the scalar one per lane.
+#[inline]
+fn atan2_lanes<F: Float>(y: F, x: F) -> F {
+    use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
+    let (one, zero) = (F::splat(1.0), F::splat(0.0));
+    let (ax, ay) = (x.abs(), y.abs());
+    let swap = ay.cmp_gt(ax);
+    let (num, den) = (F::select(swap, ax, ay), F::select(swap, ay, ax));
+    let t = num / den;
+    let big = t.cmp_gt(F::splat(0.414_213_57));
+    let base = F::select(big, F::splat(FRAC_PI_4), zero);
+    let z = F::select(big, (t - one) / (t + one), t);
+    let z2 = z * z;
+    let p = ((F::splat(8.053_744_5e-2) * z2 - F::splat(1.387_768_6e-1)) * z2 + F::splat(1.997_771_1e-1)) * z2
+        - F::splat(3.333_295e-1);
+    let a = base + (p * z2 * z + z);
+    let a = F::select(swap, F::splat(FRAC_PI_2) - a, a);
+    let a = F::select(x.cmp_lt(zero), F::splat(PI) - a, a);
+    let a = F::select(y.cmp_lt(zero), -a, a);
+    F::select(den.cmp_eq(zero), zero, a)
 }
 
 /// The direction at a square position (inverse of [`dir_to_square`]).

@@ -18,7 +18,8 @@ pub mod dtree;
 pub mod roulette;
 
 use crate::geometry::Aabb;
-use dtree::{dir_to_square, DTree, DTreeBuilder};
+use crate::simd::{Float, Mask, V3};
+use dtree::{dir_to_square, dir_to_square_lanes, DTree, DTreeBuilder};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use roulette::PixelEstimate;
@@ -94,6 +95,75 @@ impl GuideDensity<'_> {
             Some(n) => self.tree.pdf(d) + self.tree.pdf(mirror(d, n)),
         }
     }
+}
+
+/// [`GuideDensity`] of a batch of lanes, each lane with its own quadtree
+/// and fold: the lane form of its `sample` and `pdf`, bitwise theirs per
+/// lane. The directions are mapped to the square in lanes
+/// ([`dir_to_square_lanes`]); the quadtrees are read one lane at a time.
+pub struct GuideLanes<'g, F: Float> {
+    /// Lane `l`'s quadtree (lanes past the batch repeat one of them).
+    pub trees: [&'g DTree; 16],
+    /// The unit normal (world) of the side kept, per lane, when folded.
+    pub fold: Option<V3<F>>,
+}
+
+impl<F: Float> GuideLanes<'_, F> {
+    /// Per lane of `lanes`, its quadtree's density per steradian at `d`
+    /// (0 in the other lanes): `DTree::pdf`.
+    #[inline]
+    fn tree_pdf(&self, d: V3<F>, lanes: u32) -> F {
+        let (u, v) = dir_to_square_lanes(d);
+        let (u, v) = (u.to_array(), v.to_array());
+        crate::simd::gather::<F>(|l| {
+            if lanes >> l & 1 == 0 {
+                0.0
+            } else {
+                self.trees[l].pdf_square(Vec2::new(u.as_ref()[l], v.as_ref()[l])) * (0.25 / crate::math::PI)
+            }
+        })
+    }
+
+    /// [`GuideDensity::pdf`] of each lane's `d` in `need` (0 elsewhere).
+    #[inline]
+    pub fn pdf(&self, d: V3<F>, need: u32) -> F {
+        match self.fold {
+            None => self.tree_pdf(d, need),
+            Some(n) => {
+                let need = need & !d.dot(n).cmp_lt(F::splat(0.0)).bitmask();
+                self.tree_pdf(d, need) + self.tree_pdf(mirror_lanes(d, n), need)
+            }
+        }
+    }
+
+    /// [`GuideDensity::sample`] in the lanes of `picks` with numbers
+    /// (`u0`, `u1`): the world directions and their densities (the other
+    /// lanes' are meaningless). The quadtrees draw one lane at a time.
+    #[inline]
+    pub fn sample(&self, u0: F, u1: F, picks: u32) -> (V3<F>, F) {
+        let (u0, u1) = (u0.to_array(), u1.to_array());
+        let mut drawn = [(Vec3::ZERO, 0.0f32); 16];
+        for (l, d) in drawn.iter_mut().enumerate().take(F::WIDTH) {
+            if picks >> l & 1 != 0 {
+                *d = self.trees[l].sample(Vec2::new(u0.as_ref()[l], u1.as_ref()[l]));
+            }
+        }
+        let d = V3::gather(|l| drawn[l].0);
+        let pdf = crate::simd::gather::<F>(|l| drawn[l].1);
+        match self.fold {
+            None => (d, pdf),
+            Some(n) => {
+                let m = mirror_lanes(d, n);
+                (V3::select(d.dot(n).cmp_lt(F::splat(0.0)), m, d), pdf + self.tree_pdf(m, picks))
+            }
+        }
+    }
+}
+
+/// [`mirror`] of every lane, in glam's order per lane.
+#[inline]
+fn mirror_lanes<F: Float>(d: V3<F>, n: V3<F>) -> V3<F> {
+    d - n * (F::splat(2.0) * d.dot(n))
 }
 
 /// `d` mirrored across the plane through the origin with unit normal `n`.
@@ -388,6 +458,89 @@ mod tests {
                 GuideRecord::new(p, d, l, 0.25 / crate::math::PI).unwrap()
             })
             .collect()
+    }
+
+    /// The lane forms are bitwise the scalar ones on every lane width: the
+    /// square map (on directions of special values too: zeros of both signs,
+    /// axes, NaN, infinities, components past 1), and a trained guide's
+    /// densities and draws, folded and not, each lane with its own leaf.
+    #[test]
+    fn lanes_are_bitwise_the_scalar_guide() {
+        use crate::simd::check::{each_simd, same, specials, Visit};
+        let mut g = Guide::new(unit_box());
+        for it in 0..3 {
+            g.update(&records(20_000 << it, 40 + it as u64), SPATIAL_THRESHOLD);
+        }
+        assert!(g.leaves.len() > 1, "the test wants lanes in different leaves");
+        struct V<'a> {
+            g: &'a Guide,
+            checked: usize,
+        }
+        impl Visit for V<'_> {
+            fn visit<F: Float>(&mut self) {
+                let w = F::WIDTH;
+                let sp = specials(&[1.0, -1.0, 2.0, -2.0, f32::NAN, f32::INFINITY, -f32::INFINITY]);
+                let mut rng = TestRng::new(11);
+                let pick = |rng: &mut TestRng| sp[(rng.next_f32() * sp.len() as f32) as usize % sp.len()];
+                let eq =
+                    |a: f32, b: f32, what: &str| assert!(same(a, b, false), "{what} on {}: {a:e} vs {b:e}", F::NAME);
+                for round in 0..600 {
+                    // Unit directions (most rounds), or triples of special values.
+                    let d: Vec<Vec3> = (0..w)
+                        .map(|_| match round % 3 {
+                            2 => Vec3::new(pick(&mut rng), pick(&mut rng), pick(&mut rng)),
+                            _ => dtree::square_to_dir(rng.next_2d()),
+                        })
+                        .collect();
+                    let dl = V3::<F>::gather(|l| d[l]);
+                    let (u, v) = dir_to_square_lanes(dl);
+                    for l in 0..w {
+                        let want = dir_to_square(d[l]);
+                        eq(u.to_array().as_ref()[l], want.x, "u");
+                        eq(v.to_array().as_ref()[l], want.y, "v");
+                    }
+                    if round % 3 == 2 {
+                        continue;
+                    }
+                    // Lanes in random leaves, folded about random normals or not.
+                    let leaves: [u32; 16] = std::array::from_fn(|_| {
+                        self.g.leaf_of(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
+                    });
+                    let normals: Vec<Vec3> = (0..w).map(|_| dtree::square_to_dir(rng.next_2d())).collect();
+                    let folded = round % 2 == 0;
+                    let lanes = GuideLanes::<F> {
+                        trees: leaves.map(|l| self.g.leaf(l)),
+                        fold: folded.then(|| V3::gather(|l| normals[l])),
+                    };
+                    let scalar =
+                        |l: usize| GuideDensity { tree: self.g.leaf(leaves[l]), fold: folded.then_some(normals[l]) };
+                    let need = (rng.next_f32() * (1u64 << w) as f32) as u32 & ((1u64 << w) - 1) as u32;
+                    let pdf = lanes.pdf(dl, need).to_array();
+                    let (u0, u1): (Vec<f32>, Vec<f32>) = (0..w).map(|_| (rng.next_f32(), rng.next_f32())).unzip();
+                    let (drawn, drawn_pdf) =
+                        lanes.sample(crate::simd::gather(|l| u0[l]), crate::simd::gather(|l| u1[l]), need);
+                    let (drawn, drawn_pdf) = (drawn.to_lanes(), drawn_pdf.to_array());
+                    for l in 0..w {
+                        let want = if need >> l & 1 != 0 { scalar(l).pdf(d[l]) } else { 0.0 };
+                        eq(pdf.as_ref()[l], want, "pdf");
+                        if need >> l & 1 != 0 {
+                            let (wd, wp) = scalar(l).sample(Vec2::new(u0[l], u1[l]));
+                            for k in 0..3 {
+                                eq(drawn[l][k], wd[k], "sampled direction");
+                            }
+                            eq(drawn_pdf.as_ref()[l], wp, "sampled density");
+                        }
+                        self.checked += 1;
+                    }
+                }
+            }
+        }
+        let mut v = V { g: &g, checked: 0 };
+        let names = each_simd(&mut v);
+        // The scalar instance too: the lane code's own f32 form.
+        v.visit::<f32>();
+        assert!(v.checked > 0);
+        println!("guide lanes bitwise the scalar guide on {names:?} and f32: {} lanes", v.checked);
     }
 
     /// Folded onto a hemisphere, the density is 0 on the far side, sums to

@@ -54,7 +54,7 @@ use crate::bsdf::microfacet::{beckmann_slope_x_lanes, beckmann_slope_y_lanes, sm
 use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
-use crate::guiding::{Guide, GuideDensity};
+use crate::guiding::{Guide, GuideLanes};
 use crate::light::lane_table::LaneLightTable;
 use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
@@ -1554,14 +1554,11 @@ impl PathIntegrator {
             }
             let fold = (B != 3).then(|| {
                 let side = F::select(h.wo.z.cmp_lt(zero), -one, one);
-                h.to_world(V3::new(zero, zero, side)).to_lanes()
+                h.to_world(V3::new(zero, zero, side))
             });
-            (g, leaves, fold)
+            (g, leaves, GuideLanes { trees: leaves.map(|l| g.leaf(l)), fold })
         });
-        let density = |l: usize| {
-            let (g, leaves, fold) = guided.as_ref().expect("a guided lane without its guide");
-            GuideDensity { tree: g.leaf(leaves[l]), fold: fold.as_ref().map(|f| f[l]) }
-        };
+        let density = || &guided.as_ref().expect("a guided lane without its guide").2;
 
         // A rough plastic's material and its transmittance at wo, shared by
         // its evaluation and its sample.
@@ -1713,10 +1710,7 @@ impl PathIntegrator {
         // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
         // per lane, where the sample contributes.
         let alpha = self.guide_bsdf_fraction();
-        let guide_pdf = |d: V3<F>, need: u32| {
-            let d = d.to_lanes();
-            simd::gather::<F>(|l| if need >> l & 1 == 0 { 0.0 } else { density(l).pdf(d[l]) })
-        };
+        let guide_pdf = |d: V3<F>, need: u32| density().pdf(d, need);
         let bsdf_pdf = match guide {
             Some(_) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(wi, contributes.bitmask()),
             None => bsdf_pdf,
@@ -1781,18 +1775,13 @@ impl PathIntegrator {
             Some(_) => {
                 let pick = v.mask::<F>(row::GUIDE_PICK);
                 // The guide's direction (world) and density where it was picked.
-                let (u0, u1) = (g(row::U_BSDF).to_array(), g(row::U_BSDF + 1).to_array());
-                let (picks, mut drawn) = (pick.bitmask(), [(Vec3::ZERO, 0.0f32); LaneBatch::LANES]);
-                for (l, d) in drawn.iter_mut().enumerate().take(v.len().min(F::WIDTH)) {
-                    if picks >> l & 1 != 0 {
-                        *d = density(l).sample(glam::Vec2::new(u0.as_ref()[l], u1.as_ref()[l]));
-                    }
-                }
+                let picks = pick.bitmask() & ((1u32 << v.len().min(F::WIDTH)) - 1);
+                let (drawn, drawn_pdf) = density().sample(g(row::U_BSDF), g(row::U_BSDF + 1), picks);
                 let specular = !pick & delta;
-                let wi = V3::select(pick, h.to_local(V3::gather(|l| drawn[l].0)), wi_next);
+                let wi = V3::select(pick, h.to_local(drawn), wi_next);
                 let (f, pdf_bsdf) = eval_pdf(wi);
                 let need = (!pick & !delta & go).bitmask();
-                let pdf_guide = F::select(pick, simd::gather(|l| drawn[l].1), guide_pdf(h.to_world(wi_next), need));
+                let pdf_guide = F::select(pick, drawn_pdf, guide_pdf(h.to_world(wi_next), need));
                 let pdf = F::splat(alpha) * pdf_bsdf + F::splat(1.0 - alpha) * pdf_guide;
                 let f = f * wi.z.abs();
                 let ok = !(pdf.cmp_ne(pdf) | pdf.cmp_le(zero)) & f.ne_zero();
