@@ -323,9 +323,9 @@ impl DTreeBuilder {
 /// Levels of a quadtree that [`DTree::pdf_square`] reads from one table
 /// instead of walking them: a guided vertex looks the density up three or
 /// four times, and the walk's dependent loads were a fifth of a guided render.
-const TOP: u32 = 4;
+pub(crate) const TOP: u32 = 4;
 /// Cells per side of that table.
-const TOP_SIDE: usize = 1 << TOP;
+pub(crate) const TOP_SIDE: usize = 1 << TOP;
 
 /// A cell of the square at depth [`TOP`]: the density so far, and the node
 /// whose quadrants go on below it (0: a leaf ends at or above it, and
@@ -438,7 +438,7 @@ impl DTree {
     /// The density at `p`, walking down from `node` (`p` in the node's
     /// unit square) with `pdf` the density above it.
     #[inline]
-    fn walk(&self, node: usize, p: Vec2, pdf: f32) -> f32 {
+    pub(crate) fn walk(&self, node: usize, p: Vec2, pdf: f32) -> f32 {
         let (mut p, mut node, mut pdf) = (p, node, pdf);
         loop {
             let q;
@@ -449,6 +449,12 @@ impl DTree {
                 c => node = c as usize,
             }
         }
+    }
+
+    /// Its table of the top levels, cell by cell (row by row): the density
+    /// so far and the node [`Self::walk`] goes on from (0: none).
+    pub(crate) fn top_cells(&self) -> impl Iterator<Item = (f32, u32)> + '_ {
+        self.top.iter().map(|c| (c.pdf, c.node))
     }
 
     /// A world direction drawn from the density, and its density per

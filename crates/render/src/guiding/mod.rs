@@ -18,8 +18,8 @@ pub mod dtree;
 pub mod roulette;
 
 use crate::geometry::Aabb;
-use crate::simd::{Float, Mask, V3};
-use dtree::{dir_to_square, dir_to_square_lanes, DTree, DTreeBuilder};
+use crate::simd::{Float, Int, Mask, V3};
+use dtree::{dir_to_square, dir_to_square_lanes, DTree, DTreeBuilder, TOP_SIDE};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use roulette::PixelEstimate;
@@ -98,39 +98,63 @@ impl GuideDensity<'_> {
 }
 
 /// [`GuideDensity`] of a batch of lanes, each lane with its own quadtree
-/// and fold: the lane form of its `sample` and `pdf`, bitwise theirs per
-/// lane. The directions are mapped to the square in lanes
-/// ([`dir_to_square_lanes`]); the quadtrees are read one lane at a time.
+/// and fold ([`Guide::lanes`]): the lane form of its `sample` and `pdf`,
+/// bitwise theirs per lane. Directions are mapped to the square and the
+/// quadtrees' top tables read in lanes; the rare walk below a table and
+/// the draws go one lane at a time.
 pub struct GuideLanes<'g, F: Float> {
-    /// Lane `l`'s quadtree (lanes past the batch repeat one of them).
-    pub trees: [&'g DTree; 16],
+    /// Lane `l`'s quadtree.
+    trees: [&'g DTree; 16],
+    /// Per lane, where its tree's table starts in `tops`.
+    base: F::Int,
+    /// [`Guide`]'s `tops`.
+    tops: &'g [f32],
     /// The unit normal (world) of the side kept, per lane, when folded.
-    pub fold: Option<V3<F>>,
+    fold: Option<V3<F>>,
 }
 
 impl<F: Float> GuideLanes<'_, F> {
     /// Per lane of `lanes`, its quadtree's density per steradian at `d`
-    /// (0 in the other lanes): `DTree::pdf`.
+    /// (0 in the other lanes): `DTree::pdf`, its table looked up in lanes.
     #[inline]
-    fn tree_pdf(&self, d: V3<F>, lanes: u32) -> F {
+    fn tree_pdf(&self, d: V3<F>, lanes: F::Mask) -> F {
+        let zero = F::splat(0.0);
         let (u, v) = dir_to_square_lanes(d);
-        let (u, v) = (u.to_array(), v.to_array());
-        crate::simd::gather::<F>(|l| {
-            if lanes >> l & 1 == 0 {
-                0.0
-            } else {
-                self.trees[l].pdf_square(Vec2::new(u.as_ref()[l], v.as_ref()[l])) * (0.25 / crate::math::PI)
+        let side = F::splat(TOP_SIDE as f32);
+        let (sx, sy) = (u * side, v * side);
+        // `pdf_square`'s cell: `s as usize` (NaN and negatives to 0), at most the last.
+        let cell =
+            |s: F| F::from_int(F::select(s.cmp_ge(zero), s, zero).min(F::splat((TOP_SIDE - 1) as f32)).to_int_trunc());
+        let (cx, cy) = (cell(sx), cell(sy));
+        let at = (cy * side + cx).to_int_trunc().shift_left(1).wrapping_add(self.base);
+        let cell_pdf = F::gather_table(self.tops, at);
+        let node = F::gather_table(self.tops, at.wrapping_add(F::Int::splat(1))).to_bits();
+        let mut pdf = F::select(lanes, cell_pdf, zero);
+        let walks = (lanes & !node.cmp_eq(F::Int::splat(0))).bitmask();
+        if walks != 0 {
+            // Below the table: `DTree::walk` on from the cell.
+            let mut out = pdf.to_array();
+            let (sx, sy, cx, cy) = (sx.to_array(), sy.to_array(), cx.to_array(), cy.to_array());
+            let (node, cell_pdf) = (node.to_array(), cell_pdf.to_array());
+            let mut m = walks;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let p = Vec2::new(sx.as_ref()[l] - cx.as_ref()[l], sy.as_ref()[l] - cy.as_ref()[l]);
+                out.as_mut()[l] = self.trees[l].walk(node.as_ref()[l] as usize, p, cell_pdf.as_ref()[l]);
             }
-        })
+            pdf = F::from_array(out);
+        }
+        pdf * F::splat(0.25 / crate::math::PI)
     }
 
     /// [`GuideDensity::pdf`] of each lane's `d` in `need` (0 elsewhere).
     #[inline]
-    pub fn pdf(&self, d: V3<F>, need: u32) -> F {
+    pub fn pdf(&self, d: V3<F>, need: F::Mask) -> F {
         match self.fold {
             None => self.tree_pdf(d, need),
             Some(n) => {
-                let need = need & !d.dot(n).cmp_lt(F::splat(0.0)).bitmask();
+                let need = need & !d.dot(n).cmp_lt(F::splat(0.0));
                 self.tree_pdf(d, need) + self.tree_pdf(mirror_lanes(d, n), need)
             }
         }
@@ -140,11 +164,11 @@ impl<F: Float> GuideLanes<'_, F> {
     /// (`u0`, `u1`): the world directions and their densities (the other
     /// lanes' are meaningless). The quadtrees draw one lane at a time.
     #[inline]
-    pub fn sample(&self, u0: F, u1: F, picks: u32) -> (V3<F>, F) {
-        let (u0, u1) = (u0.to_array(), u1.to_array());
+    pub fn sample(&self, u0: F, u1: F, picks: F::Mask) -> (V3<F>, F) {
+        let (u0, u1, bits) = (u0.to_array(), u1.to_array(), picks.bitmask());
         let mut drawn = [(Vec3::ZERO, 0.0f32); 16];
         for (l, d) in drawn.iter_mut().enumerate().take(F::WIDTH) {
-            if picks >> l & 1 != 0 {
+            if bits >> l & 1 != 0 {
                 *d = self.trees[l].sample(Vec2::new(u0.as_ref()[l], u1.as_ref()[l]));
             }
         }
@@ -202,6 +226,9 @@ pub struct Guide {
     iterations: u32,
     /// The image of the last training pass, for roulette ([`roulette`]).
     image: Option<PixelEstimate>,
+    /// Every leaf's quadtree's top table in one array, leaf after leaf:
+    /// per cell its density and its node's bits ([`Self::lanes`]).
+    tops: Vec<f32>,
 }
 
 impl Guide {
@@ -215,14 +242,35 @@ impl Guide {
         };
         let size = (hi - lo).max_element().max(1e-3) * 1.02;
         let centre = (lo + hi) * 0.5;
-        Guide {
+        let mut g = Guide {
             min: centre - Vec3::splat(size * 0.5),
             size,
             nodes: vec![SNode { child: [0; 2], leaf: 0 }],
             leaves: vec![Leaf::default()],
             iterations: 0,
             image: None,
+            tops: Vec::new(),
+        };
+        g.refresh_tops();
+        g
+    }
+
+    /// Makes `tops` from the leaves' trees (after they change).
+    fn refresh_tops(&mut self) {
+        let cells = self.leaves.iter().flat_map(|l| l.sampling.top_cells());
+        self.tops = cells.flat_map(|(pdf, node)| [pdf, f32::from_bits(node)]).collect();
+    }
+
+    /// The lane form of the guide's density ([`GuideDensity`]) at lanes
+    /// in spatial leaves `leaves` ([`Self::leaf_of`]), folded about the
+    /// normals `fold` where given.
+    pub fn lanes<F: Float>(&self, leaves: &[u32; 16], fold: Option<V3<F>>) -> GuideLanes<'_, F> {
+        let mut base = <F::Int as Int>::Array::default();
+        for (b, &l) in base.as_mut().iter_mut().zip(leaves) {
+            // Within i32: a leaf's table is 512 floats, and far fewer leaves fit in memory.
+            *b = (l as usize * 2 * TOP_SIDE * TOP_SIDE) as i32;
         }
+        GuideLanes { trees: leaves.map(|l| self.leaf(l)), base: F::Int::from_array(base), tops: &self.tops, fold }
     }
 
     /// Whether the guide has learnt from a pass (before that it is not used).
@@ -330,6 +378,7 @@ impl Guide {
             leaf.records = 0;
         });
         self.iterations += 1;
+        self.refresh_tops();
     }
 
     /// Sets the image that roulette compares a path's expected share with:
@@ -413,7 +462,9 @@ impl Guide {
             f => return Err(format!("a pixel-estimate flag of {f}")),
         };
         *at = r.at;
-        Ok(Guide { min, size, nodes, leaves, iterations, image })
+        let mut g = Guide { min, size, nodes, leaves, iterations, image, tops: Vec::new() };
+        g.refresh_tops();
+        Ok(g)
     }
 
     /// Spatial leaves and quadtree nodes (sampling trees), for reports.
@@ -469,9 +520,19 @@ mod tests {
         use crate::simd::check::{each_simd, same, specials, Visit};
         let mut g = Guide::new(unit_box());
         for it in 0..3 {
-            g.update(&records(20_000 << it, 40 + it as u64), SPATIAL_THRESHOLD);
+            // `records`, and radiance from a narrow cone, which the trees refine below their tables.
+            let mut rs = records(20_000 << it, 40 + it as u64);
+            for r in &mut rs {
+                if dtree::square_to_dir(r.dir).dot(Vec3::new(0.6, 0.0, 0.8)) > 0.999 {
+                    r.value *= 1e4;
+                }
+            }
+            g.update(&rs, SPATIAL_THRESHOLD);
         }
         assert!(g.leaves.len() > 1, "the test wants lanes in different leaves");
+        // More nodes than the levels of the top table hold: lookups walk below it.
+        let top_nodes = (0..dtree::TOP).map(|k| 4usize.pow(k)).sum::<usize>();
+        assert!(g.leaves.iter().any(|l| l.sampling.node_count() > top_nodes), "no tree deeper than its table");
         struct V<'a> {
             g: &'a Guide,
             checked: usize,
@@ -508,17 +569,15 @@ mod tests {
                     });
                     let normals: Vec<Vec3> = (0..w).map(|_| dtree::square_to_dir(rng.next_2d())).collect();
                     let folded = round % 2 == 0;
-                    let lanes = GuideLanes::<F> {
-                        trees: leaves.map(|l| self.g.leaf(l)),
-                        fold: folded.then(|| V3::gather(|l| normals[l])),
-                    };
+                    let lanes = self.g.lanes::<F>(&leaves, folded.then(|| V3::gather(|l| normals[l])));
                     let scalar =
                         |l: usize| GuideDensity { tree: self.g.leaf(leaves[l]), fold: folded.then_some(normals[l]) };
                     let need = (rng.next_f32() * (1u64 << w) as f32) as u32 & ((1u64 << w) - 1) as u32;
-                    let pdf = lanes.pdf(dl, need).to_array();
+                    let mask = crate::simd::gather::<F>(|l| (need >> l & 1) as f32).cmp_ne(F::splat(0.0));
+                    let pdf = lanes.pdf(dl, mask).to_array();
                     let (u0, u1): (Vec<f32>, Vec<f32>) = (0..w).map(|_| (rng.next_f32(), rng.next_f32())).unzip();
                     let (drawn, drawn_pdf) =
-                        lanes.sample(crate::simd::gather(|l| u0[l]), crate::simd::gather(|l| u1[l]), need);
+                        lanes.sample(crate::simd::gather(|l| u0[l]), crate::simd::gather(|l| u1[l]), mask);
                     let (drawn, drawn_pdf) = (drawn.to_lanes(), drawn_pdf.to_array());
                     for l in 0..w {
                         let want = if need >> l & 1 != 0 { scalar(l).pdf(d[l]) } else { 0.0 };

@@ -54,7 +54,7 @@ use crate::bsdf::microfacet::{beckmann_slope_x_lanes, beckmann_slope_y_lanes, sm
 use crate::bsdf::roughplastic::TRANSMITTANCE_RES;
 use crate::geometry::SurfaceInteraction;
 use crate::geometry::{Ray, Shape};
-use crate::guiding::{Guide, GuideLanes};
+use crate::guiding::Guide;
 use crate::light::lane_table::LaneLightTable;
 use crate::light::{EnvMapLight, LightSelection};
 use crate::material::{LaneMaterial, Material};
@@ -1556,7 +1556,7 @@ impl PathIntegrator {
                 let side = F::select(h.wo.z.cmp_lt(zero), -one, one);
                 h.to_world(V3::new(zero, zero, side))
             });
-            (g, leaves, GuideLanes { trees: leaves.map(|l| g.leaf(l)), fold })
+            (g, leaves, g.lanes::<F>(&leaves, fold))
         });
         let density = || &guided.as_ref().expect("a guided lane without its guide").2;
 
@@ -1710,9 +1710,9 @@ impl PathIntegrator {
         // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
         // per lane, where the sample contributes.
         let alpha = self.guide_bsdf_fraction();
-        let guide_pdf = |d: V3<F>, need: u32| density().pdf(d, need);
+        let guide_pdf = |d: V3<F>, need: F::Mask| density().pdf(d, need);
         let bsdf_pdf = match guide {
-            Some(_) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(wi, contributes.bitmask()),
+            Some(_) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(wi, contributes),
             None => bsdf_pdf,
         };
         let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
@@ -1775,12 +1775,11 @@ impl PathIntegrator {
             Some(_) => {
                 let pick = v.mask::<F>(row::GUIDE_PICK);
                 // The guide's direction (world) and density where it was picked.
-                let picks = pick.bitmask() & ((1u32 << v.len().min(F::WIDTH)) - 1);
-                let (drawn, drawn_pdf) = density().sample(g(row::U_BSDF), g(row::U_BSDF + 1), picks);
+                let (drawn, drawn_pdf) = density().sample(g(row::U_BSDF), g(row::U_BSDF + 1), pick);
                 let specular = !pick & delta;
                 let wi = V3::select(pick, h.to_local(drawn), wi_next);
                 let (f, pdf_bsdf) = eval_pdf(wi);
-                let need = (!pick & !delta & go).bitmask();
+                let need = !pick & !delta & go;
                 let pdf_guide = F::select(pick, drawn_pdf, guide_pdf(h.to_world(wi_next), need));
                 let pdf = F::splat(alpha) * pdf_bsdf + F::splat(1.0 - alpha) * pdf_guide;
                 let f = f * wi.z.abs();
