@@ -229,6 +229,9 @@ pub struct Guide {
     /// Every leaf's quadtree's top table in one array, leaf after leaf:
     /// per cell its density and its node's bits ([`Self::lanes`]).
     tops: Vec<f32>,
+    /// `nodes` as bits, (first child, second child, leaf) a node
+    /// ([`Self::leaves_of`]).
+    snodes: Vec<f32>,
 }
 
 impl Guide {
@@ -250,19 +253,52 @@ impl Guide {
             iterations: 0,
             image: None,
             tops: Vec::new(),
+            snodes: Vec::new(),
         };
-        g.refresh_tops();
+        g.refresh_tables();
         g
     }
 
-    /// Makes `tops` from the leaves' trees (after they change).
-    fn refresh_tops(&mut self) {
+    /// Makes the lane tables from the tree and its leaves (after they change).
+    fn refresh_tables(&mut self) {
         let cells = self.leaves.iter().flat_map(|l| l.sampling.top_cells());
         self.tops = cells.flat_map(|(pdf, node)| [pdf, f32::from_bits(node)]).collect();
+        self.snodes = self.nodes.iter().flat_map(|n| [n.child[0], n.child[1], n.leaf].map(f32::from_bits)).collect();
+    }
+
+    /// [`Self::leaf_of`] of every lane's point (lanes past `F::WIDTH`: 0),
+    /// the spatial tree walked in lanes: bitwise the same leaves.
+    pub fn leaves_of<F: Float>(&self, p: V3<F>) -> [u32; 16] {
+        let (zero, one, half) = (F::splat(0.0), F::splat(1.0), F::splat(0.5));
+        let size = F::splat(self.size);
+        // glam's clamp: max, then min (NaN to 0).
+        let unit = |x: F, lo: f32| ((x - F::splat(lo)) / size).max(zero).min(one);
+        let mut t = [unit(p.x, self.min.x), unit(p.y, self.min.y), unit(p.z, self.min.z)];
+        let (mut node, mut leaf) = (F::Int::splat(0), F::Int::splat(0));
+        let mut done = F::Mask::splat(false);
+        for depth in 0.. {
+            // A node's (first child, second child, leaf) at 3 node.
+            let at = node.wrapping_mul(F::Int::splat(3));
+            let c0 = F::gather_table(&self.snodes, at).to_bits();
+            let is_leaf = c0.cmp_eq(F::Int::splat(0));
+            let here = F::gather_table(&self.snodes, at.wrapping_add(F::Int::splat(2))).to_bits();
+            leaf = F::Int::select(is_leaf & !done, here, leaf);
+            done = done | is_leaf;
+            if done.all() {
+                break;
+            }
+            let x = &mut t[depth % 3];
+            let hi = x.cmp_ge(half);
+            *x = F::select(hi, *x * F::splat(2.0) - one, *x * F::splat(2.0));
+            let c1 = F::gather_table(&self.snodes, at.wrapping_add(F::Int::splat(1))).to_bits();
+            node = F::Int::select(done, node, F::Int::select(hi, c1, c0));
+        }
+        let leaf = leaf.to_array();
+        std::array::from_fn(|l| leaf.as_ref().get(l).map_or(0, |&i| i as u32))
     }
 
     /// The lane form of the guide's density ([`GuideDensity`]) at lanes
-    /// in spatial leaves `leaves` ([`Self::leaf_of`]), folded about the
+    /// in spatial leaves `leaves` ([`Self::leaves_of`]), folded about the
     /// normals `fold` where given.
     pub fn lanes<F: Float>(&self, leaves: &[u32; 16], fold: Option<V3<F>>) -> GuideLanes<'_, F> {
         let mut base = <F::Int as Int>::Array::default();
@@ -378,7 +414,7 @@ impl Guide {
             leaf.records = 0;
         });
         self.iterations += 1;
-        self.refresh_tops();
+        self.refresh_tables();
     }
 
     /// Sets the image that roulette compares a path's expected share with:
@@ -462,8 +498,8 @@ impl Guide {
             f => return Err(format!("a pixel-estimate flag of {f}")),
         };
         *at = r.at;
-        let mut g = Guide { min, size, nodes, leaves, iterations, image, tops: Vec::new() };
-        g.refresh_tops();
+        let mut g = Guide { min, size, nodes, leaves, iterations, image, tops: Vec::new(), snodes: Vec::new() };
+        g.refresh_tables();
         Ok(g)
     }
 
@@ -567,6 +603,13 @@ mod tests {
                     let leaves: [u32; 16] = std::array::from_fn(|_| {
                         self.g.leaf_of(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
                     });
+                    // The spatial lookup in lanes, on points in and out of the cube.
+                    let pts: Vec<Vec3> =
+                        (0..w).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 1.2 - 0.1).collect();
+                    let found = self.g.leaves_of(V3::<F>::gather(|l| pts[l]));
+                    for l in 0..w {
+                        assert_eq!(found[l], self.g.leaf_of(pts[l]), "leaf of {} on {}", pts[l], F::NAME);
+                    }
                     let normals: Vec<Vec3> = (0..w).map(|_| dtree::square_to_dir(rng.next_2d())).collect();
                     let folded = round % 2 == 0;
                     let lanes = self.g.lanes::<F>(&leaves, folded.then(|| V3::gather(|l| normals[l])));

@@ -406,11 +406,27 @@ fn run<F: Float>(
     // Every slot has retired and every batch has run: the buffers go back empty.
     BUFFERS.with(|b| b.replace(Buffers { slots, rays, hits, shadow_slots, shadow_rays, ended, sky_slots, bins }));
     // Records in the one-path loop's order: by sample (pixel, then sample
-    // index), each path's in vertex order (rounds are in order; the sort is stable).
-    drawn.sort_by_key(|d| d.0);
-    let records = drawn
+    // index), each path's in vertex order (rounds are in order, and the
+    // counting sort by sample keeps it; a comparison sort moving the
+    // entries took 3 % of a guided render).
+    let mut start = vec![0u32; if drawn.is_empty() { 0 } else { results.len() + 1 }];
+    for d in &drawn {
+        start[d.0 + 1] += 1;
+    }
+    for k in 1..start.len() {
+        start[k] += start[k - 1];
+    }
+    let mut order = vec![0u32; drawn.len()];
+    for (i, d) in drawn.iter().enumerate() {
+        order[start[d.0] as usize] = i as u32;
+        start[d.0] += 1;
+    }
+    let records = order
         .iter()
-        .filter_map(|&(k, s, beta, before)| PathIntegrator::record(results[k].1, s, beta, before))
+        .filter_map(|&i| {
+            let (k, s, beta, before) = drawn[i as usize];
+            PathIntegrator::record(results[k].1, s, beta, before)
+        })
         .collect();
     // Splat in canonical order, a pixel's samples at a time where no AOVs need the rays.
     if aovs {

@@ -1547,11 +1547,7 @@ impl PathIntegrator {
         // normal of the frame `Material::bsdf` leaves (`h`'s: a two-sided
         // material's flipped below its normal).
         let guided = guide.map(|g| {
-            let at = p.to_lanes();
-            let mut leaves = [0u32; LaneBatch::LANES];
-            for (leaf, p) in leaves.iter_mut().zip(&at).take(v.len().min(F::WIDTH)) {
-                *leaf = g.leaf_of(*p);
-            }
+            let leaves = g.leaves_of(p);
             let fold = (B != 3).then(|| {
                 let side = F::select(h.wo.z.cmp_lt(zero), -one, one);
                 h.to_world(V3::new(zero, zero, side))
