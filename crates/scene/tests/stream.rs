@@ -173,7 +173,7 @@ fn resampled_light_selection_is_bitwise_the_scalar_loop() {
 /// sphere, mixed within a batch; bitwise the scalar vertex, with uniform
 /// selection (its lights and triangles picked in the kernel, from the
 /// scene's `LaneLightTable`) and power selection (picked per vertex), 1 to
-/// 8 candidates and a guide.
+/// 8 candidates and a guide (each lobe guided or not by its roughness).
 #[test]
 fn resampled_lane_vertices_are_bitwise_the_scalar_vertex() {
     let env = root().join("tests/scenes/textures/sunsky.exr");
@@ -188,6 +188,10 @@ fn resampled_lane_vertices_are_bitwise_the_scalar_vertex() {
         "path:max_depth=6,light_candidates=3",
         "path:max_depth=6,light_candidates=8,light_selection=power",
         "path:max_depth=6,light_candidates=2,guiding=true,guiding_budget=0.25",
+        // Every rough lobe guided; and a batch's lanes guided or not by
+        // their roughness (GGX conductors 0.25 against 0.05-0.08, dielectrics 0.2 against 0.05).
+        "path:max_depth=6,light_candidates=2,guiding=true,guiding_budget=0.25,guiding_min_roughness=0",
+        "path:max_depth=6,light_candidates=1,guiding=true,guiding_budget=0.25,guiding_min_roughness=0.1",
         "path:max_depth=6,light_candidates=1",
         "path:max_depth=6,light_candidates=1,light_selection=power",
     ] {

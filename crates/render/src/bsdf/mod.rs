@@ -293,6 +293,18 @@ impl Bsdf<'_> {
         )
     }
 
+    /// Whether its non-delta lobe is a microfacet lobe of roughness below
+    /// `roughness` (the lesser of α_u and α_v): path guiding leaves such a
+    /// vertex to the BSDF, as [`crate::material::LaneMaterial::narrower_than`].
+    #[inline]
+    pub fn narrower_than(&self, roughness: f32) -> bool {
+        match &self.kind {
+            BsdfKind::RoughConductor(b) => b.distr.alpha_u.min(b.distr.alpha_v) < roughness,
+            BsdfKind::RoughDielectric(b) => b.distr.alpha_u.min(b.distr.alpha_v) < roughness,
+            _ => false,
+        }
+    }
+
     /// f(wo, wi) without the cosine, scaled by the opacity; local directions.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Spectrum {

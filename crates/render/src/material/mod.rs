@@ -262,6 +262,16 @@ impl LaneMaterial {
         !matches!(self, LaneMaterial::Dielectric { .. } | LaneMaterial::RoughDielectric { .. })
     }
 
+    /// [`crate::bsdf::Bsdf::narrower_than`] of its BSDF: a rough conductor's
+    /// or dielectric's lesser roughness below `roughness`.
+    pub fn narrower_than(&self, roughness: f32) -> bool {
+        match *self {
+            LaneMaterial::RoughConductor { alpha_u, alpha_v, .. }
+            | LaneMaterial::RoughDielectric { alpha_u, alpha_v, .. } => alpha_u.min(alpha_v) < roughness,
+            _ => false,
+        }
+    }
+
     /// Whether its roughness differs along u and v: its frame must follow
     /// the surface's uv parameterisation.
     pub fn anisotropic(&self) -> bool {

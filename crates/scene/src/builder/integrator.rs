@@ -193,8 +193,8 @@ fn light_candidates(node: &Node) -> Result<u32> {
     Ok(m as u32)
 }
 
-/// `guiding`, `guiding_budget`, `guiding_bsdf_fraction`, `guiding_roulette` and
-/// `guiding_spatial_threshold` (see `integrator::path`).
+/// `guiding`, `guiding_budget`, `guiding_bsdf_fraction`, `guiding_roulette`,
+/// `guiding_spatial_threshold` and `guiding_min_roughness` (see `integrator::path`).
 fn guiding(node: &Node) -> Result<Option<Guiding>> {
     let on = node.bool("guiding", false)?;
     let d = Guiding::default();
@@ -220,11 +220,19 @@ fn guiding(node: &Node) -> Result<Option<Guiding>> {
             "guiding_spatial_threshold must be at least 1 (records per spatial leaf before it splits)",
         ));
     }
+    let min_roughness = node.float("guiding_min_roughness", d.min_roughness as f64)?;
+    if !(min_roughness.is_finite() && min_roughness >= 0.0) {
+        return Err(LoadError::at(
+            node.loc_of("guiding_min_roughness"),
+            "guiding_min_roughness must be a roughness of at least 0 (0: guide every non-delta lobe)",
+        ));
+    }
     Ok(on.then_some(Guiding {
         budget: budget as f32,
         bsdf_fraction: fraction as f32,
         roulette,
         spatial_threshold: threshold as f32,
+        min_roughness: min_roughness as f32,
     }))
 }
 

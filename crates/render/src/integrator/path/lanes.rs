@@ -162,8 +162,12 @@ mod row {
     /// [`LaneLightTable`]: the selection's number (`U_LIGHT` then holds
     /// the light's numbers as drawn, and the candidates' rows are unused).
     pub const U_SEL: usize = 74;
+    /// With a path guide (lit kinds only): 1 where the vertex is guided,
+    /// 0 where its lobe is too narrow for the guide
+    /// (`LaneMaterial::narrower_than`) and it samples as without one.
+    pub const GUIDED: usize = 75;
     /// How many rows there are.
-    pub const COUNT: usize = 75;
+    pub const COUNT: usize = 76;
 }
 
 /// The most light candidates a lane vertex resamples from (more run the
@@ -1407,7 +1411,7 @@ impl PathIntegrator {
         // The BSDF's numbers: diffuse and rough conductors sample with the 2D
         // one alone, smooth dielectrics with the 1D one alone, smooth
         // conductors with neither; a guided vertex reads both.
-        let guided = lit && guide.is_some();
+        let guided = lit && guide.is_some() && !material.narrower_than(self.guide_min_roughness());
         let (reads_u1, reads_u) = match material {
             LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse | LaneMaterial::RoughConductor { .. } => {
                 (false, true)
@@ -1420,16 +1424,20 @@ impl PathIntegrator {
         let u = if reads_u || guided { rng.next_2d() } else { skipped_2d(rng) };
         b.set(l, row::U_BSDF, u.x);
         b.set(l, row::U_BSDF + 1, u.y);
-        match guide.filter(|_| lit) {
-            None => b.set(l, row::U_BSDF1, u1),
-            Some(_) => {
-                // `sample_guided`: the BSDF's direction with probability α
-                // (its number rescaled), else the guide's (drawn in lanes,
-                // where the hit's point and frame are).
-                let alpha = self.guide_bsdf_fraction();
-                let pick = u1 >= alpha;
-                b.set(l, row::U_BSDF1, if pick { u1 } else { u1 / alpha });
-                b.set(l, row::GUIDE_PICK, if pick { 1.0 } else { 0.0 });
+        if guided {
+            // `sample_guided`: the BSDF's direction with probability α
+            // (its number rescaled), else the guide's (drawn in lanes,
+            // where the hit's point and frame are).
+            let alpha = self.guide_bsdf_fraction();
+            let pick = u1 >= alpha;
+            b.set(l, row::U_BSDF1, if pick { u1 } else { u1 / alpha });
+            b.set(l, row::GUIDE_PICK, if pick { 1.0 } else { 0.0 });
+            b.set(l, row::GUIDED, 1.0);
+        } else {
+            b.set(l, row::U_BSDF1, u1);
+            if lit && guide.is_some() {
+                b.set(l, row::GUIDE_PICK, 0.0);
+                b.set(l, row::GUIDED, 0.0);
             }
         }
         if emitter {
@@ -1705,10 +1713,19 @@ impl PathIntegrator {
         // With a guide, the density of the direction is the mix of the
         // BSDF's and the guide's (`vertex_guided`); the guide's is looked up
         // per lane, where the sample contributes.
+        // Lanes whose lobe is too narrow for the guide sample as without one.
         let alpha = self.guide_bsdf_fraction();
         let guide_pdf = |d: V3<F>, need: F::Mask| density().pdf(d, need);
+        let guided_lanes = match guide {
+            Some(_) => v.mask::<F>(row::GUIDED),
+            None => F::Mask::splat(false),
+        };
         let bsdf_pdf = match guide {
-            Some(_) => F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(wi, contributes),
+            Some(_) => F::select(
+                guided_lanes,
+                F::splat(alpha) * bsdf_pdf + F::splat(1.0 - alpha) * guide_pdf(wi, contributes & guided_lanes),
+                bsdf_pdf,
+            ),
             None => bsdf_pdf,
         };
         let w = if self.mis { power_heuristic(light_pdf, bsdf_pdf) } else { one };
@@ -1775,19 +1792,20 @@ impl PathIntegrator {
                 let specular = !pick & delta;
                 let wi = V3::select(pick, h.to_local(drawn), wi_next);
                 let (f, pdf_bsdf) = eval_pdf(wi);
-                let need = !pick & !delta & go;
+                let need = !pick & !delta & go & guided_lanes;
                 let pdf_guide = F::select(pick, drawn_pdf, guide_pdf(h.to_world(wi_next), need));
                 let pdf = F::splat(alpha) * pdf_bsdf + F::splat(1.0 - alpha) * pdf_guide;
                 let f = f * wi.z.abs();
                 let ok = !(pdf.cmp_ne(pdf) | pdf.cmp_le(zero)) & f.ne_zero();
+                let gl = guided_lanes;
                 (
-                    V3::select(specular, wi_next, wi),
-                    F::select(specular, bsdf_pdf * F::splat(alpha), pdf),
-                    V3::select(specular, weight / F::splat(alpha), f / pdf),
-                    (pick & ok) | (!pick & go & (delta | ok)),
-                    specular,
-                    F::select(pick, one, eta_next),
-                    F::select(specular, zero, pdf_guide),
+                    V3::select(gl & !specular, wi, wi_next),
+                    F::select(gl, F::select(specular, bsdf_pdf * F::splat(alpha), pdf), bsdf_pdf),
+                    V3::select(gl, V3::select(specular, weight / F::splat(alpha), f / pdf), weight),
+                    (gl & ((pick & ok) | (!pick & go & (delta | ok)))) | (!gl & go),
+                    (gl & specular) | (!gl & delta),
+                    F::select(gl & pick, one, eta_next),
+                    F::select(gl & !specular, pdf_guide, zero),
                 )
             }
         };

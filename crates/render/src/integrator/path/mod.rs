@@ -13,6 +13,7 @@
 //! | guiding       | boolean | false: path guiding ([`crate::guiding`]), learnt in the first passes |
 //! | guiding_budget | float  | 0.25: the share of the samples (under `--time`, of the time) whose passes train the guide (their samples are kept) |
 //! | guiding_bsdf_fraction | float | 0.5: at a guided vertex, the probability of drawing from the BSDF rather than the guide |
+//! | guiding_min_roughness | float | 0.3: a vertex whose only non-delta lobe is a microfacet lobe of roughness α below this (the lesser of α_u, α_v) is not guided: a guide's quadtree cannot follow so narrow a lobe, and its draws there only add variance |
 //! | guiding_roulette | boolean | true: after the guide's training, Russian roulette by the share of its pixel a path is expected to bring ([`crate::guiding::roulette`]) where the guide knows the radiance ahead; false: by throughput, as without guiding |
 //! | guiding_spatial_threshold | float | 12000: c, a spatial leaf of the guide splits once a training pass of 2^k spp gives it more than c·√(2^k) records (Müller et al.'s c); lower: finer space, fewer records per leaf |
 //! | light_candidates | integer | light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below), 1 to 64; by default 4 in scenes of at least 8 lights, else 1 |
@@ -99,11 +100,20 @@ pub struct Guiding {
     /// c: a spatial leaf splits once a pass gives it more than c·√(2^pass)
     /// records ([`crate::guiding::Guide::update`]).
     pub spatial_threshold: f32,
+    /// Vertices whose lobe is narrower than this roughness are not guided
+    /// ([`crate::bsdf::Bsdf::narrower_than`]).
+    pub min_roughness: f32,
 }
 
 impl Default for Guiding {
     fn default() -> Self {
-        Guiding { budget: 0.25, bsdf_fraction: 0.5, roulette: true, spatial_threshold: SPATIAL_THRESHOLD as f32 }
+        Guiding {
+            budget: 0.25,
+            bsdf_fraction: 0.5,
+            roulette: true,
+            spatial_threshold: SPATIAL_THRESHOLD as f32,
+            min_roughness: 0.3,
+        }
     }
 }
 
@@ -424,7 +434,8 @@ impl PathIntegrator {
         let wo = si.to_local(si.wo);
         // The guide's density here, where a lobe is not delta.
         let alpha = self.guide_bsdf_fraction();
-        let guide = guide.filter(|g| g.trained() && bsdf.has_smooth()).map(|g| GuideDensity {
+        let guided = bsdf.has_smooth() && !bsdf.narrower_than(self.guide_min_roughness());
+        let guide = guide.filter(|g| g.trained() && guided).map(|g| GuideDensity {
             tree: g.at(si.p),
             fold: bsdf.reflects_only().then(|| si.to_world(Vec3::new(0.0, 0.0, if wo.z < 0.0 { -1.0 } else { 1.0 }))),
         });
@@ -576,11 +587,12 @@ impl PathIntegrator {
     pub fn summary(&self, lights: usize, selection: LightSelection) -> String {
         let guiding = match self.guiding {
             Some(g) => format!(
-                "guiding=true (budget {}, bsdf_fraction {}, roulette {}, spatial_threshold {})",
+                "guiding=true (budget {}, bsdf_fraction {}, roulette {}, spatial_threshold {}, min_roughness {})",
                 g.budget,
                 g.bsdf_fraction,
                 if g.roulette { "by expected contribution" } else { "by throughput" },
-                g.spatial_threshold
+                g.spatial_threshold,
+                g.min_roughness
             ),
             None => "guiding=false".into(),
         };
@@ -600,6 +612,12 @@ impl PathIntegrator {
     #[inline]
     fn guide_bsdf_fraction(&self) -> f32 {
         self.guiding.map_or(1.0, |g| g.bsdf_fraction)
+    }
+
+    /// The roughness below which a lobe is not guided (0 without guiding).
+    #[inline]
+    fn guide_min_roughness(&self) -> f32 {
+        self.guiding.map_or(0.0, |g| g.min_roughness)
     }
 
     /// The value of pixel `global` that roulette by expected contribution
