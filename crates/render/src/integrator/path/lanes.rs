@@ -45,8 +45,9 @@
 //! plastic's (`Plastic`, its lobe chosen per lane); the next ray
 //! (`Scene::spawn_ray`). With a trained path guide, the vertex is
 //! `vertex_guided`'s: the direction the guide or the BSDF draws
-//! (`sample_guided`), the mixed density in every MIS weight; the guide's
-//! quadtree is walked per lane.
+//! (`sample_guided`), the mixed density in every MIS weight, looked up in
+//! lanes ([`crate::guiding::GuideLanes`]); a lane whose lobe is narrower
+//! than `guiding_min_roughness` samples as without a guide.
 
 use super::{PathIntegrator, PathState, Sampled};
 use crate::accel::Hit;
