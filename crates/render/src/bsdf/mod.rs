@@ -299,8 +299,8 @@ impl Bsdf<'_> {
     #[inline]
     pub fn narrower_than(&self, roughness: f32) -> bool {
         match &self.kind {
-            BsdfKind::RoughConductor(b) => b.distr.alpha_u.min(b.distr.alpha_v) < roughness,
-            BsdfKind::RoughDielectric(b) => b.distr.alpha_u.min(b.distr.alpha_v) < roughness,
+            BsdfKind::RoughConductor(RoughConductor { distr, .. })
+            | BsdfKind::RoughDielectric(RoughDielectric { distr, .. }) => distr.alpha_u.min(distr.alpha_v) < roughness,
             _ => false,
         }
     }

@@ -361,21 +361,9 @@ impl Guide {
     /// [`SPATIAL_THRESHOLD`] in the paper), and each leaf's quadtree refined
     /// where its radiance is large.
     pub fn update(&mut self, records: &[GuideRecord], threshold: f64) {
-        // Records grouped by leaf, keeping their order (a counting sort).
+        // Records grouped by leaf, keeping their order.
         let leaf_of: Vec<u32> = records.par_iter().map(|r| self.leaf_index(r.p) as u32).collect();
-        let mut start = vec![0usize; self.leaves.len() + 1];
-        for &l in &leaf_of {
-            start[l as usize + 1] += 1;
-        }
-        for i in 0..self.leaves.len() {
-            start[i + 1] += start[i];
-        }
-        let mut order = vec![0u32; records.len()];
-        let mut fill = start.clone();
-        for (i, &l) in leaf_of.iter().enumerate() {
-            order[fill[l as usize]] = i as u32;
-            fill[l as usize] += 1;
-        }
+        let (start, order) = crate::math::counting_order(leaf_of.iter().map(|&l| l as usize), self.leaves.len());
         self.leaves.par_iter_mut().enumerate().for_each(|(l, leaf)| {
             for &i in &order[start[l]..start[l + 1]] {
                 let r = &records[i as usize];

@@ -24,6 +24,33 @@ pub const RAY_EPSILON: f32 = f32::EPSILON * 0.5 * 1500.0;
 /// Shadow rays stop this fraction short of the light (Mitsuba's `math::ShadowEpsilon`).
 pub const SHADOW_EPSILON: f32 = RAY_EPSILON * 10.0;
 
+/// A stable counting sort of `keys` (each below `buckets`): where each
+/// key's group starts (`buckets + 1` offsets, the last the count) and the
+/// indices of `keys` grouped by key in key order, each group in index
+/// order. Linear, and moves indices rather than what they index.
+///
+/// ```
+/// let (start, order) = penumbra_render::math::counting_order([2, 0, 2, 1].into_iter(), 3);
+/// assert_eq!(start, [0, 1, 2, 4]);
+/// assert_eq!(order, [1, 3, 0, 2]);
+/// ```
+pub fn counting_order(keys: impl Iterator<Item = usize> + Clone, buckets: usize) -> (Vec<usize>, Vec<u32>) {
+    let mut start = vec![0usize; buckets + 1];
+    for k in keys.clone() {
+        start[k + 1] += 1;
+    }
+    for i in 0..buckets {
+        start[i + 1] += start[i];
+    }
+    let mut order = vec![0u32; start[buckets]];
+    let mut fill = start.clone();
+    for (i, k) in keys.enumerate() {
+        order[fill[k]] = i as u32;
+        fill[k] += 1;
+    }
+    (start, order)
+}
+
 /// x².
 #[inline]
 pub fn sqr(x: f32) -> f32 {

@@ -408,26 +408,19 @@ fn run<F: Float>(
     // Records in the one-path loop's order: by sample (pixel, then sample
     // index), each path's in vertex order (rounds are in order, and the
     // counting sort by sample keeps it; a comparison sort moving the
-    // entries took 3 % of a guided render).
-    let mut start = vec![0u32; if drawn.is_empty() { 0 } else { results.len() + 1 }];
-    for d in &drawn {
-        start[d.0 + 1] += 1;
-    }
-    for k in 1..start.len() {
-        start[k] += start[k - 1];
-    }
-    let mut order = vec![0u32; drawn.len()];
-    for (i, d) in drawn.iter().enumerate() {
-        order[start[d.0] as usize] = i as u32;
-        start[d.0] += 1;
-    }
-    let records = order
-        .iter()
-        .filter_map(|&i| {
-            let (k, s, beta, before) = drawn[i as usize];
-            PathIntegrator::record(results[k].1, s, beta, before)
-        })
-        .collect();
+    // entries took 3 % of a guided render). Only training passes draw any.
+    let records = if drawn.is_empty() {
+        Vec::new()
+    } else {
+        let (_, order) = crate::math::counting_order(drawn.iter().map(|d| d.0), results.len());
+        order
+            .iter()
+            .filter_map(|&i| {
+                let (k, s, beta, before) = drawn[i as usize];
+                PathIntegrator::record(results[k].1, s, beta, before)
+            })
+            .collect()
+    };
     // Splat in canonical order, a pixel's samples at a time where no AOVs need the rays.
     if aovs {
         for (k, (&(u, l), ray)) in results.iter().zip(&camera_rays).enumerate() {
