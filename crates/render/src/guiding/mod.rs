@@ -496,7 +496,8 @@ impl Guide {
         (self.leaves.len(), self.leaves.iter().map(|l| l.sampling.node_count()).sum())
     }
 
-    /// Bytes the guide holds (both trees of every leaf, the sampling tree's table).
+    /// Bytes the guide holds (both trees of every leaf, the sampling tree's
+    /// table, and the lane lookups' copies of the tables and the spatial tree).
     pub fn memory(&self) -> usize {
         let per_node = 16 + 16 + 16 + 32;
         self.nodes.len() * std::mem::size_of::<SNode>()
@@ -509,6 +510,7 @@ impl Guide {
                         + l.sampling.table_bytes()
                 })
                 .sum::<usize>()
+            + (self.tops.len() + self.snodes.len()) * std::mem::size_of::<f32>()
     }
 }
 
