@@ -532,7 +532,7 @@ impl SceneBuilder {
             return Err(LoadError::at(&self.at, "the scene has no film size"));
         };
         let sampler = self.sampler.take().unwrap_or_else(|| Sampler::new(SamplerKind::Independent, 0, 4));
-        let (integrator, selection, integrator_at) = self
+        let (mut integrator, selection, integrator_at) = self
             .integrator
             .take()
             .unwrap_or_else(|| (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform, self.at.clone()));
@@ -562,6 +562,11 @@ impl SceneBuilder {
             Scene::with_accel(accel, self.shapes, self.infos, self.instances, self.placed, self.materials, lights);
         if let Integrator::PTracer(pt) = &integrator {
             check_ptracer(pt, &camera, sampler.spp, &integrator_at)?;
+        }
+        // Light paths reach perspective and thin-lens cameras only; with
+        // others the camera paths keep the caustics.
+        if let Integrator::Path(p) = &mut integrator {
+            p.caustics &= matches!(camera.projection, Projection::Pinhole | Projection::ThinLens { .. });
         }
         scene.set_light_selection(selection);
         if !self.media.is_empty() {

@@ -511,6 +511,20 @@ impl Film {
     /// (the weight sum counts samples per pixel instead). Pixels outside
     /// the film are dropped; `px`, `py` may lie outside it.
     pub fn splat_normalized(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
+        self.splat_to_sums(px, py, u, l, filter, true);
+    }
+
+    /// Splats `l` as a camera sample at pixel (`px`, `py`) + `u` would be
+    /// ([`Self::splat`]), but into Σ w·L only: radiance that a camera
+    /// sample's weight already counts (the caustics' light paths,
+    /// `integrator::path::caustics`). Pixels outside the film are dropped;
+    /// `px`, `py` may lie outside it.
+    pub fn splat_radiance(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter) {
+        self.splat_to_sums(px, py, u, l, filter, false);
+    }
+
+    /// [`Self::splat_normalized`] (`normalized`) or [`Self::splat_radiance`].
+    fn splat_to_sums(&mut self, px: i32, py: i32, u: Vec2, l: Spectrum, filter: &Filter, normalized: bool) {
         let m = filter.margin().min(MAX_MARGIN) as i32;
         let taps = (2 * m + 1) as usize;
         let (mut wx, mut wy) = ([0.0f32; 2 * MAX_MARGIN as usize + 1], [0.0f32; 2 * MAX_MARGIN as usize + 1]);
@@ -519,7 +533,7 @@ impl Film {
             wx[k] = filter.weight(u.x + d - 0.5);
             wy[k] = filter.weight(u.y + d - 0.5);
         }
-        let norm = wx[..taps].iter().sum::<f32>() * wy[..taps].iter().sum::<f32>();
+        let norm = if normalized { wx[..taps].iter().sum::<f32>() * wy[..taps].iter().sum::<f32>() } else { 1.0 };
         if norm == 0.0 || !norm.is_finite() {
             return;
         }

@@ -300,7 +300,7 @@ impl ParticleTracer {
 /// A ray leaving `light` and its weight (emitted power over the density of
 /// the ray, light selection excluded); None for a zero-weight ray.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
-fn emit(scene: &Scene, light: &Light, u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, Spectrum)> {
+pub(crate) fn emit(scene: &Scene, light: &Light, u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, Spectrum)> {
     match light {
         Light::Area(a) => {
             let shape = &scene.shapes[a.shape as usize];

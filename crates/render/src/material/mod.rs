@@ -569,6 +569,30 @@ impl Material {
         }
     }
 
+    /// Whether its BSDF may have a delta lobe (a smooth interface or
+    /// mirror, a specular coat, a mask's pass-through): false only for
+    /// the materials whose lobes are all non-delta. Light paths for the
+    /// caustics aim at the shapes for which this holds.
+    pub fn may_be_delta(&self) -> bool {
+        match self {
+            Material::Diffuse(_)
+            | Material::DiffuseTransmission(_)
+            | Material::RoughConductor(_)
+            | Material::RoughDielectric(_)
+            | Material::RoughPlastic(_)
+            | Material::PPlastic(_)
+            | Material::Hair(_)
+            | Material::Measured(_)
+            | Material::Principled(_)
+            | Material::PrincipledThin(_)
+            | Material::GltfPbr(_) => false,
+            Material::TwoSided(front, back) => front.may_be_delta() || back.may_be_delta(),
+            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.may_be_delta(),
+            Material::Blend { first, second, .. } => first.may_be_delta() || second.may_be_delta(),
+            _ => true,
+        }
+    }
+
     /// Whether a hit on this material can scatter light at all (false for
     /// `null`, which rays pass through).
     pub fn is_null(&self) -> bool {

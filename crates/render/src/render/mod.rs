@@ -276,6 +276,11 @@ impl RenderJob {
             })
             .collect();
         let results = results?;
+        // The caustics' light paths, added after the tiles.
+        let caustics = match &self.integrator {
+            Integrator::Path(p) if p.caustics => Some(self.render_caustics(p, film, samples.clone(), active, cancel)?),
+            _ => None,
+        };
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
@@ -300,6 +305,10 @@ impl RenderJob {
                 }
             }
             stats.add(&r.stats);
+        }
+        if let Some((pass, st)) = caustics {
+            film.merge(&pass);
+            stats.add(&st);
         }
         Some((stats, records))
     }

@@ -14,7 +14,10 @@
 use super::{RenderJob, RenderStats};
 use crate::film::Film;
 use crate::integrator::ptracer::{CameraConnection, ParticleTracer, Splat};
+use crate::integrator::path::CausticTargets;
+use crate::integrator::PathIntegrator;
 use crate::material::Scratch;
+use glam::Vec2;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -83,5 +86,91 @@ impl RenderJob {
         }
         film.merge(&pass);
         Some(stats)
+    }
+}
+
+/// High bit set in the x key of the caustics' light-path streams (see
+/// `integrator::path::caustics`): pixels no image has, so the camera
+/// paths' random numbers are not the light paths'.
+const CAUSTIC_STREAM: u32 = 1 << 30;
+
+impl RenderJob {
+    /// The caustics' light paths (`path`'s `caustics`) of sample indices
+    /// `samples` of every full-film pixel, added to a film like `film`
+    /// (layers included, all zero but Σ w·L) in row order; None when
+    /// cancelled. Each splat enters Σ w·L with the filter's weights as a
+    /// camera sample taken where it lands would, but not Σ w, and only where
+    /// this pass takes camera samples (`active` and the crop's ring): the
+    /// film's weighted mean then estimates the caustics as it does the
+    /// camera paths' radiance (see `integrator::path::caustics`).
+    pub(super) fn render_caustics(
+        &self,
+        path: &PathIntegrator,
+        film: &Film,
+        samples: Range<u32>,
+        active: Option<&[bool]>,
+        cancel: &AtomicBool,
+    ) -> Option<(Film, RenderStats)> {
+        let cam = CameraConnection::new(&self.camera, self.full_size)
+            .expect("caustics need a perspective or thin-lens camera (checked when the scene is loaded)");
+        let (fw, fh) = self.full_size;
+        let mut pass = Film::with_layers(film.width, film.height, &film.layers());
+        let mut stats = RenderStats::default();
+        let targets = CausticTargets::new(&self.scene);
+        if targets.is_empty() {
+            return Some((pass, stats));
+        }
+        let (left, top, right, bottom) = self.sample_ring();
+        let (ox, oy) = (self.crop_offset.0 as f32, self.crop_offset.1 as f32);
+        // Whether this pass takes camera samples in film pixel (x, y), as `tile_pixels` decides.
+        let sampled = |x: i32, y: i32| {
+            let inside = x >= -(left as i32)
+                && y >= -(top as i32)
+                && x < (self.width + right) as i32
+                && y < (self.height + bottom) as i32;
+            inside
+                && active.is_none_or(|a| {
+                    let (cx, cy) = (x.clamp(0, self.width as i32 - 1), y.clamp(0, self.height as i32 - 1));
+                    a[(cy as u32 * self.width + cx as u32) as usize]
+                })
+        };
+        for first in (0..fh).step_by(ROWS_PER_BATCH as usize) {
+            let rows: Option<Vec<(Vec<Splat>, RenderStats)>> = (first..(first + ROWS_PER_BATCH).min(fh))
+                .into_par_iter()
+                .map(|gy| {
+                    if cancel.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                    let (mut out, mut st, mut scratch) = (Vec::new(), RenderStats::default(), Scratch::new());
+                    for gx in 0..fw {
+                        for s in samples.clone() {
+                            let mut rng = self.sampler.stream((gx | CAUSTIC_STREAM, gy), s);
+                            path.trace_caustic(&self.scene, &cam, &targets, &mut rng, &mut st.rays, &mut scratch, &mut out);
+                        }
+                    }
+                    Some((out, st))
+                })
+                .collect();
+            for (splats, st) in rows? {
+                for sp in splats {
+                    if !sp.value.is_finite() || !sp.pos.is_finite() {
+                        stats.non_finite += 1;
+                        continue;
+                    }
+                    let (x, y) = (sp.pos.x - ox, sp.pos.y - oy);
+                    let (px, py) = (x.floor(), y.floor());
+                    if !sampled(px as i32, py as i32) {
+                        continue;
+                    }
+                    let u = Vec2::new(x - px, y - py);
+                    pass.splat_radiance(px as i32, py as i32, u, sp.value, &self.filter);
+                }
+                stats.add(&st);
+            }
+        }
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
+        Some((pass, stats))
     }
 }

@@ -6,7 +6,7 @@ use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
     AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, Guiding, HemisphereSampling,
-    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator, MAX_LIGHT_CANDIDATES,
+    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator, MAX_LIGHT_CANDIDATES, DEFAULT_CAUSTIC_PATHS,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -173,9 +173,23 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
             mis: node.bool("mis", true)?,
             guiding: guiding(node)?,
             light_candidates: light_candidates(node)?,
+            caustics: node.bool("caustics", PathIntegrator::default().caustics)?,
+            caustic_paths: caustic_paths(node)?,
         }),
         light_selection(node)?,
     ))
+}
+
+/// `caustic_paths`: light paths per camera sample, in (0, 1].
+fn caustic_paths(node: &Node) -> Result<f32> {
+    let f = node.float("caustic_paths", DEFAULT_CAUSTIC_PATHS as f64)?;
+    if !(f > 0.0 && f <= 1.0) {
+        return Err(LoadError::at(
+            node.loc_of("caustic_paths"),
+            "caustic_paths must be in (0, 1]: the share of camera samples that also trace a light path for the caustics",
+        ));
+    }
+    Ok(f as f32)
 }
 
 /// `light_candidates`: 1 to [`MAX_LIGHT_CANDIDATES`], or 0 (automatic)

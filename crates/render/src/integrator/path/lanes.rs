@@ -1853,6 +1853,7 @@ impl PathIntegrator {
         st.prev_bsdf_pdf = out.at(PDF, l);
         st.prev_delta = out.delta >> l & 1 != 0;
         st.ray = Ray::new(out.at3(O, l), out.at3(WI, l), f32::INFINITY);
+        st.bounced(st.prev_delta);
         st.depth += 1;
         let guide_pdf = out.at(GUIDE_PDF, l);
         if guide_pdf > 0.0 {

@@ -37,8 +37,10 @@
 //! lights on meshes or spheres run in lanes (up to
 //! [`MAX_LANE_CANDIDATES`] candidates); the others run the scalar code.
 
+mod caustics;
 mod lanes;
 
+pub use caustics::CausticTargets;
 pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes, MAX_LANE_CANDIDATES};
 
 use super::{RayStats, Termination};
@@ -74,6 +76,14 @@ pub struct PathIntegrator {
     /// (see the module notes); 1: the light sample as drawn; 0: chosen by
     /// the scene's light count ([`Self::light_candidates_for`]).
     pub light_candidates: u32,
+    /// Caustics seen directly (light, then delta bounces, then one
+    /// non-delta vertex seen by the camera) carried by light paths
+    /// connected to the camera instead of by camera paths ([`caustics`]).
+    pub caustics: bool,
+    /// Light paths per camera sample for the caustics, in (0, 1]: each
+    /// pixel sample traces its light path with this probability, weighted
+    /// by its inverse.
+    pub caustic_paths: f32,
 }
 
 /// The most `light_candidates` a scene may ask for.
@@ -87,6 +97,9 @@ pub const MANY_LIGHTS: usize = 8;
 /// with 2, 7.0e-4 with 4, 7.4e-4 with 6, 7.9e-4 with 8. With one light,
 /// candidates cost more than they gain (the Cornell box: 2.2e-3 → 5.5e-3).
 pub const DEFAULT_LIGHT_CANDIDATES: u32 = 4;
+
+/// Light paths per camera sample for the caustics by default.
+pub const DEFAULT_CAUSTIC_PATHS: f32 = 0.125;
 
 /// The `path` integrator's guiding parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,6 +140,8 @@ impl Default for PathIntegrator {
             mis: true,
             guiding: None,
             light_candidates: 0,
+            caustics: false,
+            caustic_paths: DEFAULT_CAUSTIC_PATHS,
         }
     }
 }
@@ -171,6 +186,10 @@ pub struct PathState {
     /// The guide's mean record at the last guided vertex (Φ, see
     /// [`crate::guiding::dtree::DTree::radiance`]).
     flux: f32,
+    /// Whether the first surface vertex drew a non-delta direction and
+    /// every bounce since was delta: emission found now is a caustic's,
+    /// which light paths carry when `caustics` is on ([`caustics`]).
+    caustic: bool,
 }
 
 impl PathState {
@@ -191,6 +210,7 @@ impl PathState {
             pending: Spectrum::ZERO,
             target: 0.0,
             flux: 0.0,
+            caustic: false,
         }
     }
 
@@ -243,6 +263,13 @@ impl PathState {
         if !occluded {
             self.l += self.pending;
         }
+    }
+
+    /// After a bounce drawn from a `delta` lobe or not (before `depth`
+    /// counts it): whether the path is now a caustic's (see `caustic`).
+    #[inline(always)]
+    fn bounced(&mut self, delta: bool) {
+        self.caustic = if self.depth == 0 { !delta } else { self.caustic && delta };
     }
 }
 
@@ -484,6 +511,7 @@ impl PathIntegrator {
         st.prev_bsdf_pdf = bs.pdf;
         st.prev_delta = bs.delta;
         st.ray = scene.spawn_ray(&si, wi);
+        st.bounced(bs.delta);
         st.depth += 1;
         Vertex { shadow, go_on: self.roulette(st, rng, guide_pdf), sampled }
     }
@@ -657,7 +685,16 @@ impl PathIntegrator {
     /// environment is not hidden from camera rays.
     #[inline]
     pub fn delta_miss_seen(&self, st: &PathState) -> bool {
-        st.prev_delta && !(st.depth == 0 && self.hide_emitters)
+        st.prev_delta && !(st.depth == 0 && self.hide_emitters) && !self.carried_by_light_paths(st)
+    }
+
+    /// Whether emission found now by a path whose last bounce was delta
+    /// belongs to the light paths ([`caustics`]): with `caustics` on, the
+    /// path's first surface vertex drew a non-delta direction and every
+    /// bounce since was delta.
+    #[inline(always)]
+    fn carried_by_light_paths(&self, st: &PathState) -> bool {
+        self.caustics && st.caustic
     }
 
     /// Whether the vertex at `hit` adds nothing and ends the path, so that a
@@ -698,6 +735,9 @@ impl PathIntegrator {
         let le = scene.emitted(si);
         if le != Spectrum::ZERO {
             let w = if st.prev_delta {
+                if self.carried_by_light_paths(st) {
+                    return;
+                }
                 1.0
             } else {
                 self.bsdf_weight(st.prev_bsdf_pdf, scene.light_pdf(st.prev_p, st.prev_n, si))

@@ -1,0 +1,326 @@
+//! Caustics seen directly, carried by light paths (`path`'s `caustics`).
+//!
+//! A camera path finds a caustic (the light's image through glass or in a
+//! mirror, cast on a diffuse surface the camera sees) only when its BSDF
+//! sample at that surface happens to go through the specular chain to the
+//! light: with a small light, rarely, and then with a large weight, so the
+//! caustic is fireflies. A path traced from the light finds it every time
+//! its first bounces hit the specular object, and is then connected to the
+//! camera (light tracing, Veach 1997 sec. 10.2; the `t = 1` strategy of
+//! bidirectional path tracing).
+//!
+//! The two estimators split path space rather than weighing each other:
+//! a path x₀ (camera) x₁ … x_k (on an emitter) is **the light paths'** when
+//! k ≥ 3, x₁'s direction was drawn from a non-delta lobe and x₂ … x_{k-1}'s
+//! from delta lobes; every other path is the camera paths'. The camera path
+//! drops emission it finds with that history ([`PathState::bounced`]
+//! keeps it); the light path connects to the camera only at vertices
+//! reached through at least one delta bounce and nothing else, through the
+//! BSDF's non-delta part (a delta lobe evaluates to 0 towards the camera),
+//! and stops at its first non-delta bounce. Each part is unbiased, and
+//! together they count every path once: the image's expectation is the
+//! camera paths' alone. Delta emitters are left out (a camera path can
+//! never reach them, so neither may the light paths).
+//!
+//! One light path per full-film pixel and sample, its random numbers from a
+//! stream of its own ([`RenderJob`]'s `CAUSTIC_STREAM` pixels), as the
+//! particle tracer's; its splats land where the connection does and go into
+//! the film's Σ w·L with the filter's weights, like a camera sample there,
+//! without adding to Σ w (see `render::particles`).
+//!
+//! [`PathState::bounced`]: super::PathState
+//! [`RenderJob`]: crate::render::RenderJob
+
+use super::PathIntegrator;
+use crate::accel::Primitive;
+use crate::geometry::ray::offset_origin;
+use crate::geometry::Ray;
+use crate::integrator::ptracer::{CameraConnection, Splat};
+use crate::integrator::RayStats;
+use crate::light::Light;
+use crate::material::Scratch;
+use crate::math::{Frame, Spectrum, PI};
+use crate::sampling::{warp, SampleStream};
+use crate::scene::Scene;
+use glam::{Vec2, Vec3};
+
+/// The most targets light paths aim at; a scene with more aims at none
+/// (every direction is drawn as the particle tracer draws it).
+const MAX_TARGETS: usize = 64;
+
+/// Where light paths for the caustics go: the bounding spheres of the
+/// placed shapes (and instances) whose material may have a delta lobe
+/// ([`Material::may_be_delta`]). A light path whose first segment misses
+/// all of them hits no such surface first and connects to nothing, so the
+/// paths are drawn towards them only, with the density of that draw (an
+/// estimator restricted to where its integrand may be non-zero stays
+/// unbiased).
+///
+/// [`Material::may_be_delta`]: crate::material::Material::may_be_delta
+#[derive(Debug, Clone)]
+pub struct CausticTargets {
+    /// Centre and radius of each sphere; `None`: too many, aim at nothing.
+    spheres: Option<Vec<(Vec3, f32)>>,
+}
+
+impl CausticTargets {
+    /// The targets of `scene`'s shapes.
+    pub fn new(scene: &Scene) -> CausticTargets {
+        let delta = |shape: u32| scene.materials[scene.shape_info[shape as usize].material as usize].may_be_delta();
+        let mut spheres = Vec::new();
+        for p in &scene.placed {
+            let bounds = match *p {
+                Primitive::Shape(id) | Primitive::Part(id, _) => {
+                    if !delta(id) {
+                        continue;
+                    }
+                    let shape = &scene.shapes[id as usize];
+                    let mut b = crate::geometry::Aabb::EMPTY;
+                    for i in 0..shape.prim_count() {
+                        b = b.union(shape.prim_bounds(i));
+                    }
+                    b
+                }
+                Primitive::Instance(i) => {
+                    let inst = &scene.instances[i as usize];
+                    if !inst.group.members.iter().any(|&m| delta(m)) {
+                        continue;
+                    }
+                    inst.bounds()
+                }
+            };
+            if spheres.len() == MAX_TARGETS {
+                return CausticTargets { spheres: None };
+            }
+            let r = bounds.bounding_radius() * (1.0 + 1e-4) + 1e-6;
+            spheres.push((bounds.center(), r));
+        }
+        spheres.dedup();
+        CausticTargets { spheres: Some(spheres) }
+    }
+
+    /// Whether no light path can find a caustic (no surface may be delta).
+    pub fn is_empty(&self) -> bool {
+        self.spheres.as_ref().is_some_and(|s| s.is_empty())
+    }
+}
+
+impl PathIntegrator {
+    /// Traces one light path for the caustics (see the module notes),
+    /// appending its connections to the camera to `out`.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+    pub fn trace_caustic(
+        &self,
+        scene: &Scene,
+        cam: &CameraConnection,
+        targets: &CausticTargets,
+        rng: &mut SampleStream,
+        stats: &mut RayStats,
+        scratch: &mut Scratch,
+        out: &mut Vec<Splat>,
+    ) {
+        let n_lights = scene.lights.len();
+        // A caustic seen directly has at least 3 segments.
+        if n_lights == 0 || self.term.max_depth < 3 {
+            return;
+        }
+        // Traced with probability `caustic_paths`, weighted by its inverse.
+        if rng.next_1d() >= self.caustic_paths {
+            return;
+        }
+        let (u_sel, u_pos, u_dir) = (rng.next_1d(), rng.next_2d(), rng.next_2d());
+        let light = &scene.lights[((u_sel * n_lights as f32) as usize).min(n_lights - 1)];
+        if light.is_delta() {
+            return;
+        }
+        let Some((ray, mut beta)) = (match &targets.spheres {
+            Some(spheres) => emit_towards(scene, light, spheres, u_pos, u_dir),
+            None => crate::integrator::ptracer::emit(scene, light, u_pos, u_dir),
+        }) else {
+            return;
+        };
+        beta *= n_lights as f32 / self.caustic_paths;
+        let mut eta = 1.0f32;
+        // Segments so far; vertices since the light all delta.
+        let mut depth = 1u32;
+        stats.rays += 1;
+        let mut hit = scene.intersect(&ray);
+        while let Some(mut si) = hit {
+            scratch.reset();
+            let bsdf = scene.bsdf(&mut si, scratch);
+            let wi = si.to_local(si.wo);
+            let wi_geo = si.n.dot(si.wo);
+            // A vertex after delta bounces only: connect it to the camera
+            // (one more segment).
+            if depth >= 2 && depth < self.term.max_depth && bsdf.has_smooth() {
+                let u_lens = rng.next_2d();
+                if let Some(c) = cam.connect(si.p, u_lens) {
+                    let to_cam = c.at - si.p;
+                    let dist = to_cam.length();
+                    let d = to_cam / dist;
+                    let local = si.to_local(d);
+                    let d_geo = si.n.dot(d);
+                    if wi_geo * wi.z > 0.0 && d_geo * local.z > 0.0 {
+                        stats.shadow_rays += 1;
+                        if !scene.occluded(&si, d, dist) {
+                            // The adjoint shading-normal correction (Veach, p. 155).
+                            let correction = ((wi.z * d_geo) / (local.z * wi_geo)).abs();
+                            let f = bsdf.eval(local, wi) * local.z.abs();
+                            let value = beta * f * (c.weight * correction);
+                            if value != Spectrum::ZERO {
+                                out.push(Splat { pos: c.pos, value });
+                            }
+                        }
+                    }
+                }
+            }
+            // Only delta bounces go on: after a non-delta one, no later
+            // vertex is a caustic's first.
+            if depth + 2 > self.term.max_depth {
+                break;
+            }
+            let (u, u2) = (rng.next_1d(), rng.next_2d());
+            let Some(bs) = bsdf.sample(wi, u, u2) else { break };
+            if !bs.delta {
+                break;
+            }
+            let d = si.to_world(bs.wi);
+            let d_geo = si.n.dot(d);
+            if !(wi_geo * wi.z > 0.0 && d_geo * bs.wi.z > 0.0) {
+                break;
+            }
+            let correction = ((wi.z * d_geo) / (bs.wi.z * wi_geo)).abs();
+            // Importance transport: undo refraction's radiance scale.
+            beta *= bs.weight * (bs.eta * bs.eta * correction);
+            eta *= bs.eta;
+            if !(beta.max_element() > 0.0) || !beta.is_finite() {
+                break;
+            }
+            depth += 1;
+            if depth > self.term.rr_depth {
+                let q = (beta.max_element() * eta * eta).min(0.95);
+                if !(rng.next_1d() < q) {
+                    break;
+                }
+                beta /= q;
+            }
+            stats.rays += 1;
+            hit = scene.intersect(&scene.spawn_ray(&si, d));
+        }
+    }
+}
+
+/// A ray leaving the non-delta emitter `light` towards one of `spheres`
+/// and its weight (emitted radiance over the ray's density, light
+/// selection excluded), as `ptracer::emit` but drawn within the spheres.
+///
+/// From a point of an area light, a sphere is picked with probability
+/// proportional to the solid angle Ω_i it subtends and a direction drawn
+/// uniformly in its cone: the direction's density is (the number of cones
+/// holding it) / ΣΩ. From an emitter at infinity, a direction is drawn as
+/// `ptracer::emit` draws it, then a sphere with probability ∝ r_i² and a
+/// point of its disk across the direction: the ray's density in the
+/// plane across it is (the number of disks it crosses) / (π Σ r_i²).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+fn emit_towards(scene: &Scene, light: &Light, spheres: &[(Vec3, f32)], u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, Spectrum)> {
+    if spheres.is_empty() {
+        return None;
+    }
+    // Picks an index by weight with u, rescaling u to [0, 1) within it.
+    let pick = |weights: &mut dyn Iterator<Item = f32>, total: f32, u: f32| -> (usize, f32) {
+        let mut acc = 0.0;
+        let t = u * total;
+        let mut last = (0, 0.0, 0.0);
+        for (i, w) in weights.enumerate() {
+            if w > 0.0 {
+                last = (i, acc, w);
+                if t < acc + w {
+                    return (i, ((t - acc) / w).clamp(0.0, ONE_BELOW));
+                }
+            }
+            acc += w;
+        }
+        (last.0, ((t - last.1) / last.2).clamp(0.0, ONE_BELOW))
+    };
+    match light {
+        Light::Area(a) => {
+            let shape = &scene.shapes[a.shape as usize];
+            let s = shape.sample_point(u_pos);
+            let (p, n, pdf) = (s.p, s.n, s.pdf);
+            if !(pdf > 0.0) {
+                return None;
+            }
+            // Each sphere's cone from p: (cos θ_max, Ω); the whole sphere of
+            // directions from inside it.
+            let cone = |&(c, r): &(Vec3, f32)| {
+                let d2 = (c - p).length_squared();
+                let cos_max = if d2 <= r * r { -1.0 } else { (1.0 - r * r / d2).max(0.0).sqrt() };
+                (cos_max, 2.0 * PI * (1.0 - cos_max))
+            };
+            let total: f32 = spheres.iter().map(|t| cone(t).1).sum();
+            if !(total > 0.0) {
+                return None;
+            }
+            let (i, ux) = pick(&mut spheres.iter().map(|t| cone(t).1), total, u_dir.x);
+            let (c, _) = spheres[i];
+            let (cos_max, _) = cone(&spheres[i]);
+            let local = warp::sample_uniform_cone(Vec2::new(ux, u_dir.y), cos_max);
+            let d = Frame::from_normal((c - p).normalize()).to_world(local).normalize();
+            let held = spheres
+                .iter()
+                .filter(|t| {
+                    let (cos_max, _) = cone(t);
+                    cos_max <= -1.0 || d.dot((t.0 - p).normalize()) >= cos_max
+                })
+                .count()
+                .max(1);
+            let pdf_dir = held as f32 / total;
+            let mut cos = n.dot(d);
+            let n = if cos < 0.0 && a.two_sided {
+                cos = -cos;
+                -n
+            } else {
+                n
+            };
+            if !(cos > 0.0) {
+                return None;
+            }
+            let le = a.radiance_at(shape, &s);
+            Some((Ray::new(offset_origin(p, n, d), d, f32::INFINITY), le * (cos / (pdf * pdf_dir))))
+        }
+        l if l.is_environment() => {
+            let b = scene.bounds();
+            if b.is_empty() {
+                return None;
+            }
+            let (c, r) = (b.center(), b.bounding_radius().max(1e-4) * (1.0 + 1e-4));
+            let ls = l.sample_li(c, u_dir, &scene.shapes)?;
+            if !(ls.pdf > 0.0) {
+                return None;
+            }
+            let total: f32 = spheres.iter().map(|t| t.1 * t.1).sum();
+            let (i, ux) = pick(&mut spheres.iter().map(|t| t.1 * t.1), total, u_pos.x);
+            let (ci, ri) = spheres[i];
+            let frame = Frame::from_normal(ls.wi);
+            let disk = warp::sample_concentric_disk(Vec2::new(ux, u_pos.y)) * ri;
+            let q = ci + frame.to_world(Vec3::new(disk.x, disk.y, 0.0));
+            // The line through q along wi crosses how many of the disks.
+            let crossed = spheres
+                .iter()
+                .filter(|(cj, rj)| {
+                    let v = q - *cj;
+                    (v - ls.wi * v.dot(ls.wi)).length_squared() <= rj * rj
+                })
+                .count()
+                .max(1);
+            let pdf_area = crossed as f32 / (PI * total);
+            // Start outside the scene's bounding sphere.
+            let o = q + ls.wi * (r + (q - c).length());
+            Some((Ray::new(o, -ls.wi, f32::INFINITY), ls.li / (ls.pdf * pdf_area)))
+        }
+        _ => None,
+    }
+}
+
+/// The largest f32 below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
