@@ -29,7 +29,7 @@ fn describes_plugins_counts_and_approximations() {
         "bsdf       diffuse",
         "emitter    area",
         "integrator: path (max_depth=4)",
-        "path: max_depth=4, rr_depth=5, mis=true, light_selection=uniform, light_candidates=1, guiding=false",
+        "path: max_depth=4, rr_depth=5, mis=true, light_selection=uniform, light_candidates=1, caustics=true (caustic_paths 0.03125), guiding=false",
         "geometry: 4 triangles in 2 meshes",
         "emitters: 1 (1 area)",
         "image: 20x20, 16 samples per pixel",
@@ -43,7 +43,12 @@ fn describes_plugins_counts_and_approximations() {
     // The path integrator's defaults as resolved: 100 lights resample 4 candidates.
     let (ok, out, err) = info(&root().join("tests/scenes/many_lights.xml"), &[]);
     assert!(ok, "{err}");
-    assert!(out.contains("light_selection=uniform, light_candidates=4, guiding=false"), "{out}");
+    assert!(
+        out.contains(
+            "light_selection=uniform, light_candidates=4, caustics=true (caustic_paths 0.03125), guiding=false"
+        ),
+        "{out}"
+    );
     // sggx: sampled exactly, unlike Mitsuba 3.9.1.
     let (ok, out, err) = info(&root().join("tests/scenes/phase_sggx.xml"), &[]);
     assert!(ok, "{err}");

@@ -65,7 +65,7 @@ use penumbra_render::accel::{Accel, Instance, Primitive, ShapeGroup};
 use penumbra_render::camera::{Camera, Projection};
 use penumbra_render::film::Filter;
 use penumbra_render::geometry::{Mesh, Shape, TriangleMesh};
-use penumbra_render::integrator::{Integrator, ParticleTracer, PathIntegrator};
+use penumbra_render::integrator::{Integrator, ParticleTracer, PathIntegrator, DEFAULT_CAUSTICS};
 use penumbra_render::light::{AreaLight, DirectionalAreaLight, Light, LightSelection};
 use penumbra_render::material::Material;
 use penumbra_render::math::Spectrum;
@@ -532,10 +532,10 @@ impl SceneBuilder {
             return Err(LoadError::at(&self.at, "the scene has no film size"));
         };
         let sampler = self.sampler.take().unwrap_or_else(|| Sampler::new(SamplerKind::Independent, 0, 4));
-        let (mut integrator, selection, integrator_at) = self
-            .integrator
-            .take()
-            .unwrap_or_else(|| (Integrator::Path(PathIntegrator::default()), LightSelection::Uniform, self.at.clone()));
+        let (mut integrator, selection, integrator_at) = self.integrator.take().unwrap_or_else(|| {
+            let path = PathIntegrator { caustics: DEFAULT_CAUSTICS, ..PathIntegrator::default() };
+            (Integrator::Path(path), LightSelection::Uniform, self.at.clone())
+        });
         if let Some(m) = camera_medium.filter(|&m| m as usize >= self.media.len()) {
             return Err(LoadError::at(&self.at, format!("the camera's medium {m} does not exist")));
         }
@@ -563,10 +563,12 @@ impl SceneBuilder {
         if let Integrator::PTracer(pt) = &integrator {
             check_ptracer(pt, &camera, sampler.spp, &integrator_at)?;
         }
-        // Light paths reach perspective and thin-lens cameras only; with
-        // others the camera paths keep the caustics.
+        // Light paths reach perspective and thin-lens cameras only, and are
+        // not let through hidden emitters; otherwise the camera paths keep
+        // the caustics.
         if let Integrator::Path(p) = &mut integrator {
-            p.caustics &= matches!(camera.projection, Projection::Pinhole | Projection::ThinLens { .. });
+            p.caustics &=
+                !p.hide_emitters && matches!(camera.projection, Projection::Pinhole | Projection::ThinLens { .. });
         }
         scene.set_light_selection(selection);
         if !self.media.is_empty() {

@@ -6,6 +6,7 @@
 mod common;
 
 mod builder;
+mod caustics;
 mod channels;
 mod estimators;
 mod format;

@@ -278,7 +278,9 @@ impl RenderJob {
         let results = results?;
         // The caustics' light paths, added after the tiles.
         let caustics = match &self.integrator {
-            Integrator::Path(p) if p.caustics => Some(self.render_caustics(p, film, samples.clone(), active, cancel)?),
+            Integrator::Path(p) if p.caustics => {
+                Some(self.render_caustics(p, film, samples.clone(), active, cancel)?)
+            }
             _ => None,
         };
         if cancel.load(Ordering::Relaxed) {

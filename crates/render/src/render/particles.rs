@@ -13,8 +13,8 @@
 
 use super::{RenderJob, RenderStats};
 use crate::film::Film;
-use crate::integrator::ptracer::{CameraConnection, ParticleTracer, Splat};
 use crate::integrator::path::CausticTargets;
+use crate::integrator::ptracer::{CameraConnection, ParticleTracer, Splat};
 use crate::integrator::PathIntegrator;
 use crate::material::Scratch;
 use glam::Vec2;
@@ -145,7 +145,15 @@ impl RenderJob {
                     for gx in 0..fw {
                         for s in samples.clone() {
                             let mut rng = self.sampler.stream((gx | CAUSTIC_STREAM, gy), s);
-                            path.trace_caustic(&self.scene, &cam, &targets, &mut rng, &mut st.rays, &mut scratch, &mut out);
+                            path.trace_caustic(
+                                &self.scene,
+                                &cam,
+                                &targets,
+                                &mut rng,
+                                &mut st.rays,
+                                &mut scratch,
+                                &mut out,
+                            );
                         }
                     }
                     Some((out, st))

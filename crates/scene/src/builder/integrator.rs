@@ -6,7 +6,8 @@ use crate::desc::{Kind, Node, Property, Value};
 use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
     AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, Guiding, HemisphereSampling,
-    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator, MAX_LIGHT_CANDIDATES, DEFAULT_CAUSTIC_PATHS,
+    Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator, DEFAULT_CAUSTICS,
+    DEFAULT_CAUSTIC_PATHS, MAX_LIGHT_CANDIDATES,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -89,7 +90,12 @@ fn nested(node: &Node) -> Result<(Vec<(String, Integrator)>, LightSelection)> {
             unnamed += 1;
             format!("_arg_{}", unnamed - 1)
         });
-        let (integrator, sel) = build_integrator(&c.node)?;
+        let (mut integrator, sel) = build_integrator(&c.node)?;
+        // Light paths run for a `path` at the top only; nested, its camera
+        // paths keep the caustics.
+        if let Integrator::Path(p) = &mut integrator {
+            p.caustics = false;
+        }
         if out.is_empty() {
             selection = sel;
         }
@@ -173,7 +179,7 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
             mis: node.bool("mis", true)?,
             guiding: guiding(node)?,
             light_candidates: light_candidates(node)?,
-            caustics: node.bool("caustics", PathIntegrator::default().caustics)?,
+            caustics: node.bool("caustics", DEFAULT_CAUSTICS)?,
             caustic_paths: caustic_paths(node)?,
         }),
         light_selection(node)?,

@@ -222,7 +222,13 @@ impl PathIntegrator {
 /// point of its disk across the direction: the ray's density in the
 /// plane across it is (the number of disks it crosses) / (π Σ r_i²).
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
-fn emit_towards(scene: &Scene, light: &Light, spheres: &[(Vec3, f32)], u_pos: Vec2, u_dir: Vec2) -> Option<(Ray, Spectrum)> {
+fn emit_towards(
+    scene: &Scene,
+    light: &Light,
+    spheres: &[(Vec3, f32)],
+    u_pos: Vec2,
+    u_dir: Vec2,
+) -> Option<(Ray, Spectrum)> {
     if spheres.is_empty() {
         return None;
     }

@@ -16,6 +16,8 @@
 //! | guiding_min_roughness | float | 0.3: a vertex whose only non-delta lobe is a microfacet lobe of roughness α below this (the lesser of α_u, α_v) is not guided: a guide's quadtree cannot follow so narrow a lobe, and its draws there only add variance |
 //! | guiding_roulette | boolean | true: after the guide's training, Russian roulette by the share of its pixel a path is expected to bring ([`crate::guiding::roulette`]) where the guide knows the radiance ahead; false: by throughput, as without guiding |
 //! | guiding_spatial_threshold | float | 12000: c, a spatial leaf of the guide splits once a training pass of 2^k spp gives it more than c·√(2^k) records (Müller et al.'s c); lower: finer space, fewer records per leaf |
+//! | caustics      | boolean | true in scene files (false in `PathIntegrator::default()`): caustics seen directly (light, delta bounces, one non-delta vertex seen by the camera) carried by light paths connected to the camera, which camera paths then leave out ([`caustics`]); off for cameras other than perspective and thin lens, with `hide_emitters`, and nested in `aov`/`moment` |
+//! | caustic_paths | float   | 1/32: light paths per camera sample for the caustics, in (0, 1] |
 //! | light_candidates | integer | light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below), 1 to 64; by default 4 in scenes of at least 8 lights, else 1 |
 //!
 //! **Guided vertices.** With a trained guide, a vertex with a non-delta lobe
@@ -98,8 +100,12 @@ pub const MANY_LIGHTS: usize = 8;
 /// candidates cost more than they gain (the Cornell box: 2.2e-3 → 5.5e-3).
 pub const DEFAULT_LIGHT_CANDIDATES: u32 = 4;
 
+/// Whether a `path` loaded from a scene carries caustics by light paths
+/// (`PathIntegrator::default()`, Mitsuba's estimator alone, does not).
+pub const DEFAULT_CAUSTICS: bool = true;
+
 /// Light paths per camera sample for the caustics by default.
-pub const DEFAULT_CAUSTIC_PATHS: f32 = 0.125;
+pub const DEFAULT_CAUSTIC_PATHS: f32 = 0.03125;
 
 /// The `path` integrator's guiding parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -626,9 +632,13 @@ impl PathIntegrator {
             ),
             None => "guiding=false".into(),
         };
+        let caustics = match self.caustics {
+            true => format!("caustics=true (caustic_paths {})", self.caustic_paths),
+            false => "caustics=false".into(),
+        };
         let depth = |d: u32| if d == u32::MAX { "-1".to_string() } else { d.to_string() };
         format!(
-            "max_depth={}, rr_depth={}, mis={}, light_selection={}, light_candidates={}, {guiding}",
+            "max_depth={}, rr_depth={}, mis={}, light_selection={}, light_candidates={}, {caustics}, {guiding}",
             depth(self.term.max_depth),
             self.term.rr_depth,
             self.mis,

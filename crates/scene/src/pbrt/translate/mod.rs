@@ -37,7 +37,7 @@ use glam::{DMat4, DVec3};
 use materials::Materials;
 use penumbra_render::camera::{Camera, FovAxis};
 use penumbra_render::film::{Filter, FilterKind};
-use penumbra_render::integrator::{Integrator, PathIntegrator, Termination, VolPathIntegrator};
+use penumbra_render::integrator::{Integrator, PathIntegrator, Termination, VolPathIntegrator, DEFAULT_CAUSTICS};
 use penumbra_render::light::LightSelection;
 use penumbra_render::material::Material;
 use penumbra_render::render::RenderJob;
@@ -569,5 +569,9 @@ fn integrator(
     if e.is_some_and(|e| e.kind == "volpath") {
         return Ok((Integrator::VolPath(VolPathIntegrator { term, hide_emitters: false }), selection, at));
     }
-    Ok((Integrator::Path(PathIntegrator { term, ..PathIntegrator::default() }), selection, at))
+    Ok((
+        Integrator::Path(PathIntegrator { term, caustics: DEFAULT_CAUSTICS, ..PathIntegrator::default() }),
+        selection,
+        at,
+    ))
 }
