@@ -109,6 +109,7 @@ impl PathIntegrator {
     /// Traces one light path for the caustics (see the module notes),
     /// appending its connections to the camera to `out`.
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+    #[allow(clippy::too_many_arguments)]
     pub fn trace_caustic(
         &self,
         scene: &Scene,

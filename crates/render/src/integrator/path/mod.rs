@@ -16,7 +16,7 @@
 //! | guiding_min_roughness | float | 0.3: a vertex whose only non-delta lobe is a microfacet lobe of roughness α below this (the lesser of α_u, α_v) is not guided: a guide's quadtree cannot follow so narrow a lobe, and its draws there only add variance |
 //! | guiding_roulette | boolean | true: after the guide's training, Russian roulette by the share of its pixel a path is expected to bring ([`crate::guiding::roulette`]) where the guide knows the radiance ahead; false: by throughput, as without guiding |
 //! | guiding_spatial_threshold | float | 12000: c, a spatial leaf of the guide splits once a training pass of 2^k spp gives it more than c·√(2^k) records (Müller et al.'s c); lower: finer space, fewer records per leaf |
-//! | caustics      | boolean | true in scene files (false in `PathIntegrator::default()`): caustics seen directly (light, delta bounces, one non-delta vertex seen by the camera) carried by light paths connected to the camera, which camera paths then leave out ([`caustics`]); off for cameras other than perspective and thin lens, with `hide_emitters`, and nested in `aov`/`moment` |
+//! | caustics      | boolean | true in scene files (false in `PathIntegrator::default()`): caustics seen directly (light, delta bounces, one non-delta vertex seen by the camera) carried by light paths connected to the camera, which camera paths then leave out (`path/caustics.rs`); off for cameras other than perspective and thin lens, with `hide_emitters`, and nested in `aov`/`moment` |
 //! | caustic_paths | float   | 1/32: light paths per camera sample for the caustics, in (0, 1] |
 //! | light_candidates | integer | light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below), 1 to 64; by default 4 in scenes of at least 8 lights, else 1 |
 //!
@@ -80,7 +80,7 @@ pub struct PathIntegrator {
     pub light_candidates: u32,
     /// Caustics seen directly (light, then delta bounces, then one
     /// non-delta vertex seen by the camera) carried by light paths
-    /// connected to the camera instead of by camera paths ([`caustics`]).
+    /// connected to the camera instead of by camera paths (`path/caustics.rs`).
     pub caustics: bool,
     /// Light paths per camera sample for the caustics, in (0, 1]: each
     /// pixel sample traces its light path with this probability, weighted
@@ -194,7 +194,7 @@ pub struct PathState {
     flux: f32,
     /// Whether the first surface vertex drew a non-delta direction and
     /// every bounce since was delta: emission found now is a caustic's,
-    /// which light paths carry when `caustics` is on ([`caustics`]).
+    /// which light paths carry when `caustics` is on (`path/caustics.rs`).
     caustic: bool,
 }
 
@@ -699,7 +699,7 @@ impl PathIntegrator {
     }
 
     /// Whether emission found now by a path whose last bounce was delta
-    /// belongs to the light paths ([`caustics`]): with `caustics` on, the
+    /// belongs to the light paths (`path/caustics.rs`): with `caustics` on, the
     /// path's first surface vertex drew a non-delta direction and every
     /// bounce since was delta.
     #[inline(always)]
