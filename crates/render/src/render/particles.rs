@@ -143,8 +143,10 @@ impl RenderJob {
                     }
                     let (mut out, mut st, mut scratch) = (Vec::new(), RenderStats::default(), Scratch::new());
                     for gx in 0..fw {
+                        // Hashed once for the pixel's streams.
+                        let key = self.sampler.pixel_key((gx | CAUSTIC_STREAM, gy));
                         for s in samples.clone() {
-                            let mut rng = self.sampler.stream((gx | CAUSTIC_STREAM, gy), s);
+                            let mut rng = self.sampler.stream_of_key(key, s);
                             path.trace_caustic(
                                 &self.scene,
                                 &cam,
