@@ -376,6 +376,13 @@ impl Scene {
         self.lane_material[shape as usize]
     }
 
+    /// Whether light paths carry the caustics of shape `shape`'s delta
+    /// lobes ([`Material::carries_caustics`] of its material).
+    #[inline]
+    pub fn carries_caustics(&self, shape: u32) -> bool {
+        self.materials[self.shape_info[shape as usize].material as usize].carries_caustics()
+    }
+
     /// Light `i` when its samples can be drawn in lanes: an area light of
     /// constant, non-zero radiance on a mesh or a sphere.
     #[inline(always)]

@@ -593,6 +593,21 @@ impl Material {
         }
     }
 
+    /// Whether light paths carry the caustics of its delta lobes (see
+    /// `integrator::path::caustics`): those that [`Self::may_be_delta`] finds,
+    /// but a specular coat over a diffuse base (`plastic`, `coateddiffuse`),
+    /// whose faint caustics camera paths find well enough: light paths aimed
+    /// at them cost time and bought nothing (rough_spheres, see the README).
+    pub fn carries_caustics(&self) -> bool {
+        match self {
+            Material::Plastic(_) | Material::CoatedDiffuse(_) => false,
+            Material::TwoSided(front, back) => front.carries_caustics() || back.carries_caustics(),
+            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.carries_caustics(),
+            Material::Blend { first, second, .. } => first.carries_caustics() || second.carries_caustics(),
+            m => m.may_be_delta(),
+        }
+    }
+
     /// Whether a hit on this material can scatter light at all (false for
     /// `null`, which rays pass through).
     pub fn is_null(&self) -> bool {

@@ -12,7 +12,9 @@
 //! The two estimators split path space rather than weighing each other:
 //! a path x₀ (camera) x₁ … x_k (on an emitter) is **the light paths'** when
 //! k ≥ 3, x₁'s direction was drawn from a non-delta lobe and x₂ … x_{k-1}'s
-//! from delta lobes; every other path is the camera paths'. The camera path
+//! from delta lobes of shapes that carry caustics (not a faint specular
+//! coat over a diffuse base: `Material::carries_caustics`); every other
+//! path is the camera paths'. The camera path
 //! drops emission it finds with that history ([`PathState::bounced`]
 //! keeps it); the light path connects to the camera only at vertices
 //! reached through at least one delta bounce and nothing else, through the
@@ -49,14 +51,14 @@ use glam::{Vec2, Vec3};
 const MAX_TARGETS: usize = 64;
 
 /// Where light paths for the caustics go: the bounding spheres of the
-/// placed shapes (and instances) whose material may have a delta lobe
-/// ([`Material::may_be_delta`]). A light path whose first segment misses
+/// placed shapes (and instances) whose delta lobes light paths carry
+/// ([`Material::carries_caustics`]). A light path whose first segment misses
 /// all of them hits no such surface first and connects to nothing, so the
 /// paths are drawn towards them only, with the density of that draw (an
 /// estimator restricted to where its integrand may be non-zero stays
 /// unbiased).
 ///
-/// [`Material::may_be_delta`]: crate::material::Material::may_be_delta
+/// [`Material::carries_caustics`]: crate::material::Material::carries_caustics
 #[derive(Debug, Clone)]
 pub struct CausticTargets {
     /// Centre and radius of each sphere; `None`: too many, aim at nothing.
@@ -66,7 +68,7 @@ pub struct CausticTargets {
 impl CausticTargets {
     /// The targets of `scene`'s shapes.
     pub fn new(scene: &Scene) -> CausticTargets {
-        let delta = |shape: u32| scene.materials[scene.shape_info[shape as usize].material as usize].may_be_delta();
+        let delta = |shape: u32| scene.carries_caustics(shape);
         let mut spheres = Vec::new();
         for p in &scene.placed {
             let bounds = match *p {
@@ -182,7 +184,8 @@ impl PathIntegrator {
             }
             let (u, u2) = (rng.next_1d(), rng.next_2d());
             let Some(bs) = bsdf.sample(wi, u, u2) else { break };
-            if !bs.delta {
+            // Only delta bounces on carriers go on (camera paths keep the rest).
+            if !bs.delta || !scene.carries_caustics(si.shape) {
                 break;
             }
             let d = si.to_world(bs.wi);

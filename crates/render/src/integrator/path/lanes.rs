@@ -1444,6 +1444,8 @@ impl PathIntegrator {
         if emitter {
             self.add_emitted(scene, st, &scene.interaction(&st.ray, hit));
         }
+        // For `lane_vertex_done`'s `bounced`, as `vertex` sets it.
+        st.on_carrier = scene.carries_caustics(hit.shape);
         b.slots[l] = slot as u32;
         b.len += 1;
         Some(at)

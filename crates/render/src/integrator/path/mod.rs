@@ -193,9 +193,13 @@ pub struct PathState {
     /// [`crate::guiding::dtree::DTree::radiance`]).
     flux: f32,
     /// Whether the first surface vertex drew a non-delta direction and
-    /// every bounce since was delta: emission found now is a caustic's,
+    /// every bounce since was delta, on shapes whose caustics light paths
+    /// carry: emission found now is a caustic's,
     /// which light paths carry when `caustics` is on (`path/caustics.rs`).
     caustic: bool,
+    /// Whether the vertex now being shaded is on a shape whose delta
+    /// bounces light paths carry ([`Scene::carries_caustics`]).
+    on_carrier: bool,
 }
 
 impl PathState {
@@ -217,6 +221,7 @@ impl PathState {
             target: 0.0,
             flux: 0.0,
             caustic: false,
+            on_carrier: false,
         }
     }
 
@@ -272,10 +277,12 @@ impl PathState {
     }
 
     /// After a bounce drawn from a `delta` lobe or not (before `depth`
-    /// counts it): whether the path is now a caustic's (see `caustic`).
+    /// counts it) at a vertex on a carrier (`on_carrier`) or not: whether
+    /// the path is now a caustic's (see `caustic`): its first vertex drew a
+    /// non-delta direction, and every bounce since was delta on a carrier.
     #[inline(always)]
     fn bounced(&mut self, delta: bool) {
-        self.caustic = if self.depth == 0 { !delta } else { self.caustic && delta };
+        self.caustic = if self.depth == 0 { !delta } else { self.caustic && delta && self.on_carrier };
     }
 }
 
@@ -517,6 +524,7 @@ impl PathIntegrator {
         st.prev_bsdf_pdf = bs.pdf;
         st.prev_delta = bs.delta;
         st.ray = scene.spawn_ray(&si, wi);
+        st.on_carrier = scene.carries_caustics(si.shape);
         st.bounced(bs.delta);
         st.depth += 1;
         Vertex { shadow, go_on: self.roulette(st, rng, guide_pdf), sampled }
