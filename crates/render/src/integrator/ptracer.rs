@@ -238,24 +238,7 @@ impl ParticleTracer {
             let wi_geo = si.n.dot(si.wo);
             // Connect this vertex to the camera.
             let u_lens = rng.next_2d();
-            if let Some(c) = cam.connect(si.p, u_lens) {
-                let to_cam = c.at - si.p;
-                let dist = to_cam.length();
-                let d = to_cam / dist;
-                let local = si.to_local(d);
-                let d_geo = si.n.dot(d);
-                if wi_geo * wi.z > 0.0 && d_geo * local.z > 0.0 {
-                    stats.shadow_rays += 1;
-                    if !scene.occluded(&si, d, dist) {
-                        let correction = ((wi.z * d_geo) / (local.z * wi_geo)).abs();
-                        let f = bsdf.eval(local, wi) * local.z.abs();
-                        let value = beta * f * (c.weight * correction);
-                        if value != Spectrum::ZERO {
-                            out.push(Splat { pos: c.pos, value });
-                        }
-                    }
-                }
-            }
+            out.extend(connect_vertex(scene, cam, &si, &bsdf, beta, u_lens, stats));
             // Continue by sampling the BSDF from the light's side.
             let (u, u2) = (rng.next_1d(), rng.next_2d());
             let Some(bs) = bsdf.sample(wi, u, u2) else { break };
@@ -295,6 +278,41 @@ impl ParticleTracer {
         let len = d.length();
         !scene.occluded_ray(&Ray::new(o, d / len, len * (1.0 - crate::math::SHADOW_EPSILON)))
     }
+}
+
+/// The splat of light-path vertex `si` (BSDF `bsdf`, throughput `beta`)
+/// connected to the camera through the lens point `u_lens` draws: f
+/// (towards the camera ← from the light) cos θ W_e / d², with the adjoint
+/// shading-normal correction (Veach, p. 155); None where the camera does not
+/// see the point, the connection is occluded or the value is zero.
+pub(crate) fn connect_vertex(
+    scene: &Scene,
+    cam: &CameraConnection,
+    si: &crate::geometry::SurfaceInteraction,
+    bsdf: &crate::bsdf::Bsdf,
+    beta: Spectrum,
+    u_lens: Vec2,
+    stats: &mut RayStats,
+) -> Option<Splat> {
+    let wi = si.to_local(si.wo);
+    let wi_geo = si.n.dot(si.wo);
+    let c = cam.connect(si.p, u_lens)?;
+    let to_cam = c.at - si.p;
+    let dist = to_cam.length();
+    let d = to_cam / dist;
+    let local = si.to_local(d);
+    let d_geo = si.n.dot(d);
+    if !(wi_geo * wi.z > 0.0 && d_geo * local.z > 0.0) {
+        return None;
+    }
+    stats.shadow_rays += 1;
+    if scene.occluded(si, d, dist) {
+        return None;
+    }
+    let correction = ((wi.z * d_geo) / (local.z * wi_geo)).abs();
+    let f = bsdf.eval(local, wi) * local.z.abs();
+    let value = beta * f * (c.weight * correction);
+    (value != Spectrum::ZERO).then_some(Splat { pos: c.pos, value })
 }
 
 /// A ray leaving `light` and its weight (emitted power over the density of

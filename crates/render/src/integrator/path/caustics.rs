@@ -37,7 +37,7 @@ use super::PathIntegrator;
 use crate::accel::Primitive;
 use crate::geometry::ray::offset_origin;
 use crate::geometry::Ray;
-use crate::integrator::ptracer::{CameraConnection, Splat};
+use crate::integrator::ptracer::{connect_vertex, CameraConnection, Splat};
 use crate::integrator::RayStats;
 use crate::light::Light;
 use crate::material::Scratch;
@@ -157,25 +157,7 @@ impl PathIntegrator {
             // (one more segment).
             if depth >= 2 && depth < self.term.max_depth && bsdf.has_smooth() {
                 let u_lens = rng.next_2d();
-                if let Some(c) = cam.connect(si.p, u_lens) {
-                    let to_cam = c.at - si.p;
-                    let dist = to_cam.length();
-                    let d = to_cam / dist;
-                    let local = si.to_local(d);
-                    let d_geo = si.n.dot(d);
-                    if wi_geo * wi.z > 0.0 && d_geo * local.z > 0.0 {
-                        stats.shadow_rays += 1;
-                        if !scene.occluded(&si, d, dist) {
-                            // The adjoint shading-normal correction (Veach, p. 155).
-                            let correction = ((wi.z * d_geo) / (local.z * wi_geo)).abs();
-                            let f = bsdf.eval(local, wi) * local.z.abs();
-                            let value = beta * f * (c.weight * correction);
-                            if value != Spectrum::ZERO {
-                                out.push(Splat { pos: c.pos, value });
-                            }
-                        }
-                    }
-                }
+                out.extend(connect_vertex(scene, cam, &si, &bsdf, beta, u_lens, stats));
             }
             // Only delta bounces go on: after a non-delta one, no later
             // vertex is a caustic's first.
