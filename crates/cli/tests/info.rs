@@ -29,7 +29,7 @@ fn describes_plugins_counts_and_approximations() {
         "bsdf       diffuse",
         "emitter    area",
         "integrator: path (max_depth=4)",
-        "path: max_depth=4, rr_depth=5, mis=true, light_selection=uniform, light_candidates=1, caustics=true (caustic_paths 0.03125), guiding=false",
+        "path: max_depth=4, rr_depth=5, mis=true, light_selection=uniform, light_candidates=1, caustics=true (caustic_paths 0.03125, caustic_bounces -1), guiding=false",
         "geometry: 4 triangles in 2 meshes",
         "emitters: 1 (1 area)",
         "image: 20x20, 16 samples per pixel",
@@ -45,7 +45,7 @@ fn describes_plugins_counts_and_approximations() {
     assert!(ok, "{err}");
     assert!(
         out.contains(
-            "light_selection=uniform, light_candidates=4, caustics=true (caustic_paths 0.03125), guiding=false"
+            "light_selection=uniform, light_candidates=4, caustics=true (caustic_paths 0.03125, caustic_bounces -1), guiding=false"
         ),
         "{out}"
     );

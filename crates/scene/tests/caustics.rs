@@ -25,12 +25,25 @@ fn glass_caustic_matches_mitsuba_at_every_rate_of_light_paths() {
     compare("glass_caustic", 16, 512, "caustics=false");
 }
 
+/// Light paths that go on through non-delta bounces after their first
+/// delta chain (`caustic_bounces`), so that they also carry the caustic's
+/// light reflected by diffuse surfaces before the camera sees it: one such
+/// bounce, and as many as the depth allows, at a light path per camera
+/// sample and at a quarter.
+#[test]
+fn glass_caustic_matches_mitsuba_with_light_paths_bouncing() {
+    compare("glass_caustic", 16, 512, "caustic_paths=1,caustic_bounces=1");
+    compare("glass_caustic", 16, 512, "caustic_paths=1,caustic_bounces=64");
+    compare("glass_caustic", 16, 512, "caustic_paths=0.25,caustic_bounces=64");
+}
+
 /// The sun's caustic through a glass sphere and its glints off a mirror
 /// sphere: light paths from an emitter at infinity (512 spp, as the
 /// scene's reference test).
 #[test]
 fn envmap_sun_matches_mitsuba_with_a_light_path_per_sample() {
     compare("envmap_sun", 8, 512, "caustic_paths=1");
+    compare("envmap_sun", 8, 512, "caustic_paths=1,caustic_bounces=64");
 }
 
 /// relMSE of `e`'s mean against the reference `r`, less the reference's
@@ -80,4 +93,27 @@ fn caustics_are_off_where_light_paths_cannot_carry_them() {
     assert!(!caustics("hidden_emitters.xml", None));
     assert!(!caustics("orthographic.xml", Some("path")));
     assert!(!caustics("aov_channels.xml", None));
+}
+
+/// `caustic_bounces` is -1 (unbounded, the default) or 0 to 64; anything
+/// else is refused with its meaning.
+#[test]
+fn caustic_bounces_is_read_and_checked() {
+    let scene = root().join("tests/scenes/glass_caustic.xml");
+    let load = |spec: Option<&str>| {
+        let ov = Overrides { integrator: spec.map(str::to_string), ..Default::default() };
+        load_scene(&scene, &[], &ov)
+    };
+    let bounces = |spec: Option<&str>| match load(spec).unwrap_or_else(|e| panic!("{e}")).integrator {
+        Integrator::Path(p) => p.caustic_bounces,
+        _ => panic!("not a path integrator"),
+    };
+    assert_eq!(bounces(None), u32::MAX);
+    assert_eq!(bounces(Some("path:caustic_bounces=-1")), u32::MAX);
+    assert_eq!(bounces(Some("path:caustic_bounces=0")), 0);
+    assert_eq!(bounces(Some("path:caustic_bounces=64")), 64);
+    for m in ["65", "-2", "1000"] {
+        let err = load(Some(&format!("path:caustic_bounces={m}"))).err().unwrap_or_else(|| panic!("{m} was accepted"));
+        assert!(err.to_string().contains("caustic_bounces must be -1"), "{m}: {err}");
+    }
 }

@@ -30,8 +30,8 @@ pub use depth::DepthIntegrator;
 pub use direct::DirectIntegrator;
 pub use moment::MomentIntegrator;
 pub use path::{
-    Guiding, PathIntegrator, DEFAULT_CAUSTICS, DEFAULT_CAUSTIC_PATHS, DEFAULT_LIGHT_CANDIDATES, MANY_LIGHTS,
-    MAX_LIGHT_CANDIDATES,
+    Guiding, PathIntegrator, DEFAULT_CAUSTICS, DEFAULT_CAUSTIC_BOUNCES, DEFAULT_CAUSTIC_PATHS,
+    DEFAULT_LIGHT_CANDIDATES, MANY_LIGHTS, MAX_LIGHT_CANDIDATES,
 };
 pub use ptracer::ParticleTracer;
 pub use volpath::VolPathIntegrator;

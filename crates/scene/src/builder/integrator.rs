@@ -7,7 +7,7 @@ use crate::error::{FileLoc, LoadError, Result};
 use penumbra_render::integrator::{
     AovIntegrator, AovType, BruteForceIntegrator, DepthIntegrator, DirectIntegrator, Guiding, HemisphereSampling,
     Integrator, MomentIntegrator, ParticleTracer, PathIntegrator, Termination, VolPathIntegrator, DEFAULT_CAUSTICS,
-    DEFAULT_CAUSTIC_PATHS, MAX_LIGHT_CANDIDATES,
+    DEFAULT_CAUSTIC_BOUNCES, DEFAULT_CAUSTIC_PATHS, MAX_LIGHT_CANDIDATES,
 };
 use penumbra_render::light::LightSelection;
 use std::cell::Cell;
@@ -181,6 +181,7 @@ fn path(node: &Node) -> Result<(Integrator, LightSelection)> {
             light_candidates: light_candidates(node)?,
             caustics: node.bool("caustics", DEFAULT_CAUSTICS)?,
             caustic_paths: caustic_paths(node)?,
+            caustic_bounces: caustic_bounces(node)?,
         }),
         light_selection(node)?,
     ))
@@ -196,6 +197,20 @@ fn caustic_paths(node: &Node) -> Result<f32> {
         ));
     }
     Ok(f as f32)
+}
+
+/// `caustic_bounces`: non-delta bounces a caustics' light path may take,
+/// -1 (the default) for as many as the depth allows.
+fn caustic_bounces(node: &Node) -> Result<u32> {
+    let default = if DEFAULT_CAUSTIC_BOUNCES == u32::MAX { -1 } else { DEFAULT_CAUSTIC_BOUNCES as i64 };
+    match node.int("caustic_bounces", default)? {
+        -1 => Ok(u32::MAX),
+        n @ 0..=64 => Ok(n as u32),
+        _ => Err(LoadError::at(
+            node.loc_of("caustic_bounces"),
+            "caustic_bounces must be -1 (as many as max_depth allows) or from 0 to 64: the non-delta bounces a caustics' light path may take before the vertex the camera sees",
+        )),
+    }
 }
 
 /// `light_candidates`: 1 to [`MAX_LIGHT_CANDIDATES`], or 0 (automatic)

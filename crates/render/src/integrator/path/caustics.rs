@@ -1,28 +1,32 @@
-//! Caustics seen directly, carried by light paths (`path`'s `caustics`).
+//! Caustics carried by light paths (`path`'s `caustics`).
 //!
 //! A camera path finds a caustic (the light's image through glass or in a
-//! mirror, cast on a diffuse surface the camera sees) only when its BSDF
-//! sample at that surface happens to go through the specular chain to the
-//! light: with a small light, rarely, and then with a large weight, so the
-//! caustic is fireflies. A path traced from the light finds it every time
-//! its first bounces hit the specular object, and is then connected to the
-//! camera (light tracing, Veach 1997 sec. 10.2; the `t = 1` strategy of
-//! bidirectional path tracing).
+//! mirror, cast on a diffuse surface) only when its BSDF sample at that
+//! surface happens to go through the specular chain to the light: with a
+//! small light, rarely, and then with a large weight, so the caustic is
+//! fireflies, and so is all the light it sends on (the ceiling lit by a
+//! caustic on the floor). A path traced from the light finds the caustic
+//! every time its first bounces hit the specular object, and is connected
+//! to the camera at each later vertex (light tracing, Veach 1997 sec.
+//! 10.2; the `t = 1` strategy of bidirectional path tracing).
 //!
 //! The two estimators split path space rather than weighing each other:
 //! a path x₀ (camera) x₁ … x_k (on an emitter) is **the light paths'** when
-//! k ≥ 3, x₁'s direction was drawn from a non-delta lobe and x₂ … x_{k-1}'s
-//! from delta lobes of shapes that carry caustics (not a faint specular
-//! coat over a diffuse base: `Material::carries_caustics`); every other
-//! path is the camera paths'. The camera path
-//! drops emission it finds with that history ([`PathState::bounced`]
-//! keeps it); the light path connects to the camera only at vertices
-//! reached through at least one delta bounce and nothing else, through the
-//! BSDF's non-delta part (a delta lobe evaluates to 0 towards the camera),
-//! and stops at its first non-delta bounce. Each part is unbiased, and
-//! together they count every path once: the image's expectation is the
-//! camera paths' alone. Delta emitters are left out (a camera path can
-//! never reach them, so neither may the light paths).
+//! k ≥ 3, x₁'s direction was drawn from a non-delta lobe, x_{k-1}'s from a
+//! delta lobe, every delta lobe drawn at x₂ … x_{k-1} is of a shape that
+//! carries caustics (not a faint specular coat over a diffuse base:
+//! `Material::carries_caustics`), and at most `caustic_bounces` of x₂ …
+//! x_{k-1} drew non-delta directions; every other path is the camera
+//! paths'. The camera path drops emission it finds after a delta bounce
+//! with that history ([`PathState::bounced`] keeps it). The light path
+//! starts with a delta bounce on a carrier (else it stops), goes on
+//! through delta bounces on carriers and up to `caustic_bounces`
+//! non-delta ones, and connects to the camera at every vertex after the
+//! first, through the BSDF's non-delta part (a delta lobe evaluates to 0
+//! towards the camera). Each part is unbiased, and together they count
+//! every path once: the image's expectation is the camera paths' alone.
+//! Delta emitters are left out (a camera path can never reach them, so
+//! neither may the light paths).
 //!
 //! One light path per full-film pixel and sample, its random numbers from a
 //! stream of its own ([`RenderJob`]'s `CAUSTIC_STREAM` pixels), as the
@@ -144,8 +148,9 @@ impl PathIntegrator {
         };
         beta *= n_lights as f32 / self.caustic_paths;
         let mut eta = 1.0f32;
-        // Segments so far; vertices since the light all delta.
+        // Segments so far, and non-delta bounces after the first delta chain.
         let mut depth = 1u32;
+        let mut smooth = 0u32;
         stats.rays += 1;
         let mut hit = scene.intersect(&ray);
         while let Some(mut si) = hit {
@@ -153,22 +158,29 @@ impl PathIntegrator {
             let bsdf = scene.bsdf(&mut si, scratch);
             let wi = si.to_local(si.wo);
             let wi_geo = si.n.dot(si.wo);
-            // A vertex after delta bounces only: connect it to the camera
-            // (one more segment).
+            // A vertex after the first delta bounce: connect it to the
+            // camera (one more segment).
             if depth >= 2 && depth < self.term.max_depth && bsdf.has_smooth() {
                 let u_lens = rng.next_2d();
                 out.extend(connect_vertex(scene, cam, &si, &bsdf, beta, u_lens, stats));
             }
-            // Only delta bounces go on: after a non-delta one, no later
-            // vertex is a caustic's first.
             if depth + 2 > self.term.max_depth {
                 break;
             }
             let (u, u2) = (rng.next_1d(), rng.next_2d());
             let Some(bs) = bsdf.sample(wi, u, u2) else { break };
-            // Only delta bounces on carriers go on (camera paths keep the rest).
-            if !bs.delta || !scene.carries_caustics(si.shape) {
-                break;
+            // Delta bounces go on on carriers only (camera paths keep the
+            // rest); non-delta ones after the first delta chain, up to
+            // `caustic_bounces` of them.
+            if bs.delta {
+                if !scene.carries_caustics(si.shape) {
+                    break;
+                }
+            } else {
+                smooth += 1;
+                if depth == 1 || smooth > self.caustic_bounces {
+                    break;
+                }
             }
             let d = si.to_world(bs.wi);
             let d_geo = si.n.dot(d);
