@@ -11,11 +11,12 @@
 //! variance moments follow; string: the integrator's output channels,
 //! newline-separated), per pixel R, G, B sums and the weight sum as
 //! f64, then the AOV sums (f64, the AOVs' channels per pixel), then the
-//! moments (`film::MOMENTS` = 8 f64 per pixel), a u8 that is 1 when the path
+//! moments (`film::MOMENTS` = 14 f64 per pixel), a u8 that is 1 when the path
 //! guide follows and the guide ([`Guide::encode`]), and a CRC-32 of
 //! everything before it. Formats 1 (no layers), 2 (7 moments, no Σ w³), 3
-//! (no integrator channels), 4 (no guide) and 5 (a guide without its
-//! pixel estimate and mean records) are refused with a message.
+//! (no integrator channels), 4 (no guide), 5 (a guide without its
+//! pixel estimate and mean records) and 6 (8 moments, none of light paths'
+//! splats) are refused with a message.
 
 use crate::settings::{Settings, VERSION};
 use anyhow::{bail, Context, Result};
@@ -28,7 +29,7 @@ use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PNMBRCKP";
-const FORMAT: u32 = 6;
+const FORMAT: u32 = 7;
 
 /// A render's state after `passes` whole passes.
 #[derive(Debug, Clone)]
@@ -262,7 +263,7 @@ mod tests {
     }
 
     /// A header claiming a film of 65536 x 65536 pixels (with a valid
-    /// checksum) is refused before the film (about 550 GB) is allocated.
+    /// checksum) is refused before the film (about 720 GB) is allocated.
     #[test]
     fn a_huge_resolution_is_refused_before_allocating() {
         let layers = FilmLayers { aovs: vec![AovKind::Albedo], variance: true, channels: Vec::new() };
@@ -275,6 +276,6 @@ mod tests {
         let crc = crc32fast::hash(&bytes);
         bytes.extend_from_slice(&crc.to_le_bytes());
         let e = Checkpoint::decode(&bytes, "x").unwrap_err().to_string();
-        assert!(e.contains("65536 x 65536 pixels of 15 values need 515396075520 bytes"), "{e}");
+        assert!(e.contains("65536 x 65536 pixels of 21 values need 721554505728 bytes"), "{e}");
     }
 }

@@ -49,15 +49,18 @@ pub fn describe(l: &FilmLayers) -> String {
     names.join(",")
 }
 
-/// The eight moment channels: Σ w², then Σ w²(L − r) and Σ w²(L − r)² per
-/// channel, then Σ w³.
+/// The moment channels ([`MOMENTS`]): Σ w², then Σ w²(L − r) and
+/// Σ w²(L − r)² per channel, then Σ w³ (the camera samples'), then Σ s and
+/// Σ s² per channel (the light paths' splats, stored as they are).
 fn moment_name(k: usize) -> String {
     const RGB: [&str; 3] = ["R", "G", "B"];
     match k {
         0 => "penumbra.m0".into(),
         1..=3 => format!("penumbra.m1.{}", RGB[k - 1]),
         4..=6 => format!("penumbra.m2.{}", RGB[k - 4]),
-        _ => "penumbra.w3".into(),
+        7 => "penumbra.w3".into(),
+        8..=10 => format!("penumbra.s1.{}", RGB[k - 8]),
+        _ => format!("penumbra.s2.{}", RGB[k - 11]),
     }
 }
 
@@ -85,7 +88,7 @@ pub fn channels(film: &Film, part: bool) -> Vec<(String, Vec<f32>)> {
                 .iter()
                 .zip(&rgb)
                 .map(|(m, p)| {
-                    let mut c = [m[0], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, m[7]];
+                    let mut c = *m;
                     for ch in 0..3 {
                         let r = p[ch] as f64;
                         c[1 + ch] = m[1 + ch] - r * m[0];

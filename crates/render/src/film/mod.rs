@@ -257,8 +257,10 @@ pub struct Film {
     pub channels: Vec<String>,
     /// Σ w·a per pixel, `aov_channels()` values per pixel.
     pub aov: Vec<f64>,
-    /// Per pixel [Σ w², Σ w²·L (R, G, B), Σ w²·L² (R, G, B), Σ w³] when
-    /// the variance is tracked (else empty).
+    /// Per pixel [Σ w², Σ w²·L (R, G, B), Σ w²·L² (R, G, B), Σ w³] of the
+    /// camera samples, then [Σ s (R, G, B), Σ s² (R, G, B)] of the values s
+    /// that light paths added to Σ w·L ([`Self::splat_radiance`]), when the
+    /// variance is tracked (else empty).
     pub moments: Vec<[f64; MOMENTS]>,
 }
 
@@ -274,7 +276,10 @@ pub struct FilmLayers {
 }
 
 /// Moments per pixel of [`Film::moments`].
-pub const MOMENTS: usize = 8;
+pub const MOMENTS: usize = 14;
+/// Where the light paths' Σ s and Σ s² start in [`Film::moments`].
+const SPLAT_SUM: usize = 8;
+const SPLAT_SQUARES: usize = 11;
 
 /// ε of the relative error: relMSE = (a − b)² / (b² + ε), as `penumbra diff`.
 pub const REL_EPS: f64 = 0.01;
@@ -544,9 +549,19 @@ impl Film {
             for kx in xs.clone() {
                 let x = (px - m + kx as i32) as u32;
                 let w = wx[kx] * wy[ky] / norm;
-                let a = &mut self.acc[(y * self.width + x) as usize];
+                let i = (y * self.width + x) as usize;
+                let a = &mut self.acc[i];
                 for (c, v) in l.to_array().into_iter().enumerate() {
                     a[c] += (v * w) as f64;
+                }
+                // Light paths' splats into camera samples' sums: their own
+                // moments, for the variance (see `pixel_variance`).
+                if let (false, Some(m)) = (normalized, self.moments.get_mut(i)) {
+                    for (c, v) in l.to_array().into_iter().enumerate() {
+                        let s = (v * w) as f64;
+                        m[SPLAT_SUM + c] += s;
+                        m[SPLAT_SQUARES + c] += s * s;
+                    }
                 }
             }
         }
@@ -615,6 +630,13 @@ impl Film {
     /// sample count n); so it is divided by 1 − 2a + b, which for equal
     /// weights is the familiar n/(n − 1) and under a Gaussian filter is
     /// about 3 % larger. Fewer than 1.5 effective samples: infinite.
+    ///
+    /// Light paths' splats ([`Self::splat_radiance`]) add Y = Σ_j s_j / W
+    /// to the pixel, a sum over independent light paths j, most of which
+    /// add nothing here: Var(Y) = Σ_j Var(s_j) / W², estimated by
+    /// Σ_j s_j² / W² (it leaves in Σ_j (E s_j)² / W², which is small
+    /// beside it when each light path rarely reaches the pixel). The camera
+    /// samples' part is taken about their own mean, the pixel's less Y.
     #[inline]
     pub fn pixel_variance(&self, i: usize) -> Option<[f64; 3]> {
         let m = self.moments.get(i)?;
@@ -627,9 +649,9 @@ impl Film {
         }
         let mut v = [0.0; 3];
         for c in 0..3 {
-            let r = self.acc[i][c] / w;
+            let r = (self.acc[i][c] - m[SPLAT_SUM + c]) / w;
             let s = m[4 + c] - 2.0 * r * m[1 + c] + r * r * m[0];
-            v[c] = s.max(0.0) / (w * w) / unbias;
+            v[c] = (s.max(0.0) / unbias + m[SPLAT_SQUARES + c]) / (w * w);
         }
         Some(v)
     }
