@@ -235,35 +235,19 @@ impl ParticleTracer {
             scratch.reset();
             let bsdf = scene.bsdf(&mut si, scratch);
             let wi = si.to_local(si.wo);
-            let wi_geo = si.n.dot(si.wo);
             // Connect this vertex to the camera.
             let u_lens = rng.next_2d();
             out.extend(connect_vertex(scene, cam, &si, &bsdf, beta, u_lens, stats));
             // Continue by sampling the BSDF from the light's side.
             let (u, u2) = (rng.next_1d(), rng.next_2d());
             let Some(bs) = bsdf.sample(wi, u, u2) else { break };
-            let d = si.to_world(bs.wi);
-            let d_geo = si.n.dot(d);
-            if !(wi_geo * wi.z > 0.0 && d_geo * bs.wi.z > 0.0) {
-                break;
-            }
-            let correction = ((wi.z * d_geo) / (bs.wi.z * wi_geo)).abs();
-            // Importance transport: undo refraction's radiance scale.
-            beta *= bs.weight * (bs.eta * bs.eta * correction);
-            eta *= bs.eta;
-            if !(beta.max_element() > 0.0) || !beta.is_finite() {
-                break;
-            }
+            let Some(d) = scatter_adjoint(&si, wi, &bs, &mut beta, &mut eta) else { break };
             depth += 1;
             if depth >= self.term.max_depth {
                 break;
             }
-            if depth > self.term.rr_depth {
-                let q = (beta.max_element() * eta * eta).min(0.95);
-                if !(rng.next_1d() < q) {
-                    break;
-                }
-                beta /= q;
+            if depth > self.term.rr_depth && !light_roulette(&mut beta, eta, rng) {
+                break;
             }
             stats.rays += 1;
             hit = scene.intersect(&scene.spawn_ray(&si, d));
@@ -313,6 +297,51 @@ pub(crate) fn connect_vertex(
     let f = bsdf.eval(local, wi) * local.z.abs();
     let value = beta * f * (c.weight * correction);
     (value != Spectrum::ZERO).then_some(Splat { pos: c.pos, value })
+}
+
+/// A light path's bounce `bs` at `si` (reached along `si.wo`, `wi` in the
+/// local frame) in importance transport: the direction it leaves along,
+/// with `beta` and `eta` updated: refraction's 1/η² radiance scale undone
+/// and the adjoint shading-normal correction |wi·n_s d·n_g / d·n_s wi·n_g|
+/// applied (Veach 1997, p. 155). None where the path ends: a direction on
+/// opposite sides of the shading and geometric normals, or a throughput
+/// that is zero or not finite.
+#[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+pub(crate) fn scatter_adjoint(
+    si: &crate::geometry::SurfaceInteraction,
+    wi: Vec3,
+    bs: &crate::bsdf::BsdfSample,
+    beta: &mut Spectrum,
+    eta: &mut f32,
+) -> Option<Vec3> {
+    let wi_geo = si.n.dot(si.wo);
+    let d = si.to_world(bs.wi);
+    let d_geo = si.n.dot(d);
+    if !(wi_geo * wi.z > 0.0 && d_geo * bs.wi.z > 0.0) {
+        return None;
+    }
+    let correction = ((wi.z * d_geo) / (bs.wi.z * wi_geo)).abs();
+    *beta *= bs.weight * (bs.eta * bs.eta * correction);
+    *eta *= bs.eta;
+    if !(beta.max_element() > 0.0) || !beta.is_finite() {
+        return None;
+    }
+    Some(d)
+}
+
+/// Russian roulette of a light path past `rr_depth`: it survives with
+/// probability q = min(max(β) η², 0.95), η the product of its bounces'
+/// relative indices, and its throughput is divided by q.
+#[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > y)` is also true for NaN, on purpose
+pub(crate) fn light_roulette(beta: &mut Spectrum, eta: f32, rng: &mut SampleStream) -> bool {
+    let q = (beta.max_element() * eta * eta).min(0.95);
+    if !(rng.next_1d() < q) {
+        return false;
+    }
+    *beta /= q;
+    true
 }
 
 /// A ray leaving `light` and its weight (emitted power over the density of

@@ -41,7 +41,7 @@ use super::PathIntegrator;
 use crate::accel::Primitive;
 use crate::geometry::ray::offset_origin;
 use crate::geometry::Ray;
-use crate::integrator::ptracer::{connect_vertex, CameraConnection, Splat};
+use crate::integrator::ptracer::{connect_vertex, light_roulette, scatter_adjoint, CameraConnection, Splat};
 use crate::integrator::RayStats;
 use crate::light::Light;
 use crate::material::Scratch;
@@ -157,7 +157,6 @@ impl PathIntegrator {
             scratch.reset();
             let bsdf = scene.bsdf(&mut si, scratch);
             let wi = si.to_local(si.wo);
-            let wi_geo = si.n.dot(si.wo);
             // A vertex after the first delta bounce: connect it to the
             // camera (one more segment).
             if depth >= 2 && depth < self.term.max_depth && bsdf.has_smooth() {
@@ -182,25 +181,10 @@ impl PathIntegrator {
                     break;
                 }
             }
-            let d = si.to_world(bs.wi);
-            let d_geo = si.n.dot(d);
-            if !(wi_geo * wi.z > 0.0 && d_geo * bs.wi.z > 0.0) {
-                break;
-            }
-            let correction = ((wi.z * d_geo) / (bs.wi.z * wi_geo)).abs();
-            // Importance transport: undo refraction's radiance scale.
-            beta *= bs.weight * (bs.eta * bs.eta * correction);
-            eta *= bs.eta;
-            if !(beta.max_element() > 0.0) || !beta.is_finite() {
-                break;
-            }
+            let Some(d) = scatter_adjoint(&si, wi, &bs, &mut beta, &mut eta) else { break };
             depth += 1;
-            if depth > self.term.rr_depth {
-                let q = (beta.max_element() * eta * eta).min(0.95);
-                if !(rng.next_1d() < q) {
-                    break;
-                }
-                beta /= q;
+            if depth > self.term.rr_depth && !light_roulette(&mut beta, eta, rng) {
+                break;
             }
             stats.rays += 1;
             hit = scene.intersect(&scene.spawn_ray(&si, d));
