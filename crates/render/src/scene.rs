@@ -112,6 +112,8 @@ pub struct Scene {
     /// ([`Material::reads_uv`] of its material, or an area light with a
     /// textured radiance); hits on the others skip it.
     reads_uv: Vec<bool>,
+    /// Per shape: [`Scene::carries_caustics`], looked up once a bounce.
+    carries_caustics: Vec<bool>,
     /// Per shape: [`Scene::lane_material`].
     lane_material: Vec<Option<LaneSurface>>,
     /// Per light: [`Scene::lane_light`].
@@ -205,6 +207,10 @@ impl Scene {
             })
             .collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };
+        let carries_caustics = shape_info
+            .iter()
+            .map(|info| materials.get(info.material as usize).is_some_and(Material::carries_caustics))
+            .collect();
         // Per material first, so that a table is copied once per material.
         let mut lane_tables = Vec::new();
         let per_material: Vec<Option<LaneSurface>> =
@@ -288,6 +294,7 @@ impl Scene {
             accel,
             light_sampler,
             reads_uv,
+            carries_caustics,
             lane_material,
             lane_lights,
             lane_light_tris,
@@ -380,7 +387,7 @@ impl Scene {
     /// lobes ([`Material::carries_caustics`] of its material).
     #[inline]
     pub fn carries_caustics(&self, shape: u32) -> bool {
-        self.materials[self.shape_info[shape as usize].material as usize].carries_caustics()
+        self.carries_caustics[shape as usize]
     }
 
     /// Light `i` when its samples can be drawn in lanes: an area light of
