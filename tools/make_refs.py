@@ -61,6 +61,8 @@ SPP = {
     "point_light": 8192,
     "spot_light": 65536,
     "envmap_sun": 65536,
+    "window": 65536,
+    "window_sky": 32768,
     "many_lights": 65536,
     "direct_integrator": 16384,
     "rough_spheres": 65536,

@@ -525,6 +525,18 @@ impl Scene {
         self.env_lights.iter().map(|&i| self.lights[i as usize].environment_radiance(d)).sum()
     }
 
+    /// The part of [`Self::environment_radiance`] along `d` whose caustics
+    /// camera paths carry: the lights at infinity that are not concentrated
+    /// there ([`Light::caustics_by_light_paths`]).
+    pub fn environment_radiance_left_to_camera(&self, d: Vec3) -> Spectrum {
+        self.env_lights
+            .iter()
+            .map(|&i| &self.lights[i as usize])
+            .filter(|l| !l.caustics_by_light_paths(d))
+            .map(|l| l.environment_radiance(d))
+            .sum()
+    }
+
     /// The scene's environment, with its light index, when it is one
     /// `envmap` and nothing else: then [`Self::environment_radiance`] of a
     /// direction d is `Spectrum::ZERO + e.eval(d)` (the sum above), which

@@ -81,6 +81,18 @@ fn envmap_sun_matches_mitsuba() {
     compare("envmap_sun", 512);
 }
 
+/// A room lit by the sun and sky through a thindielectric window.
+#[test]
+fn window_matches_mitsuba() {
+    compare("window", 2048);
+}
+
+/// A room lit by a uniform sky through a thindielectric window.
+#[test]
+fn window_sky_matches_mitsuba() {
+    compare("window_sky", 512);
+}
+
 /// The sky alone: pinhole rays and envmap escapes evaluated in lanes.
 #[test]
 fn sky_matches_mitsuba() {

@@ -15,11 +15,15 @@
 //! k ≥ 3, x₁'s direction was drawn from a non-delta lobe, x_{k-1}'s from a
 //! delta lobe, every delta lobe drawn at x₂ … x_{k-1} is of a shape that
 //! carries caustics (not a faint specular coat over a diffuse base:
-//! `Material::carries_caustics`), and at most `caustic_bounces` of x₂ …
-//! x_{k-1} drew non-delta directions; every other path is the camera
+//! `Material::carries_caustics`), at most `caustic_bounces` of x₂ …
+//! x_{k-1} drew non-delta directions, and x_k is on an area light, or on a
+//! light at infinity in a direction where it is concentrated (a sun, not a
+//! sky: `Light::caustics_by_light_paths`); every other path is the camera
 //! paths'. The camera path drops emission it finds after a delta bounce
-//! with that history ([`PathState::bounced`] keeps it). The light path
-//! starts with a delta bounce on a carrier (else it stops), goes on
+//! with that history ([`PathState::bounced`] keeps it), and of an
+//! environment only the concentrated lights' part. The light path leaves
+//! a light at infinity only in directions where it is concentrated (else
+//! it stops), starts with a delta bounce on a carrier (else it stops), goes on
 //! through delta bounces on carriers and up to `caustic_bounces`
 //! non-delta ones, and connects to the camera at every vertex after the
 //! first, through the BSDF's non-delta part (a delta lobe evaluates to 0
@@ -146,6 +150,10 @@ impl PathIntegrator {
         }) else {
             return;
         };
+        // Where the light is not concentrated, its caustics are the camera paths'.
+        if !light.caustics_by_light_paths(-ray.d) {
+            return;
+        }
         beta *= n_lights as f32 / self.caustic_paths;
         let mut eta = 1.0f32;
         // Segments so far, and non-delta bounces after the first delta chain.

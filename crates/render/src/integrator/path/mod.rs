@@ -16,7 +16,7 @@
 //! | guiding_min_roughness | float | 0.3: a vertex whose only non-delta lobe is a microfacet lobe of roughness α below this (the lesser of α_u, α_v) is not guided: a guide's quadtree cannot follow so narrow a lobe, and its draws there only add variance |
 //! | guiding_roulette | boolean | true: after the guide's training, Russian roulette by the share of its pixel a path is expected to bring ([`crate::guiding::roulette`]) where the guide knows the radiance ahead; false: by throughput, as without guiding |
 //! | guiding_spatial_threshold | float | 12000: c, a spatial leaf of the guide splits once a training pass of 2^k spp gives it more than c·√(2^k) records (Müller et al.'s c); lower: finer space, fewer records per leaf |
-//! | caustics      | boolean | true in scene files (false in `PathIntegrator::default()`): caustics (light, delta bounces, then non-delta vertices, the last seen by the camera) carried by light paths connected to the camera, which camera paths then leave out (`path/caustics.rs`); off for cameras other than perspective and thin lens, with `hide_emitters`, and nested in `aov`/`moment` |
+//! | caustics      | boolean | true in scene files (false in `PathIntegrator::default()`): caustics (light, delta bounces, then non-delta vertices, the last seen by the camera) of area lights and of concentrated sources at infinity (a sun, not a sky) carried by light paths connected to the camera, which camera paths then leave out (`path/caustics.rs`); off for cameras other than perspective and thin lens, with `hide_emitters`, and nested in `aov`/`moment` |
 //! | caustic_paths | float   | 1/32: light paths per camera sample for the caustics, in (0, 1] |
 //! | caustic_bounces | integer | -1 (as many as `max_depth` allows): non-delta bounces a caustics' light path may take before the vertex the camera sees, -1 or 0 to 64; 0: caustics seen directly only |
 //! | light_candidates | integer | light samples drawn per vertex to resample the one whose shadow ray is traced (resampled importance sampling, see below), 1 to 64; by default 4 in scenes of at least 8 lights, else 1 |
@@ -485,6 +485,9 @@ impl PathIntegrator {
                 // Camera ray or specular bounce: weight 1, no density needed.
                 if self.delta_miss_seen(st) {
                     Self::add_delta_miss(st, scene.environment_radiance(st.ray.d));
+                } else if self.carried_by_light_paths(st) {
+                    // A caustic: light paths carry the concentrated part.
+                    Self::add_delta_miss(st, scene.environment_radiance_left_to_camera(st.ray.d));
                 }
             } else {
                 let (le, env_pdf) = scene.environment(st.prev_p, st.prev_n, st.ray.d);
