@@ -151,3 +151,44 @@ fn caustic_bounces_is_read_and_checked() {
         assert!(err.to_string().contains("caustic_bounces must be -1"), "{m}: {err}");
     }
 }
+
+/// Which shapes' delta lobes light paths carry, through the wrappers
+/// (`twosided`, `blendbsdf`, `mask`) to the materials inside: glass and
+/// mirrors do, a specular coat over a diffuse base and rough or diffuse
+/// materials do not, and a wrapper does where any material inside it does.
+#[test]
+fn carriers_are_found_through_wrappers() {
+    let bsdfs = [
+        (r#"<bsdf type="dielectric"/>"#, true),
+        (r#"<bsdf type="conductor"/>"#, true),
+        (r#"<bsdf type="thindielectric"/>"#, true),
+        (r#"<bsdf type="diffuse"/>"#, false),
+        (r#"<bsdf type="roughconductor"/>"#, false),
+        (r#"<bsdf type="plastic"/>"#, false),
+        (r#"<bsdf type="twosided"><bsdf type="plastic"/></bsdf>"#, false),
+        (r#"<bsdf type="twosided"><bsdf type="conductor"/></bsdf>"#, true),
+        (
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="dielectric"/></bsdf>"#,
+            true,
+        ),
+        (
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="plastic"/></bsdf>"#,
+            false,
+        ),
+        (r#"<bsdf type="mask"><float name="opacity" value="0.5"/><bsdf type="diffuse"/></bsdf>"#, true),
+    ];
+    let shapes: String = bsdfs
+        .iter()
+        .enumerate()
+        .map(|(i, (b, _))| format!(r#"<shape type="sphere"><point name="center" x="{i}" y="0" z="0"/><float name="radius" value="0.3"/>{b}</shape>"#))
+        .collect();
+    let xml = format!(
+        r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"/></sensor><emitter type="constant"/>{shapes}</scene>"#
+    );
+    let desc = penumbra_scene::mitsuba::parse_str(&xml, std::path::Path::new("carriers.xml"), &[])
+        .unwrap_or_else(|e| panic!("{e}"));
+    let job = penumbra_scene::builder::build(&desc, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    for (i, (b, carries)) in bsdfs.iter().enumerate() {
+        assert_eq!(job.scene.carries_caustics(i as u32), *carries, "{b}");
+    }
+}

@@ -557,16 +557,22 @@ impl Material {
         s.sh_frame
     }
 
+    /// Whether `leaf` holds for any of the materials this one is made of:
+    /// itself, or those inside a two-sided, normal- or bump-mapped material
+    /// or a blend (which have no lobes of their own).
+    fn any_part(&self, leaf: &impl Fn(&Material) -> bool) -> bool {
+        match self {
+            Material::TwoSided(front, back) => front.any_part(leaf) || back.any_part(leaf),
+            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.any_part(leaf),
+            Material::Blend { first, second, .. } => first.any_part(leaf) || second.any_part(leaf),
+            m => leaf(m),
+        }
+    }
+
     /// Whether the BSDF has a pass-through lobe (Mitsuba's `BSDFFlags::Null`):
     /// `null`, `mask`, `thindielectric`, or a wrapper or blend of one.
     pub fn has_null_lobe(&self) -> bool {
-        match self {
-            Material::Null | Material::Mask { .. } | Material::ThinDielectric(_) => true,
-            Material::TwoSided(front, back) => front.has_null_lobe() || back.has_null_lobe(),
-            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.has_null_lobe(),
-            Material::Blend { first, second, .. } => first.has_null_lobe() || second.has_null_lobe(),
-            _ => false,
-        }
+        self.any_part(&|m| matches!(m, Material::Null | Material::Mask { .. } | Material::ThinDielectric(_)))
     }
 
     /// Whether its BSDF may have a delta lobe (a smooth interface or
@@ -574,23 +580,22 @@ impl Material {
     /// the materials whose lobes are all non-delta. Light paths for the
     /// caustics aim at the shapes for which this holds.
     pub fn may_be_delta(&self) -> bool {
-        match self {
-            Material::Diffuse(_)
-            | Material::DiffuseTransmission(_)
-            | Material::RoughConductor(_)
-            | Material::RoughDielectric(_)
-            | Material::RoughPlastic(_)
-            | Material::PPlastic(_)
-            | Material::Hair(_)
-            | Material::Measured(_)
-            | Material::Principled(_)
-            | Material::PrincipledThin(_)
-            | Material::GltfPbr(_) => false,
-            Material::TwoSided(front, back) => front.may_be_delta() || back.may_be_delta(),
-            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.may_be_delta(),
-            Material::Blend { first, second, .. } => first.may_be_delta() || second.may_be_delta(),
-            _ => true,
-        }
+        self.any_part(&|m| {
+            !matches!(
+                m,
+                Material::Diffuse(_)
+                    | Material::DiffuseTransmission(_)
+                    | Material::RoughConductor(_)
+                    | Material::RoughDielectric(_)
+                    | Material::RoughPlastic(_)
+                    | Material::PPlastic(_)
+                    | Material::Hair(_)
+                    | Material::Measured(_)
+                    | Material::Principled(_)
+                    | Material::PrincipledThin(_)
+                    | Material::GltfPbr(_)
+            )
+        })
     }
 
     /// Whether light paths carry the caustics of its delta lobes (see
@@ -599,13 +604,7 @@ impl Material {
     /// whose faint caustics camera paths find well enough: light paths aimed
     /// at them cost time and bought nothing (rough_spheres, see the README).
     pub fn carries_caustics(&self) -> bool {
-        match self {
-            Material::Plastic(_) | Material::CoatedDiffuse(_) => false,
-            Material::TwoSided(front, back) => front.carries_caustics() || back.carries_caustics(),
-            Material::NormalMap { inner, .. } | Material::BumpMap { inner, .. } => inner.carries_caustics(),
-            Material::Blend { first, second, .. } => first.carries_caustics() || second.carries_caustics(),
-            m => m.may_be_delta(),
-        }
+        self.any_part(&|m| !matches!(m, Material::Plastic(_) | Material::CoatedDiffuse(_)) && m.may_be_delta())
     }
 
     /// Whether a hit on this material can scatter light at all (false for

@@ -17,6 +17,8 @@ use crate::integrator::path::CausticTargets;
 use crate::integrator::ptracer::{CameraConnection, ParticleTracer, Splat};
 use crate::integrator::PathIntegrator;
 use crate::material::Scratch;
+use crate::math::Spectrum;
+use crate::sampling::SampleStream;
 use glam::Vec2;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -39,47 +41,18 @@ impl RenderJob {
     ) -> Option<RenderStats> {
         let cam = CameraConnection::new(&self.camera, self.full_size)
             .expect("ptracer needs a perspective or thin-lens camera (checked when the scene is loaded)");
-        let (fw, fh) = self.full_size;
         let mut pass = Film::with_layers(film.width, film.height, &film.layers());
-        let mut stats = RenderStats::default();
-        let (ox, oy) = (self.crop_offset.0 as f32, self.crop_offset.1 as f32);
-        for first in (0..fh).step_by(ROWS_PER_BATCH as usize) {
-            let rows: Option<Vec<(Vec<Splat>, RenderStats)>> = (first..(first + ROWS_PER_BATCH).min(fh))
-                .into_par_iter()
-                .map(|gy| {
-                    if cancel.load(Ordering::Relaxed) {
-                        return None;
-                    }
-                    let (mut out, mut st, mut scratch) = (Vec::new(), RenderStats::default(), Scratch::new());
-                    for gx in 0..fw {
-                        for s in samples.clone() {
-                            let mut rng = self.sampler.stream((gx, gy), s);
-                            pt.trace(&self.scene, &cam, &mut rng, &mut st.rays, &mut scratch, &mut out);
-                            st.samples += 1;
-                        }
-                    }
-                    progress(st.samples);
-                    Some((out, st))
-                })
-                .collect();
-            for (splats, st) in rows? {
-                for sp in splats {
-                    if !sp.value.is_finite() || !sp.pos.is_finite() {
-                        stats.non_finite += 1;
-                        continue;
-                    }
-                    // The pixel in the film (crop) and the offset in it.
-                    let (x, y) = (sp.pos.x - ox, sp.pos.y - oy);
-                    let (px, py) = (x.floor(), y.floor());
-                    let u = glam::Vec2::new(x - px, y - py);
-                    pass.splat_normalized(px as i32, py as i32, u, sp.value, &self.filter);
-                }
-                stats.add(&st);
-            }
-        }
-        if cancel.load(Ordering::Relaxed) {
-            return None;
-        }
+        let stats = self.trace_rows(
+            samples.clone(),
+            0,
+            progress,
+            cancel,
+            |rng, st, scratch, out| {
+                pt.trace(&self.scene, &cam, rng, &mut st.rays, scratch, out);
+                st.samples += 1;
+            },
+            |px, py, u, value| pass.splat_normalized(px, py, u, value, &self.filter),
+        )?;
         let n = samples.len() as f64;
         for a in &mut pass.acc {
             a[3] += n;
@@ -113,15 +86,12 @@ impl RenderJob {
     ) -> Option<(Film, RenderStats)> {
         let cam = CameraConnection::new(&self.camera, self.full_size)
             .expect("caustics need a perspective or thin-lens camera (checked when the scene is loaded)");
-        let (fw, fh) = self.full_size;
         let mut pass = Film::with_layers(film.width, film.height, &film.layers());
-        let mut stats = RenderStats::default();
         let targets = CausticTargets::new(&self.scene);
         if targets.is_empty() {
-            return Some((pass, stats));
+            return Some((pass, RenderStats::default()));
         }
         let (left, top, right, bottom) = self.sample_ring();
-        let (ox, oy) = (self.crop_offset.0 as f32, self.crop_offset.1 as f32);
         // Whether this pass takes camera samples in film pixel (x, y), as `tile_pixels` decides.
         let sampled = |x: i32, y: i32| {
             let inside = x >= -(left as i32)
@@ -134,6 +104,39 @@ impl RenderJob {
                     a[(cy as u32 * self.width + cx as u32) as usize]
                 })
         };
+        let stats = self.trace_rows(
+            samples,
+            CAUSTIC_STREAM,
+            &|_| {},
+            cancel,
+            |rng, st, scratch, out| path.trace_caustic(&self.scene, &cam, &targets, rng, &mut st.rays, scratch, out),
+            |px, py, u, value| {
+                if sampled(px, py) {
+                    pass.splat_radiance(px, py, u, value, &self.filter);
+                }
+            },
+        )?;
+        Some((pass, stats))
+    }
+
+    /// Traces the light paths of sample indices `samples` of every full-film
+    /// pixel (x, y), each from the stream of pixel (x | `x_key`, y) and
+    /// sample, a row of the full film per task, and lands their finite
+    /// splats in row order, each with its film pixel and the offset in it:
+    /// `land(px, py, u, value)` (crop offset applied). `progress` gets each
+    /// row's sample count. None when cancelled.
+    fn trace_rows(
+        &self,
+        samples: Range<u32>,
+        x_key: u32,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+        trace: impl Fn(&mut SampleStream, &mut RenderStats, &mut Scratch, &mut Vec<Splat>) + Sync,
+        mut land: impl FnMut(i32, i32, Vec2, Spectrum),
+    ) -> Option<RenderStats> {
+        let (fw, fh) = self.full_size;
+        let (ox, oy) = (self.crop_offset.0 as f32, self.crop_offset.1 as f32);
+        let mut stats = RenderStats::default();
         for first in (0..fh).step_by(ROWS_PER_BATCH as usize) {
             let rows: Option<Vec<(Vec<Splat>, RenderStats)>> = (first..(first + ROWS_PER_BATCH).min(fh))
                 .into_par_iter()
@@ -144,20 +147,12 @@ impl RenderJob {
                     let (mut out, mut st, mut scratch) = (Vec::new(), RenderStats::default(), Scratch::new());
                     for gx in 0..fw {
                         // Hashed once for the pixel's streams.
-                        let key = self.sampler.pixel_key((gx | CAUSTIC_STREAM, gy));
+                        let key = self.sampler.pixel_key((gx | x_key, gy));
                         for s in samples.clone() {
-                            let mut rng = self.sampler.stream_of_key(key, s);
-                            path.trace_caustic(
-                                &self.scene,
-                                &cam,
-                                &targets,
-                                &mut rng,
-                                &mut st.rays,
-                                &mut scratch,
-                                &mut out,
-                            );
+                            trace(&mut self.sampler.stream_of_key(key, s), &mut st, &mut scratch, &mut out);
                         }
                     }
+                    progress(st.samples);
                     Some((out, st))
                 })
                 .collect();
@@ -169,11 +164,7 @@ impl RenderJob {
                     }
                     let (x, y) = (sp.pos.x - ox, sp.pos.y - oy);
                     let (px, py) = (x.floor(), y.floor());
-                    if !sampled(px as i32, py as i32) {
-                        continue;
-                    }
-                    let u = Vec2::new(x - px, y - py);
-                    pass.splat_radiance(px as i32, py as i32, u, sp.value, &self.filter);
+                    land(px as i32, py as i32, Vec2::new(x - px, y - py), sp.value);
                 }
                 stats.add(&st);
             }
@@ -181,6 +172,6 @@ impl RenderJob {
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
-        Some((pass, stats))
+        Some(stats)
     }
 }
