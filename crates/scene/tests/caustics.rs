@@ -3,27 +3,19 @@
 //! whose `path` has none), and what they are for, a caustic's variance
 //! cut several-fold. The other scene tests run them too, by default on.
 
-use crate::common::{assert_agree, reference, render_with_variance, root, Estimate};
+use crate::common::{compare_path, reference, render_with_variance, root, Estimate};
 use penumbra_render::film::Film;
 use penumbra_render::integrator::Integrator;
 use penumbra_scene::{load_scene, Overrides};
-
-fn compare(name: &str, max_depth: u32, spp: u32, options: &str) {
-    let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-    let integrator = format!("path:max_depth={max_depth},{options}");
-    // As `references::compare_path`: 8 batches, seed 3.
-    let ours = render_with_variance(&scene, spp, 8, Some(&integrator), 3);
-    assert_agree(&format!("{name} ({options})"), &ours, &reference(name), 0.02);
-}
 
 /// A caustic of an area light through a glass sphere: with a light path
 /// for every camera sample, a quarter of them, and none (512 spp, as the
 /// scene's reference test).
 #[test]
 fn glass_caustic_matches_mitsuba_at_every_rate_of_light_paths() {
-    compare("glass_caustic", 16, 512, "caustic_paths=1");
-    compare("glass_caustic", 16, 512, "caustic_paths=0.25");
-    compare("glass_caustic", 16, 512, "caustics=false");
+    compare_path("glass_caustic", 16, 512, "caustic_paths=1");
+    compare_path("glass_caustic", 16, 512, "caustic_paths=0.25");
+    compare_path("glass_caustic", 16, 512, "caustics=false");
 }
 
 /// Light paths that go on through non-delta bounces after their first
@@ -33,9 +25,9 @@ fn glass_caustic_matches_mitsuba_at_every_rate_of_light_paths() {
 /// sample and at a quarter.
 #[test]
 fn glass_caustic_matches_mitsuba_with_light_paths_bouncing() {
-    compare("glass_caustic", 16, 512, "caustic_paths=1,caustic_bounces=1");
-    compare("glass_caustic", 16, 512, "caustic_paths=1,caustic_bounces=64");
-    compare("glass_caustic", 16, 512, "caustic_paths=0.25,caustic_bounces=64");
+    compare_path("glass_caustic", 16, 512, "caustic_paths=1,caustic_bounces=1");
+    compare_path("glass_caustic", 16, 512, "caustic_paths=1,caustic_bounces=64");
+    compare_path("glass_caustic", 16, 512, "caustic_paths=0.25,caustic_bounces=64");
 }
 
 /// The sun's caustic through a glass sphere and its glints off a mirror
@@ -43,8 +35,8 @@ fn glass_caustic_matches_mitsuba_with_light_paths_bouncing() {
 /// scene's reference test).
 #[test]
 fn envmap_sun_matches_mitsuba_with_a_light_path_per_sample() {
-    compare("envmap_sun", 8, 512, "caustic_paths=1");
-    compare("envmap_sun", 8, 512, "caustic_paths=1,caustic_bounces=64");
+    compare_path("envmap_sun", 8, 512, "caustic_paths=1");
+    compare_path("envmap_sun", 8, 512, "caustic_paths=1,caustic_bounces=64");
 }
 
 /// A room lit through a window by the sun and sky of `envmap_sun`: the
@@ -54,7 +46,7 @@ fn envmap_sun_matches_mitsuba_with_a_light_path_per_sample() {
 /// scene's reference test renders the default at 2048).
 #[test]
 fn window_matches_mitsuba_with_the_sky_on_camera_paths() {
-    compare("window", 8, 1024, "caustic_paths=1");
+    compare_path("window", 8, 1024, "caustic_paths=1");
 }
 
 /// A uniform sky is no concentrated source (`Light::caustics_by_light_paths`):

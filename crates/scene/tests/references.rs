@@ -10,8 +10,8 @@
 use crate::common;
 
 use crate::common::{
-    assert_agree, compare as compare_estimates, injected_errors, reference, render_with_sampler, render_with_variance,
-    root,
+    assert_agree, compare as compare_estimates, compare_path, injected_errors, reference, render_with_sampler,
+    render_with_variance, root,
 };
 
 /// Every comparison must resolve an error of this fraction in each
@@ -339,15 +339,6 @@ fn sggx_in_a_heterogeneous_medium_matches_mitsuba() {
 
 fn compare_guided(name: &str, max_depth: u32, spp: u32) {
     compare_path(name, max_depth, spp, "guiding=true,guiding_bsdf_fraction=0.3");
-}
-
-/// `name` rendered by `path` with `max_depth` and `options` (in 8 batches
-/// of `spp` each) against its Mitsuba reference.
-fn compare_path(name: &str, max_depth: u32, spp: u32, options: &str) {
-    let scene = root().join("tests/scenes").join(format!("{name}.xml"));
-    let integrator = format!("path:max_depth={max_depth},{options}");
-    let ours = render_with_variance(&scene, spp, 8, Some(&integrator), 3);
-    assert_agree(&format!("{name} ({options})"), &ours, &reference(name), 0.02);
 }
 
 #[test]

@@ -376,6 +376,16 @@ pub fn injected_errors(e: &Estimate) -> Vec<(&'static str, Estimate)> {
     vec![("lobe too wide (3x3 blur)", blur), ("mirrored", mirror), ("10 % too bright over a fifth", bright)]
 }
 
+/// `path` with `max_depth` and `options` (`key=value,...`) on
+/// tests/scenes/`name`.xml at `spp` (8 batches, seed 3) against its
+/// Mitsuba reference, to 2 % of the image mean.
+pub fn compare_path(name: &str, max_depth: u32, spp: u32, options: &str) {
+    let scene = root().join("tests/scenes").join(format!("{name}.xml"));
+    let integrator = format!("path:max_depth={max_depth},{options}");
+    let ours = render_with_variance(&scene, spp, 8, Some(&integrator), 3);
+    assert_agree(&format!("{name} ({options})"), &ours, &reference(name), 0.02);
+}
+
 /// The Mitsuba reference of tests/scenes/`name`.xml (tests/refs/, with its variance image).
 pub fn reference(name: &str) -> Estimate {
     let img = penumbra_scene::image_io::read_exr(&root().join("tests/refs").join(format!("{name}.exr"))).unwrap();
