@@ -527,14 +527,9 @@ impl Scene {
 
     /// The part of [`Self::environment_radiance`] along `d` whose caustics
     /// camera paths carry: the lights at infinity that are not concentrated
-    /// there ([`Light::caustics_by_light_paths`]).
+    /// there ([`Light::environment_left_to_camera`]).
     pub fn environment_radiance_left_to_camera(&self, d: Vec3) -> Spectrum {
-        self.env_lights
-            .iter()
-            .map(|&i| &self.lights[i as usize])
-            .filter(|l| !l.caustics_by_light_paths(d))
-            .map(|l| l.environment_radiance(d))
-            .sum()
+        self.env_lights.iter().map(|&i| self.lights[i as usize].environment_left_to_camera(d)).sum()
     }
 
     /// The scene's environment, with its light index, when it is one

@@ -551,14 +551,13 @@ impl Film {
                 let w = wx[kx] * wy[ky] / norm;
                 let i = (y * self.width + x) as usize;
                 let a = &mut self.acc[i];
+                // Light paths' splats into camera samples' sums also keep
+                // their own moments, for the variance (see `pixel_variance`).
+                let mut moments = if normalized { None } else { self.moments.get_mut(i) };
                 for (c, v) in l.to_array().into_iter().enumerate() {
-                    a[c] += (v * w) as f64;
-                }
-                // Light paths' splats into camera samples' sums: their own
-                // moments, for the variance (see `pixel_variance`).
-                if let (false, Some(m)) = (normalized, self.moments.get_mut(i)) {
-                    for (c, v) in l.to_array().into_iter().enumerate() {
-                        let s = (v * w) as f64;
+                    let s = (v * w) as f64;
+                    a[c] += s;
+                    if let Some(m) = moments.as_deref_mut() {
                         m[SPLAT_SUM + c] += s;
                         m[SPLAT_SQUARES + c] += s * s;
                     }

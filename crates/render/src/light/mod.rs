@@ -212,6 +212,18 @@ impl Light {
         }
     }
 
+    /// The radiance from direction `wi` of a light at infinity whose
+    /// caustics camera paths carry there (not
+    /// [`Self::caustics_by_light_paths`]), else zero: its radiance and
+    /// density found at once.
+    #[inline]
+    pub fn environment_left_to_camera(&self, wi: Vec3) -> Spectrum {
+        match self.environment(wi) {
+            (_, pdf) if pdf > CONCENTRATED_PDF => Spectrum::ZERO,
+            (le, _) => le,
+        }
+    }
+
     /// Radiance from direction `wi` for lights at infinity (zero otherwise),
     /// and the solid-angle density with which `sample_li` picks `wi`: the
     /// `pdf_li` of environment lights, sharing their work with the radiance.
