@@ -37,6 +37,26 @@ pub struct ShapeInfo {
     pub light: Option<u32>,
 }
 
+/// A shape whose hits lane vertices shade ([`Scene::lane_site`]): what the
+/// vertex needs of it before its hit, found once per scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaneSite {
+    /// Its material.
+    pub surface: LaneSurface,
+    /// Its geometry as the lane kernels read it: 0 a flat-shaded mesh, 1 a
+    /// sphere, 2 a disk, 3 a flat-shaded mesh whose frame follows its
+    /// texture coordinates (a textured material), 4 a sphere whose frame
+    /// follows its uv parameterisation (an anisotropic material), 5 and 6: 0
+    /// and 3 on a mesh with vertex normals (the shading normal interpolated).
+    pub geometry: u8,
+    /// [`LaneMaterial::kernel`] of its material.
+    pub kernel: u8,
+    /// Whether it is an area emitter.
+    pub emitter: bool,
+    /// [`Scene::carries_caustics`].
+    pub carries_caustics: bool,
+}
+
 /// An area light as lane vertices sample it ([`Scene::lane_light`]), its
 /// constants found once.
 #[derive(Debug, Clone, Copy)]
@@ -114,15 +134,15 @@ pub struct Scene {
     reads_uv: Vec<bool>,
     /// Per shape: [`Scene::carries_caustics`], looked up once a bounce.
     carries_caustics: Vec<bool>,
-    /// Per shape: [`Scene::lane_material`].
-    lane_material: Vec<Option<LaneSurface>>,
+    /// Per shape: [`Scene::lane_site`].
+    lane_sites: Vec<Option<LaneSite>>,
     /// Per light: [`Scene::lane_light`].
     lane_lights: Vec<Option<LaneLight>>,
     /// The triangles of the mesh lights among `lane_lights`.
     lane_light_tris: Vec<LaneLightTri>,
     /// `lane_lights` as one table, where every light has a lane kernel.
     lane_light_table: Option<LaneLightTable>,
-    /// The transmittance tables of the `roughplastic`s among `lane_material`.
+    /// The transmittance tables of the `roughplastic`s among `lane_sites`.
     lane_tables: Vec<[f32; TRANSMITTANCE_RES]>,
     /// When set, every `intersect` and `occluded` query is appended here
     /// (benchmarking only; one predictable branch per ray otherwise).
@@ -207,7 +227,7 @@ impl Scene {
             })
             .collect();
         let light_sampler = LightSampler::Uniform { count: lights.len() };
-        let carries_caustics = shape_info
+        let carries_caustics: Vec<bool> = shape_info
             .iter()
             .map(|info| materials.get(info.material as usize).is_some_and(Material::carries_caustics))
             .collect();
@@ -215,11 +235,12 @@ impl Scene {
         let mut lane_tables = Vec::new();
         let per_material: Vec<Option<LaneSurface>> =
             materials.iter().map(|m| m.lane_material(&mut lane_tables)).collect();
-        let lane_material = shapes
+        let lane_sites = shapes
             .iter()
             .zip(&shape_info)
             .zip(&reads_uv)
-            .map(|((shape, info), &uv)| {
+            .zip(&carries_caustics)
+            .map(|(((shape, info), &uv), &carries_caustics)| {
                 let (known, mesh) = match shape {
                     Shape::Mesh(_) | Shape::CulledMesh(_) => (true, true),
                     Shape::Sphere(_) | Shape::Disk(_) => (true, false),
@@ -229,10 +250,33 @@ impl Scene {
                 // Textures read the uv parameterisation, which lanes find on
                 // meshes only; anisotropic roughness its dp/du, which lanes
                 // find on spheres only.
-                m.filter(|s| match &s.material {
+                let surface = m.filter(|s| match &s.material {
                     LaneMaterial::TexturedDiffuse => mesh,
                     m if m.anisotropic() => matches!(shape, Shape::Sphere(_)),
                     _ => !uv,
+                })?;
+                let geometry = match shape {
+                    Shape::Mesh(m) | Shape::CulledMesh(m) => {
+                        let textured =
+                            matches!(surface.material, LaneMaterial::TexturedDiffuse) && !m.mesh.uvs.is_empty();
+                        let smooth = !m.face_normals && !m.mesh.normals.is_empty();
+                        match (textured, smooth) {
+                            (false, false) => 0,
+                            (true, false) => 3,
+                            (false, true) => 5,
+                            (true, true) => 6,
+                        }
+                    }
+                    Shape::Sphere(_) if surface.material.anisotropic() => 4,
+                    Shape::Sphere(_) => 1,
+                    _ => 2,
+                };
+                Some(LaneSite {
+                    surface,
+                    geometry,
+                    kernel: surface.material.kernel(),
+                    emitter: info.light.is_some(),
+                    carries_caustics,
                 })
             })
             .collect();
@@ -295,7 +339,7 @@ impl Scene {
             light_sampler,
             reads_uv,
             carries_caustics,
-            lane_material,
+            lane_sites,
             lane_lights,
             lane_light_tris,
             lane_light_table: lane_light_table.flatten(),
@@ -374,13 +418,13 @@ impl Scene {
         }
     }
 
-    /// The material of shape `shape` when its hits can be shaded in lanes
-    /// (the `path` integrator's lane vertex): a mesh (flat or with vertex
-    /// normals), a sphere or a disk, an emitter or not, whose material is a
+    /// Shape `shape` when its hits can be shaded in lanes (the `path`
+    /// integrator's lane vertex): a mesh (flat or with vertex normals), a
+    /// sphere or a disk, an emitter or not, whose material is a
     /// [`Material::lane_material`] (a textured one on meshes only).
-    #[inline]
-    pub fn lane_material(&self, shape: u32) -> Option<LaneSurface> {
-        self.lane_material[shape as usize]
+    #[inline(always)]
+    pub fn lane_site(&self, shape: u32) -> Option<&LaneSite> {
+        self.lane_sites[shape as usize].as_ref()
     }
 
     /// Whether light paths carry the caustics of shape `shape`'s delta

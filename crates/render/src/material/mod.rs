@@ -256,6 +256,25 @@ fn constant_alphas(r: &crate::bsdf::microfacet::Roughness) -> Option<(f32, f32)>
 }
 
 impl LaneMaterial {
+    /// The lane kernel that shades it: 0 diffuse (textured too), 1 and 6
+    /// the GGX and Beckmann rough conductors, 2 the smooth conductor, 3 the
+    /// smooth dielectric, 4 plastic, 5 and 7 the GGX and Beckmann rough
+    /// dielectrics, 8 and 9 the GGX and Beckmann rough plastics.
+    pub fn kernel(&self) -> u8 {
+        match self {
+            LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse => 0,
+            LaneMaterial::RoughConductor { beckmann: false, .. } => 1,
+            LaneMaterial::Conductor { .. } => 2,
+            LaneMaterial::Dielectric { .. } => 3,
+            LaneMaterial::Plastic { .. } => 4,
+            LaneMaterial::RoughDielectric { beckmann: false, .. } => 5,
+            LaneMaterial::RoughConductor { beckmann: true, .. } => 6,
+            LaneMaterial::RoughDielectric { beckmann: true, .. } => 7,
+            LaneMaterial::RoughPlastic { beckmann: false, .. } => 8,
+            LaneMaterial::RoughPlastic { beckmann: true, .. } => 9,
+        }
+    }
+
     /// Whether no lobe transmits (as [`crate::bsdf::Bsdf::reflects_only`]
     /// of its BSDF): all but the dielectrics.
     pub fn reflects_only(&self) -> bool {

@@ -5,7 +5,7 @@
 //! `conductor`, `dielectric`, `plastic`, `roughconductor` or
 //! `roughdielectric` (GGX or Beckmann; anisotropic ones on spheres, whose
 //! frame then follows the uv parameterisation) material of constant parameters,
-//! alone or in `twosided` ([`Scene::lane_material`]); the non-specular ones lit by an area light
+//! alone or in `twosided` ([`Scene::lane_site`]); the non-specular ones lit by an area light
 //! on a mesh or a sphere ([`Scene::lane_light`]) or by the scene's one
 //! environment map, or resampled from up to [`MAX_LANE_CANDIDATES`] light
 //! candidates that are all such area lights (`resample_light`: the
@@ -70,16 +70,16 @@ use glam::{Vec2, Vec3};
 /// run together.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LaneKind {
-    /// 0: a flat-shaded mesh, 1: a sphere, 2: a disk, 3: a flat-shaded
-    /// mesh whose frame follows its texture coordinates (a textured
-    /// material), 4: a sphere whose frame follows its uv parameterisation
-    /// (an anisotropic material), 5 and 6: 0 and 3 on a mesh with vertex
-    /// normals (the shading normal interpolated).
+    /// The geometry ([`crate::scene::LaneSite::geometry`]): 0: a flat-shaded
+    /// mesh, 1: a sphere, 2: a disk, 3: a flat-shaded mesh whose frame
+    /// follows its texture coordinates, 4: a sphere whose frame follows its
+    /// uv parameterisation, 5 and 6: 0 and 3 with vertex normals.
     shape: u8,
-    /// 0: diffuse, 1: GGX rough conductor, 4: plastic, 5: GGX rough
-    /// dielectric, 6 and 7: Beckmann rough conductor and dielectric, 8 and
-    /// 9: GGX and Beckmann rough plastic (these sample a light), 2: smooth
-    /// conductor, 3: smooth dielectric.
+    /// The material's kernel ([`LaneMaterial::kernel`]): 0: diffuse, 1:
+    /// GGX rough conductor, 4: plastic, 5: GGX rough dielectric, 6 and 7:
+    /// Beckmann rough conductor and dielectric, 8 and 9: GGX and Beckmann
+    /// rough plastic (these sample a light), 2: smooth conductor, 3: smooth
+    /// dielectric.
     bsdf: u8,
     /// The light sampled: 0: an area light on a mesh, 1: the environment
     /// map, 2: an area light on a sphere (0 where none is).
@@ -383,14 +383,21 @@ impl LaneBins {
     }
 
     /// The position of `kind`'s batch, made on first use.
-    #[inline]
+    #[inline(always)]
     fn of(&mut self, kind: LaneKind) -> usize {
         let k = kind.index();
         if self.of_kind[k] == u8::MAX {
-            self.of_kind[k] = self.batches.len() as u8;
-            self.batches.push(LaneBatch::new(kind));
+            self.add(kind);
         }
         self.of_kind[k] as usize
+    }
+
+    /// A new batch for `kind` (a stream meets a few kinds).
+    #[cold]
+    #[inline(never)]
+    fn add(&mut self, kind: LaneKind) {
+        self.of_kind[kind.index()] = self.batches.len() as u8;
+        self.batches.push(LaneBatch::new(kind));
     }
 }
 
@@ -1058,7 +1065,7 @@ impl<F: Float> LaneHit<F> {
 impl PathIntegrator {
     /// The vertex of `st` at `hit` (the closest hit of `st.ray`) added to
     /// its kind's batch in `bins` when it qualifies: a non-instanced hit on
-    /// a [`Scene::lane_material`] shape, before the last segment; for a
+    /// a [`Scene::lane_site`] shape, before the last segment; for a
     /// diffuse one, with a light picked (uniformly or by power) that is a
     /// [`Scene::lane_light`] or `env`, the scene's one environment map
     /// ([`Scene::single_envmap`]). Its light and BSDF random numbers are
@@ -1086,27 +1093,16 @@ impl PathIntegrator {
             return None;
         }
         // The kind first, then the rows of its batch.
-        let surface = scene.lane_material(hit.shape)?;
+        let site = scene.lane_site(hit.shape)?;
         // An emitter's emission is added here (after the last way back to
         // `vertex`, below), one path at a time; hidden from the camera, it is
         // `vertex`'s.
-        let emitter = scene.shape_info[hit.shape as usize].light.is_some();
-        if emitter && st.depth == 0 && self.hide_emitters {
+        if site.emitter && st.depth == 0 && self.hide_emitters {
             return None;
         }
-        let material = surface.material;
-        let bsdf = match material {
-            LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse => 0,
-            LaneMaterial::RoughConductor { beckmann: false, .. } => 1,
-            LaneMaterial::Conductor { .. } => 2,
-            LaneMaterial::Dielectric { .. } => 3,
-            LaneMaterial::Plastic { .. } => 4,
-            LaneMaterial::RoughDielectric { beckmann: false, .. } => 5,
-            LaneMaterial::RoughConductor { beckmann: true, .. } => 6,
-            LaneMaterial::RoughDielectric { beckmann: true, .. } => 7,
-            LaneMaterial::RoughPlastic { beckmann: false, .. } => 8,
-            LaneMaterial::RoughPlastic { beckmann: true, .. } => 9,
-        };
+        let (surface, shape_kind, bsdf) = (&site.surface, site.geometry, site.kernel);
+        // By reference: a copy of the material cost 22 instructions a vertex.
+        let material = &surface.material;
         let lit = bsdf != 2 && bsdf != 3;
         let m = if lit { self.light_candidates_for(scene.lights.len()) } else { 1 };
         // The light BVH's choice depends on the point, found in lanes.
@@ -1114,23 +1110,7 @@ impl PathIntegrator {
             return None;
         }
         let shape = &scene.shapes[hit.shape as usize];
-        let shape_kind = match shape {
-            Shape::Mesh(m) | Shape::CulledMesh(m) => {
-                let textured = matches!(material, LaneMaterial::TexturedDiffuse);
-                let smooth = !m.face_normals && !m.mesh.normals.is_empty();
-                match (textured && !m.mesh.uvs.is_empty(), smooth) {
-                    (false, false) => 0,
-                    (true, false) => 3,
-                    (false, true) => 5,
-                    (true, true) => 6,
-                }
-            }
-            Shape::Sphere(_) if material.anisotropic() => 4,
-            Shape::Sphere(_) => 1,
-            Shape::Disk(_) => 2,
-            _ => return None,
-        };
-        let reflectance = match material {
+        let reflectance = match *material {
             LaneMaterial::TexturedDiffuse => {
                 let m = &scene.materials[scene.shape_info[hit.shape as usize].material as usize];
                 let Material::Diffuse(d) = m else { return None };
@@ -1167,6 +1147,14 @@ impl PathIntegrator {
             }
             if m > 1 {
                 break 'pick Some((Picked::Candidates, 0.0, Spectrum::ZERO, false));
+            }
+            // The kernel picks from a table (uniformly, so never failing);
+            // here only the light's kind is needed, which a table of one
+            // kind gives without a pick.
+            match table.map(LaneLightTable::kinds) {
+                Some((true, false)) => break 'pick Some((Picked::Table(false), 0.0, Spectrum::ZERO, false)),
+                Some((false, true)) => break 'pick Some((Picked::Table(true), 0.0, Spectrum::ZERO, false)),
+                _ => {}
             }
             // Uniform and power selection ignore the receiver.
             let Some((i, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel) else { break 'pick None };
@@ -1212,7 +1200,7 @@ impl PathIntegrator {
         b.set(l, row::B + 1, hit.uv.y);
         b.set3(l, row::BETA, st.beta);
         b.set(l, row::TWO_SIDED_BSDF, if surface.two_sided { 1.0 } else { 0.0 });
-        match material {
+        match *material {
             LaneMaterial::Diffuse(r) => b.set3(l, row::MAT, r),
             LaneMaterial::TexturedDiffuse => {}
             LaneMaterial::RoughConductor { alpha_u, alpha_v, eta, k, specular_reflectance, .. } => {
@@ -1413,7 +1401,7 @@ impl PathIntegrator {
         // one alone, smooth dielectrics with the 1D one alone, smooth
         // conductors with neither; a guided vertex reads both.
         let guided = lit && guide.is_some() && !material.narrower_than(self.guide_min_roughness());
-        let (reads_u1, reads_u) = match material {
+        let (reads_u1, reads_u) = match *material {
             LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse | LaneMaterial::RoughConductor { .. } => {
                 (false, true)
             }
@@ -1441,11 +1429,11 @@ impl PathIntegrator {
                 b.set(l, row::GUIDED, 0.0);
             }
         }
-        if emitter {
+        if site.emitter {
             self.add_emitted(scene, st, &scene.interaction(&st.ray, hit));
         }
         // For `lane_vertex_done`'s `bounced`, as `vertex` sets it.
-        st.on_carrier = scene.carries_caustics(hit.shape);
+        st.on_carrier = site.carries_caustics;
         b.slots[l] = slot as u32;
         b.len += 1;
         Some(at)
