@@ -185,6 +185,7 @@ fn run<F: Float>(
     let mut round_drawn: Vec<(usize, Sampled)> = Vec::new();
     let mut drawn: Vec<Drawn> = Vec::new();
     let env = scene.single_envmap();
+    let setup = path.lane_setup(scene, env, guide);
     let mut lane_out = LaneOutcomes::default();
     let mut next = 0;
     loop {
@@ -343,7 +344,7 @@ fn run<F: Float>(
                 continue;
             }
             if let (true, Some(h)) = (vertex_lanes, &hits[i]) {
-                if let Some(at) = path.lane_vertex(scene, env, &mut slot.state, h, &mut slot.rng, i, &mut bins, guide) {
+                if let Some(at) = path.lane_vertex(scene, &setup, &mut slot.state, h, &mut slot.rng, i, &mut bins) {
                     ended.push(false);
                     if bins.batch(at).len() == F::WIDTH {
                         run_batch!(at);

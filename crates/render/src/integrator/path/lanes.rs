@@ -1062,7 +1062,59 @@ impl<F: Float> LaneHit<F> {
     }
 }
 
+/// What [`PathIntegrator::lane_vertex`] reads of the scene and the
+/// integrator the same way at every vertex, found once per stream
+/// ([`PathIntegrator::lane_setup`]).
+pub struct LaneSetup<'a> {
+    /// Light candidates of a lit vertex ([`PathIntegrator::light_candidates_for`]).
+    candidates: u32,
+    /// Whether lit vertices can run in lanes: not with the light BVH, whose
+    /// choice depends on the point, nor with more than
+    /// [`MAX_LANE_CANDIDATES`] candidates.
+    lit_in_lanes: bool,
+    /// Whether a lit vertex draws the light selection's number.
+    reads_sel: bool,
+    /// The scene's [`LaneLightTable`], where the kernel picks lights.
+    table: Option<&'a LaneLightTable>,
+    /// With a table whose lights are all of one kind: whether they are
+    /// spheres (else meshes).
+    table_kind: Option<bool>,
+    /// The scene's one environment map, with its light index.
+    env: Option<(usize, &'a EnvMapLight)>,
+    /// The trained path guide.
+    guide: Option<&'a Guide>,
+    /// `guiding_min_roughness`.
+    guide_min_roughness: f32,
+}
+
 impl PathIntegrator {
+    /// The [`LaneSetup`] of a stream over `scene` guided by `guide` (a
+    /// trained path guide); `env` is the scene's one environment map
+    /// ([`Scene::single_envmap`]).
+    pub fn lane_setup<'a>(
+        &self,
+        scene: &'a Scene,
+        env: Option<(usize, &'a EnvMapLight)>,
+        guide: Option<&'a Guide>,
+    ) -> LaneSetup<'a> {
+        let candidates = self.light_candidates_for(scene.lights.len());
+        let table = scene.lane_light_table();
+        LaneSetup {
+            candidates,
+            lit_in_lanes: scene.light_sampler().kind() != LightSelection::Bvh && candidates <= MAX_LANE_CANDIDATES,
+            reads_sel: candidates > 1 || !scene.light_sampler().picks_without_number(),
+            table,
+            table_kind: match table.map(LaneLightTable::kinds) {
+                Some((true, false)) => Some(false),
+                Some((false, true)) => Some(true),
+                _ => None,
+            },
+            env,
+            guide,
+            guide_min_roughness: self.guide_min_roughness(),
+        }
+    }
+
     /// The vertex of `st` at `hit` (the closest hit of `st.ray`) added to
     /// its kind's batch in `bins` when it qualifies: a non-instanced hit on
     /// a [`Scene::lane_site`] shape, before the last segment; for a
@@ -1081,14 +1133,14 @@ impl PathIntegrator {
     pub fn lane_vertex(
         &self,
         scene: &Scene,
-        env: Option<(usize, &EnvMapLight)>,
+        setup: &LaneSetup,
         st: &mut PathState,
         hit: &Hit,
         rng: &mut SampleStream,
         slot: usize,
         bins: &mut LaneBins,
-        guide: Option<&Guide>,
     ) -> Option<usize> {
+        let LaneSetup { env, guide, table, .. } = *setup;
         if hit.instance != Hit::NOT_INSTANCED || st.depth + 1 >= self.term.max_depth {
             return None;
         }
@@ -1104,9 +1156,8 @@ impl PathIntegrator {
         // By reference: a copy of the material cost 22 instructions a vertex.
         let material = &surface.material;
         let lit = bsdf != 2 && bsdf != 3;
-        let m = if lit { self.light_candidates_for(scene.lights.len()) } else { 1 };
-        // The light BVH's choice depends on the point, found in lanes.
-        if lit && (scene.light_sampler().kind() == LightSelection::Bvh || m > MAX_LANE_CANDIDATES) {
+        let m = if lit { setup.candidates } else { 1 };
+        if lit && !setup.lit_in_lanes {
             return None;
         }
         let shape = &scene.shapes[hit.shape as usize];
@@ -1130,12 +1181,11 @@ impl PathIntegrator {
             /// Picked in the kernel from the scene's table (true: on a sphere).
             Table(bool),
         }
-        let table = scene.lane_light_table();
         // The numbers `vertex` draws, in its order; those this vertex never
         // reads are skipped, not computed (specular BSDFs sample no light, and
         // a lone light is picked without a number).
         let dim = rng.dim();
-        let reads_sel = lit && (m > 1 || !scene.light_sampler().picks_without_number());
+        let reads_sel = lit && setup.reads_sel;
         let u_sel = if reads_sel { rng.next_1d() } else { skipped_1d(rng) };
         let u_light = if lit { rng.next_2d() } else { skipped_2d(rng) };
         let u_pick = if lit && m > 1 { rng.next_1d() } else { 0.0 };
@@ -1151,10 +1201,8 @@ impl PathIntegrator {
             // The kernel picks from a table (uniformly, so never failing);
             // here only the light's kind is needed, which a table of one
             // kind gives without a pick.
-            match table.map(LaneLightTable::kinds) {
-                Some((true, false)) => break 'pick Some((Picked::Table(false), 0.0, Spectrum::ZERO, false)),
-                Some((false, true)) => break 'pick Some((Picked::Table(true), 0.0, Spectrum::ZERO, false)),
-                _ => {}
+            if let Some(sphere) = setup.table_kind {
+                break 'pick Some((Picked::Table(sphere), 0.0, Spectrum::ZERO, false));
             }
             // Uniform and power selection ignore the receiver.
             let Some((i, pmf)) = scene.select_light(Vec3::ZERO, Vec3::ZERO, u_sel) else { break 'pick None };
@@ -1400,13 +1448,12 @@ impl PathIntegrator {
         // The BSDF's numbers: diffuse and rough conductors sample with the 2D
         // one alone, smooth dielectrics with the 1D one alone, smooth
         // conductors with neither; a guided vertex reads both.
-        let guided = lit && guide.is_some() && !material.narrower_than(self.guide_min_roughness());
-        let (reads_u1, reads_u) = match *material {
-            LaneMaterial::Diffuse(_) | LaneMaterial::TexturedDiffuse | LaneMaterial::RoughConductor { .. } => {
-                (false, true)
-            }
-            LaneMaterial::Conductor { .. } => (false, false),
-            LaneMaterial::Dielectric { .. } => (true, false),
+        let guided = lit && guide.is_some() && !material.narrower_than(setup.guide_min_roughness);
+        // By kernel ([`LaneMaterial::kernel`]).
+        let (reads_u1, reads_u) = match bsdf {
+            0 | 1 | 6 => (false, true),
+            2 => (false, false),
+            3 => (true, false),
             _ => (true, true),
         };
         let u1 = if reads_u1 || guided { rng.next_1d() } else { skipped_1d(rng) };

@@ -44,7 +44,7 @@ mod caustics;
 mod lanes;
 
 pub use caustics::CausticTargets;
-pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes, MAX_LANE_CANDIDATES};
+pub use lanes::{LaneBatch, LaneBins, LaneKind, LaneOutcomes, LaneSetup, MAX_LANE_CANDIDATES};
 
 use super::{RayStats, Termination};
 use crate::accel::Hit;
