@@ -70,16 +70,10 @@ use glam::{Vec2, Vec3};
 /// run together.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LaneKind {
-    /// The geometry ([`crate::scene::LaneSite::geometry`]): 0: a flat-shaded
-    /// mesh, 1: a sphere, 2: a disk, 3: a flat-shaded mesh whose frame
-    /// follows its texture coordinates, 4: a sphere whose frame follows its
-    /// uv parameterisation, 5 and 6: 0 and 3 with vertex normals.
+    /// The geometry, numbered as [`crate::scene::LaneSite::geometry`].
     shape: u8,
-    /// The material's kernel ([`LaneMaterial::kernel`]): 0: diffuse, 1:
-    /// GGX rough conductor, 4: plastic, 5: GGX rough dielectric, 6 and 7:
-    /// Beckmann rough conductor and dielectric, 8 and 9: GGX and Beckmann
-    /// rough plastic (these sample a light), 2: smooth conductor, 3: smooth
-    /// dielectric.
+    /// The material's kernel, numbered as [`LaneMaterial::kernel`] (all but
+    /// 2 and 3, the smooth conductor and dielectric, sample a light).
     bsdf: u8,
     /// The light sampled: 0: an area light on a mesh, 1: the environment
     /// map, 2: an area light on a sphere (0 where none is).
